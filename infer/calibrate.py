@@ -1,0 +1,79 @@
+"""Calibrate one session: measure every frame, fit area vs pressure, write the outputs."""
+
+from __future__ import annotations
+
+import os
+from pathlib import Path
+
+from contactcal.infer.calibration_io import FrameResult, format_table, write_calibration
+from contactcal.infer.curve import CurveConfig, fit_monotone
+from contactcal.infer.errors import RunError
+from contactcal.infer.manifest import read_manifest
+from contactcal.infer.methods import make_method
+from contactcal.infer.scale import PixelScale
+from contactcal.infer.session import measure_files
+
+
+def calibrate_session(
+    manifest: str | os.PathLike[str],
+    out_dir: str | os.PathLike[str],
+    method_name: str,
+    model: str | os.PathLike[str] | None = None,
+    scale: PixelScale | None = None,
+    curve_config: CurveConfig | None = None,
+) -> str:
+    """Calibrate the session listed in ``manifest`` and write its outputs into ``out_dir``.
+
+    The lowest-pressure frame is the session's reference (ROI for the classical method).
+
+    Args:
+        manifest: CSV with columns ``file,pressure_kpa`` (paths relative to the manifest).
+        out_dir: folder for ``calibration.json``, ``calibration.csv`` and ``curve.png``.
+        method_name: ``"classical"`` (or ``"unet"`` where available).
+        model: ONNX model path for learned methods (None → the shipped one).
+        scale: pixel scale; None → the curve is in px (``area_mm2`` null).
+        curve_config: fit settings (None → defaults).
+
+    Returns:
+        The short text table the CLI prints.
+
+    Raises:
+        ManifestError / ImageError: bad manifest or frame (nothing written).
+        RunError: no contact in any frame (nothing written).
+    """
+    manifest = Path(manifest)
+    frames = read_manifest(manifest)
+    method = make_method(method_name, None if model is None else str(model))
+    measured = measure_files([f.file for f in frames], method, frames[0].file, scale)
+    results = [
+        FrameResult(
+            file=os.path.relpath(m.file, manifest.parent),
+            pressure_kpa=f.pressure_kpa,
+            contact=m.result.contact,
+            area_px=float(m.result.area_px),
+            area_mm2=m.area_mm2,
+            note=m.result.note,
+        )
+        for f, m in zip(frames, measured, strict=True)
+    ]
+    if not any(r.contact for r in results):
+        raise RunError(
+            f"{manifest}: no contact detected in any of its {len(results)} frames "
+            f"(method {method.name}); check the frames, the pressure range or the method"
+        )
+    use_mm = scale is not None
+    areas = [r.area_mm2 if use_mm else r.area_px for r in results]
+    curve = fit_monotone(
+        [r.pressure_kpa for r in results],
+        areas,
+        [r.contact for r in results],
+        curve_config or CurveConfig(),
+        area_unit="mm2" if use_mm else "px",
+    )
+    extra = {
+        "manifest": str(manifest.resolve()),
+        "mm_per_px": None if scale is None else scale.mm_per_px,
+        "scale_image_width_px": None if scale is None else scale.image_width_px,
+    }
+    write_calibration(out_dir, results, curve, method.name, extra)
+    return format_table(results, curve)

@@ -1,0 +1,77 @@
+"""Contact-area methods behind one small interface, so the CLI and the benchmark treat them alike.
+
+A method is prepared once per session with the reference (lowest-pressure) frame, then measures
+frames. Areas are in pixels of the input image.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Protocol
+
+import numpy as np
+
+from contactcal.infer.classical import ClassicalConfig, Roi, find_roi, measure_classical
+
+
+@dataclass(frozen=True)
+class AreaResult:
+    """One frame's outcome."""
+
+    contact: bool
+    area_px: float  # in pixels of the input image; 0.0 when no contact
+    note: str  # "" or why there is no contact
+    contour: np.ndarray | None  # (N, 1, 2) int32 outline in input pixels, for overlays
+
+
+class Method(Protocol):
+    """What every contact-area method provides."""
+
+    name: str
+
+    def prepare(self, reference: np.ndarray | None) -> None:
+        """Use the session's reference frame ``(H, W) uint8`` (or None)."""
+
+    def measure(self, image: np.ndarray) -> AreaResult:
+        """Measure one ``(H, W) uint8`` frame."""
+
+
+class ClassicalMethod:
+    """The published OpenCV routine (:mod:`contactcal.infer.classical`)."""
+
+    name = "classical"
+
+    def __init__(self, config: ClassicalConfig | None = None) -> None:
+        self.config = config or ClassicalConfig()
+        self.roi: Roi | None = None
+
+    def prepare(self, reference: np.ndarray | None) -> None:
+        """Take the ROI from the reference frame; without one, each frame finds its own."""
+        self.roi = None if reference is None else find_roi(reference, self.config)
+
+    def measure(self, image: np.ndarray) -> AreaResult:
+        """Run the routine; the contour is the fitted ellipse."""
+        res = measure_classical(image, self.roi, self.config)
+        contour = None
+        if res.ellipse is not None:
+            import cv2
+
+            (cx, cy), (w, h), ang = res.ellipse
+            pts = cv2.ellipse2Poly((round(cx), round(cy)), (round(w / 2), round(h / 2)),
+                                   round(ang), 0, 360, 5)
+            contour = pts.reshape(-1, 1, 2).astype(np.int32)
+        return AreaResult(res.contact, res.area_px, res.reason, contour)
+
+
+METHODS = ("classical",)
+
+
+def make_method(name: str, model: str | None = None) -> Method:
+    """Build a method by name.
+
+    Raises:
+        ValueError: unknown method name.
+    """
+    if name == "classical":
+        return ClassicalMethod()
+    raise ValueError(f"unknown method {name!r}; expected one of {', '.join(METHODS)}")
