@@ -12,9 +12,9 @@ from pathlib import Path
 import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tests"))
-from procedural import draw_frame, write_png  # noqa: E402
+from procedural import draw_frame, write_png
 
-from contactcal.infer.atomic import write_json, write_text  # noqa: E402
+from contactcal.infer.atomic import write_json, write_text
 
 OUT = Path(__file__).resolve().parent / "session"
 MM_PER_PX = 0.045  # at 648 px width: 27.5 mm cylinder ≈ 610 px

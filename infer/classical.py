@@ -45,7 +45,9 @@ class ClassicalConfig:
         if not 0.0 < self.roi_fraction <= 1.0:
             raise ValueError(f"roi_fraction must be in (0, 1], got {self.roi_fraction}")
         if not 0 <= self.ring_threshold <= 255:
-            raise ValueError(f"ring_threshold must be a grey level 0-255, got {self.ring_threshold}")
+            raise ValueError(
+                f"ring_threshold must be a grey level 0-255, got {self.ring_threshold}"
+            )
 
 
 @dataclass(frozen=True)
@@ -103,7 +105,7 @@ def _work_image(image: np.ndarray, config: ClassicalConfig) -> np.ndarray:
     return gray
 
 
-def find_roi(reference: np.ndarray, config: ClassicalConfig = ClassicalConfig()) -> Roi | None:  # noqa: B008
+def find_roi(reference: np.ndarray, config: ClassicalConfig = ClassicalConfig()) -> Roi | None:
     """ROI from the zero-pressure frame's bright window ring.
 
     Args:
@@ -128,7 +130,7 @@ def find_roi(reference: np.ndarray, config: ClassicalConfig = ClassicalConfig())
 def measure_classical(
     image: np.ndarray,
     roi: Roi | None = None,
-    config: ClassicalConfig = ClassicalConfig(),  # noqa: B008
+    config: ClassicalConfig = ClassicalConfig(),
     debug: bool = False,
 ) -> ClassicalResult:
     """Run the published per-frame routine.
@@ -163,7 +165,9 @@ def measure_classical(
         steps.update(threshold=thr, eroded=eroded, dilated=dilated)
     contour = _largest_contour(dilated)
     if contour is None:
-        return ClassicalResult(False, 0.0, None, roi, "no contact (nothing left after erosion)", steps)
+        return ClassicalResult(
+            False, 0.0, None, roi, "no contact (nothing left after erosion)", steps
+        )
     (cx, cy), (w, h), angle = cv2.minAreaRect(contour)
     area = math.pi * (w / s) * (h / s) / 4.0
     if not area > 0.0:

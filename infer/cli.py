@@ -21,7 +21,7 @@ def _scale_args(p: argparse.ArgumentParser) -> None:
     g.add_argument("--rig", type=Path, help="rig config JSON with mm_per_px and image_width_px")
 
 
-def _resolve_scale(args: argparse.Namespace, default_rig: Path | None = None):  # noqa: ANN202
+def _resolve_scale(args: argparse.Namespace, default_rig: Path | None = None):
     from contactcal.infer.scale import PixelScale, load_rig_config
 
     if args.mm_per_px is not None:
@@ -42,7 +42,9 @@ def _cmd_measure(args: argparse.Namespace) -> int:
     measured = measure_files(args.images, method, args.reference, _resolve_scale(args))
     write_json(args.out, [m.to_json(method.name) for m in measured])
     for m in measured:
-        area = f"{m.area_mm2:8.1f} mm²" if m.area_mm2 is not None else f"{m.result.area_px:10.0f} px"
+        area = (
+            f"{m.area_mm2:8.1f} mm²" if m.area_mm2 is not None else f"{m.result.area_px:10.0f} px"
+        )
         print(f"{m.file}  contact={'yes' if m.result.contact else 'no ':3s} area={area}")
     return 0
 
@@ -51,7 +53,11 @@ def _cmd_calibrate(args: argparse.Namespace) -> int:
     from contactcal.infer.calibrate import calibrate_session
 
     report = calibrate_session(
-        args.manifest, args.out, args.method, args.model, _resolve_scale(args, args.manifest.parent / "rig.json")
+        args.manifest,
+        args.out,
+        args.method,
+        args.model,
+        _resolve_scale(args, args.manifest.parent / "rig.json"),
     )
     print(report)
     return 0
@@ -98,7 +104,9 @@ def _cmd_demo(args: argparse.Namespace) -> int:
     manifest = example_manifest()
     for method in METHODS:
         out = args.out / method
-        scale = _resolve_scale(argparse.Namespace(mm_per_px=None, rig=None), manifest.parent / "rig.json")
+        scale = _resolve_scale(
+            argparse.Namespace(mm_per_px=None, rig=None), manifest.parent / "rig.json"
+        )
         print(f"== {method} → {out}")
         print(calibrate_session(manifest, out, method, None, scale))
     return 0

@@ -57,8 +57,9 @@ class ClassicalMethod:
             import cv2
 
             (cx, cy), (w, h), ang = res.ellipse
-            pts = cv2.ellipse2Poly((round(cx), round(cy)), (round(w / 2), round(h / 2)),
-                                   round(ang), 0, 360, 5)
+            pts = cv2.ellipse2Poly(
+                (round(cx), round(cy)), (round(w / 2), round(h / 2)), round(ang), 0, 360, 5
+            )
             contour = pts.reshape(-1, 1, 2).astype(np.int32)
         return AreaResult(res.contact, res.area_px, res.reason, contour)
 

@@ -37,7 +37,10 @@ class CameraEffects:
 
 
 def tilt_homography(
-    width: int, height: int, tilt_deg: tuple[float, float], shift_px: tuple[float, float],
+    width: int,
+    height: int,
+    tilt_deg: tuple[float, float],
+    shift_px: tuple[float, float],
     focal_px: float,
 ) -> np.ndarray:
     """``(3, 3)`` homography of a camera rotated by ``tilt_deg`` (about x, y) and shifted.

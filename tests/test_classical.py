@@ -72,6 +72,8 @@ def test_reference_values(rng: np.random.Generator) -> None:
     frame = draw_frame(np.random.default_rng(7), 648, 486, semi_axes_px=(80.0, 60.0))
     res = measure_classical(frame.image)
     assert res.roi is not None
-    assert res.roi.cx == pytest.approx(323.5, abs=1.0) and res.roi.cy == pytest.approx(242.5, abs=1.0)
+    assert res.roi.cx == pytest.approx(323.5, abs=1.0) and res.roi.cy == pytest.approx(
+        242.5, abs=1.0
+    )
     assert res.roi.radius == pytest.approx(0.55 * 0.42 * 486 * 1.03, rel=0.03)
     assert res.area_px == pytest.approx(np.pi * 80 * 60 * 1.35, rel=0.1)

@@ -1,0 +1,147 @@
+"""Tests of contactcal.infer.calibration_io."""
+
+from __future__ import annotations
+
+import csv
+import json
+import math
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from contactcal.infer import calibration_io
+from contactcal.infer.calibration_io import (
+    FrameResult,
+    format_table,
+    load_curve,
+    write_calibration,
+)
+from contactcal.infer.curve import fit_monotone
+
+P = np.arange(0.0, 11.0, 2.0)
+
+
+def _results(mm2: bool = True) -> list[FrameResult]:
+    out = []
+    for p in P[::-1]:  # any order
+        area_px = 0.0 if p < 3 else 500.0 * (p - 3)
+        out.append(
+            FrameResult(
+                file=f"p{p:04.1f}.png",
+                pressure_kpa=float(p),
+                contact=area_px > 0,
+                area_px=area_px,
+                area_mm2=(area_px * 0.002 if mm2 else None),
+                note="dim" if p == 4 else "",
+            )
+        )
+    return out
+
+
+def _curve(results: list[FrameResult], unit: str = "mm²"):
+    areas = [r.area_mm2 if unit != "px" else r.area_px for r in results]
+    return fit_monotone(
+        [r.pressure_kpa for r in results], areas, [r.contact for r in results], area_unit=unit
+    )
+
+
+def _no_nan(obj) -> None:
+    if isinstance(obj, float):
+        assert math.isfinite(obj)
+    elif isinstance(obj, dict):
+        for v in obj.values():
+            _no_nan(v)
+    elif isinstance(obj, list):
+        for v in obj:
+            _no_nan(v)
+
+
+def test_write_calibration_outputs(tmp_path: Path) -> None:
+    results = _results()
+    curve = _curve(results)
+    extra = {"mm_per_px": 0.045, "bad": float("nan"), "arr": np.array([1.0, np.inf]), "p": tmp_path}
+    paths = write_calibration(tmp_path / "out", results, curve, "classical", extra)
+    assert set(paths) == {"json", "csv", "png"}
+    assert all(p.is_file() and p.stat().st_size > 0 for p in paths.values())
+    assert sorted(x.name for x in (tmp_path / "out").iterdir()) == [
+        "calibration.csv",
+        "calibration.json",
+        "curve.png",
+    ]
+    text = paths["json"].read_text(encoding="utf-8")
+    assert "NaN" not in text and "Infinity" not in text
+    data = json.loads(text)
+    _no_nan(data)
+    assert data["method"] == "classical" and data["area_unit"] == "mm²"
+    assert data["onset_kpa"] == pytest.approx(curve.onset_kpa)
+    assert [pt["pressure_kpa"] for pt in data["points"]] == sorted(P.tolist())
+    assert data["fit"]["area"] == pytest.approx(curve.fit_area.tolist())
+    assert data["inverse"]["area"][0] == 0.0 and data["inverse"]["pressure_kpa"][-1] == 10.0
+    assert data["extra"]["bad"] is None and data["extra"]["arr"] == [1.0, None]
+    assert data["versions"]["numpy"] == np.__version__
+    assert "created" in data
+    assert paths["png"].read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+
+    with open(paths["csv"], newline="", encoding="utf-8") as fh:
+        rows = list(csv.DictReader(fh))
+    assert list(rows[0]) == ["file", "pressure_kpa", "contact", "area_px", "area_mm2", "fit_area"]
+    assert [float(r["pressure_kpa"]) for r in rows] == sorted(P.tolist())
+    assert rows[0]["contact"] == "false" and rows[-1]["contact"] == "true"
+
+    loaded = load_curve(paths["json"])
+    np.testing.assert_allclose(loaded.fit_area, curve.fit_area)
+    assert loaded.pressure_for_area(5.0) == curve.pressure_for_area(5.0)
+
+
+def test_px_curve_without_mm2_and_without_contact(tmp_path: Path) -> None:
+    results = _results(mm2=False)
+    paths = write_calibration(tmp_path, results, _curve(results, "px"), "learned", {})
+    data = json.loads(paths["json"].read_text(encoding="utf-8"))
+    assert data["area_unit"] == "px" and all(pt["area_mm2"] is None for pt in data["points"])
+    assert ",," in paths["csv"].read_text(encoding="utf-8")  # empty area_mm2 cells
+
+    flat = [FrameResult(r.file, r.pressure_kpa, False, 0.0, None) for r in results]
+    paths = write_calibration(tmp_path / "none", flat, _curve(flat, "px"), "classical", {})
+    data = json.loads(paths["json"].read_text(encoding="utf-8"))
+    assert data["onset_kpa"] is None and data["inverse"] is None
+
+
+def test_failed_write_leaves_nothing(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    def boom(*args, **kwargs):
+        raise RuntimeError("plot failed")
+
+    monkeypatch.setattr(calibration_io, "plot_curve", boom)
+    results = _results()
+    out = tmp_path / "out"
+    with pytest.raises(RuntimeError, match="plot failed"):
+        write_calibration(out, results, _curve(results), "classical", {})
+    assert list(out.iterdir()) == []
+
+
+def test_failed_write_keeps_previous_run(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    results = _results()
+    paths = write_calibration(tmp_path, results, _curve(results), "classical", {})
+    before = {k: p.read_bytes() for k, p in paths.items()}
+
+    def boom(path, text):
+        raise OSError("disk full")
+
+    monkeypatch.setattr(calibration_io, "_write_synced", boom)
+    with pytest.raises(OSError, match="disk full"):
+        write_calibration(tmp_path, results, _curve(results), "other", {})
+    assert {k: p.read_bytes() for k, p in paths.items()} == before
+    assert sorted(x.name for x in tmp_path.iterdir()) == sorted(p.name for p in paths.values())
+
+
+def test_format_table() -> None:
+    results = _results()
+    table = format_table(results, _curve(results))
+    lines = table.splitlines()
+    assert "pressure (kPa)" in lines[0] and "area (mm²)" in lines[0] and "contact" in lines[0]
+    assert len(lines) == 2 + len(results)
+    assert lines[2].split()[:4] == ["0.00", "0.0", "0.0", "no"]
+    assert lines[-1].split()[0] == "10.00" and "yes" in lines[-1]
+    assert "dim" in table
+    px = format_table(_results(mm2=False), _curve(_results(mm2=False), "px"))
+    assert "area (px)" in px.splitlines()[0]

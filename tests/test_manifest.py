@@ -1,0 +1,132 @@
+"""Tests of contactcal.infer.manifest."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import pytest
+
+from contactcal.infer.manifest import Frame, ManifestError, read_manifest
+
+
+def _session(tmp_path: Path, text: str, images: tuple[str, ...] = ("a.png", "b.png", "c.png")):
+    for name in images:
+        (tmp_path / name).parent.mkdir(parents=True, exist_ok=True)
+        (tmp_path / name).write_bytes(b"x")
+    path = tmp_path / "manifest.csv"
+    path.write_text(text, encoding="utf-8")
+    return path
+
+
+def _fails(path: Path, *needles: str) -> str:
+    with pytest.raises(ManifestError) as info:
+        read_manifest(path)
+    msg = str(info.value)
+    assert str(path) in msg
+    for needle in needles:
+        assert needle in msg, msg
+    return msg
+
+
+def test_sorted_and_resolved(tmp_path: Path) -> None:
+    (tmp_path / "img").mkdir()
+    path = _session(
+        tmp_path,
+        "file,pressure_kpa\nimg/c.png,4\nimg/a.png,0\n\nimg/b.png,2.5\n",
+        ("img/a.png", "img/b.png", "img/c.png"),
+    )
+    frames = read_manifest(path)
+    assert [f.pressure_kpa for f in frames] == [0.0, 2.5, 4.0]
+    assert [f.row for f in frames] == [2, 3, 1]
+    assert frames[0] == Frame(file=(tmp_path / "img" / "a.png").resolve(), pressure_kpa=0.0, row=2)
+    assert all(f.file.is_absolute() and f.file.is_file() for f in frames)
+
+
+def test_bom_whitespace_and_absolute_paths(tmp_path: Path) -> None:
+    path = _session(tmp_path, "", ())
+    (tmp_path / "a.png").write_bytes(b"x")
+    other = tmp_path / "elsewhere"
+    other.mkdir()
+    (other / "b.png").write_bytes(b"x")
+    path.write_text(f"\ufeff file , pressure_kpa \na.png, 0\n{other / 'b.png'},1\n", "utf-8")
+    frames = read_manifest(path)
+    assert [f.file for f in frames] == [(tmp_path / "a.png").resolve(), (other / "b.png").resolve()]
+
+
+def test_columns_in_other_order(tmp_path: Path) -> None:
+    path = _session(tmp_path, "pressure_kpa,file\n2,b.png\n0,a.png\n")
+    assert [f.file.name for f in read_manifest(path)] == ["a.png", "b.png"]
+
+
+def test_missing_manifest(tmp_path: Path) -> None:
+    _fails(tmp_path / "nope.csv", "not found")
+
+
+def test_manifest_is_a_folder(tmp_path: Path) -> None:
+    _fails(tmp_path, "folder")
+
+
+def test_empty_and_header_only(tmp_path: Path) -> None:
+    _fails(_session(tmp_path, "\n\n"), "empty", "file,pressure_kpa")
+    _fails(_session(tmp_path, "file,pressure_kpa\n"), "no frames")
+
+
+def test_missing_column(tmp_path: Path) -> None:
+    _fails(_session(tmp_path, "file\na.png\n"), "missing required column 'pressure_kpa'")
+
+
+def test_unknown_column(tmp_path: Path) -> None:
+    msg = _fails(
+        _session(tmp_path, "file,pressure_kpa,temp\na.png,0,20\nb.png,1,20\n"),
+        "unknown column 'temp'",
+    )
+    assert "pressure_kpa" in msg and "file" in msg
+    _fails(_session(tmp_path, "file;pressure_kpa\na.png;0\n"), "comma-separated")
+    _fails(_session(tmp_path, "File,pressure_kpa\na.png,0\n"), "did you mean 'file'")
+
+
+def test_wrong_cell_count(tmp_path: Path) -> None:
+    _fails(_session(tmp_path, "file,pressure_kpa\na.png,0\nb.png,1,2\n"), "row 2", "got 3")
+
+
+def test_empty_file_cell(tmp_path: Path) -> None:
+    _fails(_session(tmp_path, "file,pressure_kpa\na.png,0\n ,1\n"), "row 2", "empty 'file'")
+
+
+@pytest.mark.parametrize(
+    ("cell", "problem"),
+    [
+        ("abc", "not a number"),
+        ("nan", "not finite"),
+        ("inf", "not finite"),
+        ("-1", "negative"),
+        ("", "not a number"),
+        ("2 kPa", "not a number"),
+    ],
+)
+def test_bad_pressure(tmp_path: Path, cell: str, problem: str) -> None:
+    _fails(_session(tmp_path, f"file,pressure_kpa\na.png,0\nb.png,{cell}\n"), "row 2", problem)
+
+
+def test_duplicate_pressure(tmp_path: Path) -> None:
+    msg = _fails(
+        _session(tmp_path, "file,pressure_kpa\na.png,2\nb.png,0\nc.png,2.0\n"),
+        "rows 1 (a.png) and 3 (c.png)",
+        "one frame per pressure step",
+    )
+    assert "2 kPa" in msg
+
+
+def test_single_frame(tmp_path: Path) -> None:
+    _fails(_session(tmp_path, "file,pressure_kpa\na.png,0\n"), ">= 2 pressure steps")
+
+
+def test_missing_image(tmp_path: Path) -> None:
+    path = _session(tmp_path, "file,pressure_kpa\na.png,0\nmissing.png,2\n")
+    _fails(path, "not found", "row 2", str((tmp_path / "missing.png").resolve()))
+
+
+def test_not_utf8(tmp_path: Path) -> None:
+    path = _session(tmp_path, "")
+    path.write_bytes(b"file,pressure_kpa\n\xff\xfe.png,0\n")
+    _fails(path, "UTF-8")
