@@ -94,6 +94,11 @@ def build_parser() -> argparse.ArgumentParser:
     d = sub.add_parser("demo", help="calibrate the bundled example session")
     d.add_argument("--out", type=Path, default=Path("out/demo"), help="output folder")
     d.set_defaults(func=_cmd_demo)
+
+    # Heavy roles register their own subcommands; their modules import nothing heavy.
+    from contactcal.train.commands import add_parsers as add_train_parsers
+
+    add_train_parsers(sub)
     return parser
 
 

@@ -33,9 +33,7 @@ T = TypeVar("T")
 class PreprocessConfig:
     """Crop, resize and normalisation of a frame into the network input."""
 
-    input_size: int = (
-        256  # px, network input side; larger keeps finer ridges, costs ~quadratic time
-    )
+    input_size: int = 256  # px, network input side; finer ridges vs ~quadratic time
     crop_factor: float = 2.2  # × outer-ring radius = crop side; 2.0 is the ring's diameter,
     #   the margin keeps the whole ring (context + scale cue) in view; larger wastes resolution
     norm_percentile: float = 99.5  # %, brightness reference P; lower is less sparkle-sensitive
@@ -66,7 +64,7 @@ class PreprocessConfig:
             raise ValueError(f"norm_std must be > 0, got {self.norm_std}")
         if not 0.0 < self.ring_threshold_fraction < 1.0:
             raise ValueError(
-                f"ring_threshold_fraction must be in (0, 1), got {self.ring_threshold_fraction}"
+                f"ring_threshold_fraction not in (0, 1): {self.ring_threshold_fraction}"
             )
 
 

@@ -1,1 +1,6 @@
-"""contactcal.train."""
+"""contactcal.train: training and ONNX export of the contact segmenter (torch, kornia, onnx).
+
+Modules: ``model`` (U-Net), ``augment`` (kornia), ``data`` (datasets → cached tensors),
+``metrics`` (loss, validation), ``checkpoint``, ``report`` (CSV/plots), ``loop`` (``train``),
+``export`` (``export_onnx``) and ``commands`` (CLI subcommands; imports no torch at import).
+"""

@@ -1,0 +1,65 @@
+"""ONNX export: checker, torch/onnxruntime parity at a new shape, metadata, errors."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+torch = pytest.importorskip("torch")
+onnx = pytest.importorskip("onnx")
+ort = pytest.importorskip("onnxruntime")
+
+from test_train import tiny_config, write_dataset  # noqa: E402
+
+from contactcal.infer.preprocess import PreprocessConfig  # noqa: E402
+from contactcal.train.data import dataset_digest  # noqa: E402
+from contactcal.train.export import PARITY_ATOL, export_onnx  # noqa: E402
+from contactcal.train.loop import train  # noqa: E402
+
+
+@pytest.fixture(scope="module")
+def run_dir(tmp_path_factory: pytest.TempPathFactory) -> Path:
+    root = tmp_path_factory.mktemp("export")
+    data = write_dataset(root / "data", fingers=3)
+    train([data], root / "run", tiny_config(epochs=1, input_size=64), progress=False)
+    return root / "run"
+
+
+@pytest.mark.slow
+def test_export_metadata_and_parity(run_dir: Path, tmp_path: Path) -> None:
+    out = export_onnx(run_dir, tmp_path / "models" / "tiny.onnx")
+    assert out == tmp_path / "models" / "tiny.onnx" and out.is_file()
+    assert not [p for p in out.parent.iterdir() if p.name.startswith(".")]  # no temp left
+    model = onnx.load(str(out))
+    onnx.checker.check_model(model, full_check=True)
+    meta = {p.key: p.value for p in model.metadata_props}
+    assert meta["input_size"] == "64" and meta["channels"] == "2" and meta["reference"] == "true"
+    assert PreprocessConfig(**json.loads(meta["preprocess"])) == PreprocessConfig(input_size=64)
+    assert float(meta["threshold"]) == 0.5 and float(meta["min_contact_area_px"]) == 4.0
+    assert meta["data_digest"] == dataset_digest([run_dir.parent / "data"])
+    assert meta["contactcal_version"] and meta["created"] and meta["output"] == "logits"
+    # dynamic batch/H/W: run at a size other than the export's and compare with torch
+    from contactcal.train.export import load_run
+    from contactcal.train.model import UNet
+
+    cfg, _, ckpt = load_run(run_dir)
+    net = UNet(cfg.model).eval()
+    net.load_state_dict(ckpt["model"])
+    x = torch.randn((3, 2, 80, 96), generator=torch.Generator().manual_seed(1))
+    with torch.no_grad():
+        ref = net(x).numpy()
+    sess = ort.InferenceSession(str(out), providers=["CPUExecutionProvider"])
+    got = sess.run(None, {"input": x.numpy()})[0]
+    assert got.shape == (3, 1, 80, 96)
+    np.testing.assert_allclose(got, ref, atol=PARITY_ATOL, rtol=1e-4)
+
+
+@pytest.mark.slow
+def test_export_errors(run_dir: Path, tmp_path: Path) -> None:
+    with pytest.raises(ValueError, match="config.json"):
+        export_onnx(tmp_path / "nothing", tmp_path / "m.onnx")
+    with pytest.raises(ValueError, match=r"\.onnx"):
+        export_onnx(run_dir, tmp_path / "m.txt")

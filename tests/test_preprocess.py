@@ -1,0 +1,131 @@
+"""Network preprocessing: ring search, crop/resize, normalisation and the inverse mapping."""
+
+from __future__ import annotations
+
+import cv2
+import numpy as np
+import pytest
+from procedural import draw_frame
+
+from contactcal.infer.preprocess import (
+    CropBox,
+    PreprocessConfig,
+    RingFit,
+    crop_box,
+    crop_resize,
+    from_network,
+    locate_ring,
+    network_to_unit,
+    prepare,
+    to_network,
+    unit_to_network,
+)
+
+W, H = 324, 243  # half the procedural default: fast, ring radius 0.42·H ≈ 102 px
+
+
+def _frame(rng: np.random.Generator, **kw: object) -> np.ndarray:
+    return draw_frame(rng, width=W, height=H, semi_axes_px=(30.0, 22.0), **kw).image
+
+
+def test_prepare_shapes(rng: np.random.Generator) -> None:
+    cfg = PreprocessConfig(input_size=64)
+    img = _frame(rng)
+    one = prepare(img, None, cfg)
+    two = prepare(img, _frame(rng), cfg)
+    assert one.x.shape == (1, 64, 64) and one.x.dtype == np.float32
+    assert two.x.shape == (2, 64, 64) and two.x.dtype == np.float32
+    assert np.all(np.isfinite(two.x))
+    assert two.box == crop_box(two.ring, img.shape, cfg)
+
+
+@pytest.mark.parametrize("gain", [0.5, 1.0, 1.5])
+def test_ring_located_under_exposure(rng: np.random.Generator, gain: float) -> None:
+    img = np.clip(np.rint(_frame(rng) * gain), 0, 255).astype(np.uint8)
+    ring = locate_ring(img)
+    assert ring.found
+    assert abs(ring.cx - (W - 1) / 2) < 2.0 and abs(ring.cy - (H - 1) / 2) < 2.0
+    # outer edge of the procedural ring: centre line 0.42·H plus its half width
+    assert 0.42 * H < ring.radius < 0.42 * H + 0.04 * H
+
+
+def test_ring_cut_by_border(rng: np.random.Generator) -> None:
+    img = _frame(rng)
+    shifted = np.zeros_like(img)
+    shifted[:, 40:] = img[:, :-40]  # ring centre moves 40 px right, its right side leaves view
+    ring = locate_ring(shifted[:, : W - 20])
+    assert ring.found and abs(ring.cx - ((W - 1) / 2 + 40)) < 3.0
+
+
+def test_no_ring_falls_back(rng: np.random.Generator) -> None:
+    noise = np.clip(rng.normal(20.0, 3.0, (H, W)), 0, 255).astype(np.uint8)
+    for img in (noise, np.zeros((H, W), np.uint8), np.full((H, W), 200, np.uint8)):
+        ring = locate_ring(img)
+        assert not ring.found
+        assert ring.cx == pytest.approx((W - 1) / 2) and ring.radius == pytest.approx(0.45 * H)
+        assert prepare(img).x.shape == (1, 256, 256)
+
+
+def test_blob_only_is_not_a_ring(rng: np.random.Generator) -> None:
+    img = np.full((H, W), 20, np.uint8)
+    cv2.ellipse(img, (W // 2, H // 2), (30, 20), 15, 0, 360, 200, -1)
+    assert not locate_ring(img).found
+
+
+def test_round_trip_iou() -> None:
+    cfg = PreprocessConfig()
+    mask = np.zeros((486, 648), np.uint8)
+    cv2.ellipse(mask, (300, 250), (70, 45), 25, 0, 360, 1, -1)
+    box = crop_box(RingFit(323.5, 242.5, 209.0), mask.shape, cfg)
+    net = crop_resize(mask.astype(np.float32), box, cfg.input_size)
+    back = from_network(net, box, mask.shape) > 0.5
+    truth = mask > 0
+    iou = (back & truth).sum() / (back | truth).sum()
+    assert iou > 0.97
+
+
+def test_round_trip_box_outside_image() -> None:
+    mask = np.zeros((100, 120), np.float32)
+    mask[10:40, 5:50] = 1.0
+    box = CropBox(-30, -20, 160)  # extends past every border
+    back = from_network(crop_resize(mask, box, 256), box, mask.shape) > 0.5
+    assert ((back & (mask > 0)).sum() / (back | (mask > 0)).sum()) > 0.97
+
+
+def test_affine_maps_pixel_centres() -> None:
+    box = CropBox(10, 20, 200)
+    m = box.to_network_affine(100)
+    # input pixel centre x = x0 + (u + 0.5)·side/S - 0.5 ↔ network u
+    u = 7.0
+    x = box.x0 + (u + 0.5) * 2.0 - 0.5
+    assert m[0, 0] * x + m[0, 2] == pytest.approx(u)
+
+
+def test_normalisation_is_exposure_invariant(rng: np.random.Generator) -> None:
+    img = _frame(rng, noise_sd=0.0)
+    box = crop_box(locate_ring(img), img.shape)
+    a = to_network(img, box)
+    b = to_network(np.clip(np.rint(img * 0.6), 0, 255).astype(np.uint8), box)
+    assert np.median(np.abs(a - b)) < 0.05
+
+
+def test_unit_mapping_inverts() -> None:
+    cfg = PreprocessConfig()
+    u = np.linspace(0, 1, 11)
+    np.testing.assert_allclose(network_to_unit(unit_to_network(u, cfg), cfg), u)
+
+
+def test_bad_input_raises(rng: np.random.Generator) -> None:
+    nan = np.full((H, W), np.nan, np.float32)
+    with pytest.raises(ValueError, match="NaN"):
+        prepare(nan)
+    with pytest.raises(ValueError, match="expected"):
+        prepare(np.zeros((2, 3, 4, 5), np.uint8))
+    with pytest.raises(ValueError, match="expected"):
+        locate_ring(np.zeros(10, np.uint8))
+    with pytest.raises(ValueError, match="reference"):
+        prepare(_frame(rng), np.zeros((10, 10), np.uint8))
+    with pytest.raises(ValueError, match="square"):
+        from_network(np.zeros((4, 5), np.float32), CropBox(0, 0, 4), (4, 4))
+    with pytest.raises(ValueError, match="input_size"):
+        PreprocessConfig(input_size=0)

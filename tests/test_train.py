@@ -1,0 +1,275 @@
+"""Training package: model shapes/size, augmentation, data validation and split, loop, CLI."""
+
+from __future__ import annotations
+
+import argparse
+import csv
+import subprocess
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+from procedural import draw_frame, write_png
+
+torch = pytest.importorskip("torch")
+pytest.importorskip("kornia")
+
+from contactcal.infer.preprocess import (  # noqa: E402
+    PreprocessConfig,
+    network_to_unit,
+    unit_to_network,
+)
+from contactcal.train.augment import AugmentConfig, Augmenter  # noqa: E402
+from contactcal.train.checkpoint import config_diff, config_from_dict, config_to_dict  # noqa: E402
+from contactcal.train.commands import add_parsers, build_config  # noqa: E402
+from contactcal.train.data import build_cache, load_records, split_by_finger  # noqa: E402
+from contactcal.train.loop import TrainConfig, train  # noqa: E402
+from contactcal.train.metrics import segmentation_loss  # noqa: E402
+from contactcal.train.model import UNet, UNetConfig, count_parameters  # noqa: E402
+
+#: Contact ellipse semi-axes (px at 64×48) per pressure, kPa; None = below the onset.
+AXES = {0.0: None, 2.0: None, 4.0: (5.0, 4.0), 8.0: (8.0, 6.0), 14.0: (11.0, 8.0)}
+
+
+def write_dataset(root: Path, fingers: int = 4, seed: int = 0, w: int = 64, h: int = 48) -> Path:
+    """A tiny dataset in the ``contactcal synth`` layout, drawn procedurally."""
+    rng = np.random.default_rng(seed)
+    root.mkdir(parents=True, exist_ok=True)
+    rows = []
+    for f in range(fingers):
+        session = f"finger_{f:04d}"
+        (root / session / "frames").mkdir(parents=True)
+        (root / session / "masks").mkdir()
+        angle = float(rng.uniform(0, 180))
+        for p, axes in AXES.items():
+            d = draw_frame(rng, w, h, axes, angle, ridge_period_px=3.0, noise_sd=2.0)
+            name = f"p{p:04.1f}kpa.png"
+            write_png(str(root / session / "frames" / name), np.repeat(d.image[:, :, None], 3, 2))
+            write_png(str(root / session / "masks" / name), d.mask.astype(np.uint8) * 255)
+            rows.append(
+                {
+                    "finger": f,
+                    "session": session,
+                    "frame": f"{session}/frames/{name}",
+                    "mask": f"{session}/masks/{name}",
+                    "pressure_kpa": p,
+                    "contact": int(axes is not None),
+                    "area_px": int(d.mask.sum()),
+                    "width": w,
+                    "height": h,
+                }
+            )
+    with open(root / "index.csv", "w", newline="") as fh:
+        writer = csv.DictWriter(fh, fieldnames=list(rows[0]))
+        writer.writeheader()
+        writer.writerows(rows)
+    return root
+
+
+def tiny_config(**kw: object) -> TrainConfig:
+    """A seconds-long run: 32 px inputs, a ~1k-parameter U-Net, no augmentation."""
+    base = {
+        "epochs": 2,
+        "batch_size": 4,
+        "input_size": 32,
+        "lr": 1e-2,
+        "num_threads": 1,
+        "device": "cpu",
+        "val_fraction": 0.25,
+        "min_contact_area_px": 4.0,
+        "model": UNetConfig(base=4, levels=2),
+        "augment": AugmentConfig(enabled=False),
+    }
+    base.update(kw)
+    return TrainConfig(**base)  # type: ignore[arg-type]
+
+
+@pytest.mark.parametrize("size", [32, 48, 64])
+@pytest.mark.parametrize("channels", [1, 2])
+def test_forward_shapes(size: int, channels: int) -> None:
+    model = UNet(UNetConfig(in_channels=channels)).eval()
+    with torch.no_grad():
+        assert model(torch.zeros(2, channels, size, size)).shape == (2, 1, size, size)
+        assert model(torch.zeros(2, channels, size + 5, size - 3)).shape == (
+            2,
+            1,
+            size + 5,
+            size - 3,
+        )
+
+
+def test_parameter_budget() -> None:
+    assert count_parameters(UNet(UNetConfig(in_channels=2))) <= 500_000
+    assert count_parameters(UNet(UNetConfig(in_channels=2, base=16, levels=4))) <= 500_000
+
+
+def _aug_batch() -> tuple[torch.Tensor, torch.Tensor]:
+    g = torch.Generator().manual_seed(0)
+    u = torch.rand((4, 2, 64, 64), generator=g) * 0.2
+    u[:, :, 16:40, 10:50] = 0.9
+    return unit_to_network(u, PreprocessConfig()), (u[:, :1] > 0.5).float()
+
+
+def test_augment_keeps_mask_aligned() -> None:
+    geometric = AugmentConfig(
+        brightness=0.0, contrast=0.0, gamma=(1.0, 1.0), blur_p=0.0, noise_p=0.0, affine_p=1.0
+    )
+    aug = Augmenter(geometric, PreprocessConfig())
+    x, m = _aug_batch()
+    torch.manual_seed(3)
+    xa, ma = aug(x, m)
+    bright = network_to_unit(xa[:, :1], PreprocessConfig()) > 0.55
+    assert set(ma.unique().tolist()) <= {0.0, 1.0}
+    assert (bright == (ma > 0.5)).float().mean() > 0.98  # only resampled edge pixels differ
+    assert ((xa[:, 0] > 0.0) == (xa[:, 1] > 0.0)).float().mean() > 0.98  # channels warped alike
+
+
+def test_augment_deterministic_per_seed() -> None:
+    aug = Augmenter(AugmentConfig(), PreprocessConfig())
+    x, m = _aug_batch()
+    torch.manual_seed(7)
+    a = aug(x, m)
+    torch.manual_seed(7)
+    b = aug(x, m)
+    torch.manual_seed(8)
+    c = aug(x, m)
+    assert torch.equal(a[0], b[0]) and torch.equal(a[1], b[1])
+    assert not torch.equal(a[0], c[0])
+
+
+def test_split_is_by_finger(tmp_path: Path) -> None:
+    records = load_records([write_dataset(tmp_path / "d", fingers=5)])
+    tr, va = split_by_finger(records, 0.4, seed=1)
+    assert {r.finger_key for r in tr}.isdisjoint({r.finger_key for r in va})
+    assert len({r.finger_key for r in va}) == 2 and len(tr) + len(va) == len(records)
+    assert split_by_finger(records, 0.4, seed=1) == (tr, va)
+
+
+def test_bad_dataset_paths(tmp_path: Path) -> None:
+    with pytest.raises(ValueError, match="does not exist"):
+        load_records([tmp_path / "nope"])
+    (tmp_path / "empty").mkdir()
+    with pytest.raises(ValueError, match="missing index.csv"):
+        load_records([tmp_path / "empty"])
+    d = write_dataset(tmp_path / "d", fingers=1)
+    text = (d / "index.csv").read_text()
+    (d / "index.csv").write_text(text.replace("pressure_kpa", "p"))
+    with pytest.raises(ValueError, match="missing column"):
+        load_records([d])
+    (d / "index.csv").write_text(text)
+    (d / "finger_0000" / "frames" / "p04.0kpa.png").unlink()
+    with pytest.raises(ValueError, match=r"missing file .*p04\.0kpa\.png"):
+        load_records([d])
+
+
+def test_config_round_trip() -> None:
+    cfg = tiny_config().resolved()
+    back = config_from_dict(TrainConfig, config_to_dict(cfg))
+    assert back == cfg and config_diff(back, cfg) == []
+    assert config_diff(cfg, tiny_config(seed=5).resolved()) == ["seed"]
+    with pytest.raises(ValueError, match="unknown"):
+        config_from_dict(TrainConfig, {"nope": 1})
+
+
+@pytest.mark.slow
+def test_steps_decrease_loss(tmp_path: Path) -> None:
+    cfg = tiny_config().resolved()
+    data = build_cache(load_records([write_dataset(tmp_path / "d")]), cfg.preprocess, True)
+    assert data.x.shape == (20, 2, 32, 32) and int(data.y.sum()) > 0
+    torch.manual_seed(0)
+    model = UNet(cfg.model)
+    opt = torch.optim.AdamW(model.parameters(), lr=1e-2)
+    x, y = data.x.float(), data.y.float()
+    losses = []
+    for _ in range(25):
+        loss = segmentation_loss(model(x), y, 1.0, 1.0)
+        opt.zero_grad()
+        loss.backward()
+        opt.step()
+        losses.append(loss.item())
+    assert losses[-1] < 0.7 * losses[0]
+
+
+@pytest.mark.slow
+def test_train_outputs(tmp_path: Path) -> None:
+    d = write_dataset(tmp_path / "d")
+    cfg = tiny_config(augment=AugmentConfig())
+    summary = train([d], tmp_path / "run", cfg, progress=False)
+    for name in ("config.json", "last.pt", "best.pt", "metrics.csv", "curves.png", "val_bins.csv"):
+        assert (tmp_path / "run" / name).is_file(), name
+    assert summary["val_frames"] == 5 and summary["train_frames"] == 15
+    lines = (tmp_path / "run" / "metrics.csv").read_text().splitlines()
+    assert lines[0].startswith("epoch,train_loss,val_loss") and len(lines) == 3
+    bins = (tmp_path / "run" / "val_bins.csv").read_text()
+    assert bins.startswith("bin_kpa,") and "nan" not in bins.lower()
+    with pytest.raises(ValueError, match="already holds a run"):
+        train([d], tmp_path / "run", cfg, progress=False)
+    with pytest.raises(ValueError, match="different config"):
+        train([d], tmp_path / "run", tiny_config(seed=3), resume=True, progress=False)
+    again = train([d], tmp_path / "run", tiny_config(augment=AugmentConfig(), device="auto"), True)
+    assert again["epochs_run"] == 0  # finished run; device/threads may change on resume
+
+
+@pytest.mark.slow
+def test_resume_is_exact(tmp_path: Path) -> None:
+    d = write_dataset(tmp_path / "d", fingers=3)
+    cfg = tiny_config(augment=AugmentConfig(), epochs=2)
+    train([d], tmp_path / "full", cfg, progress=False)
+    # interrupt the second run right after its first epoch's checkpoint, then resume it
+    import contactcal.train.loop as loop
+
+    class Stop(Exception):
+        pass
+
+    original = loop.plot_curves
+
+    def stop_after_first(path: object, history: list) -> None:
+        original(path, history)
+        raise Stop
+
+    loop.plot_curves = stop_after_first  # type: ignore[assignment]
+    try:
+        with pytest.raises(Stop):
+            train([d], tmp_path / "cut", cfg, progress=False)
+    finally:
+        loop.plot_curves = original  # type: ignore[assignment]
+    train([d], tmp_path / "cut", cfg, resume=True, progress=False)
+    a = torch.load(tmp_path / "full" / "last.pt", weights_only=True)
+    b = torch.load(tmp_path / "cut" / "last.pt", weights_only=True)
+    assert all(torch.equal(a["model"][k], b["model"][k]) for k in a["model"])
+    assert len(b["history"]) == 2
+
+
+def test_cli_parsers(tmp_path: Path) -> None:
+    parser = argparse.ArgumentParser(prog="contactcal")
+    add_parsers(parser.add_subparsers(dest="command", required=True))
+    args = parser.parse_args(
+        [
+            "train",
+            "--data",
+            "a",
+            "b",
+            "--out",
+            "r",
+            "--epochs",
+            "3",
+            "--no-reference",
+            "--input-size",
+            "64",
+        ]
+    )
+    cfg = build_config(args)
+    assert args.data == [Path("a"), Path("b")] and cfg.epochs == 3 and not cfg.use_reference
+    assert cfg.input_size == 64 and cfg.batch_size == TrainConfig().batch_size
+    args = parser.parse_args(["train", "--data", str(tmp_path / "missing"), "--out", "r"])
+    with pytest.raises(ValueError, match="missing"):
+        args.func(args)
+    args = parser.parse_args(["export", "run", "--out", "models/m.onnx"])
+    assert args.run_dir == Path("run") and args.out == Path("models/m.onnx")
+
+
+def test_commands_import_is_light() -> None:
+    code = "import sys, contactcal.train.commands; print('torch' in sys.modules)"
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
+    assert out.stdout.strip() == "False"

@@ -1,0 +1,94 @@
+"""Batch augmentation with kornia: image and mask transformed together.
+
+The cached network inputs are normalised (``contactcal.infer.preprocess``); augmentation maps
+them back to ``[0, 1]`` intensities with the same constants (``network_to_unit``), so that
+photometric operations (gamma, contrast, clipping) and zero padding mean what they do on a
+camera image, and then re-applies ``unit_to_network``. Randomness comes from torch's global
+generator (kornia's), so a run seeded with ``torch.manual_seed`` is reproducible and its
+generator state is what a checkpoint saves.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import kornia.augmentation as K
+import torch
+
+from contactcal.infer.preprocess import PreprocessConfig, network_to_unit, unit_to_network
+
+
+@dataclass(frozen=True)
+class AugmentConfig:
+    """Augmentation ranges; each models a real rig/camera variation the renderer does not."""
+
+    enabled: bool = True  # False: train on the rendered frames as they are (ablation, debugging)
+    brightness: float = 0.1  # ± additive, in [0, 1] units; exposure offset / stray light
+    contrast: float = 0.25  # ± multiplicative; camera gain; too much hides faint ridges
+    gamma: tuple[float, float] = (0.7, 1.4)  # tone curve range; camera/sensor response
+    flip_p: float = 0.5  # probability of each of the horizontal and vertical flips
+    rotation_deg: float = 180.0  # ± degrees; the rig is rotationally symmetric about the axis
+    translate: float = 0.03  # fraction of the side; ring-fit error of the crop
+    scale: tuple[float, float] = (0.92, 1.08)  # zoom range; ring radius/finger size variation
+    affine_p: float = 0.8  # probability of the rotation/translation/scale
+    blur_sigma: tuple[float, float] = (
+        0.1,
+        1.2,
+    )  # px at input size; defocus (too much erases ridges)
+    blur_p: float = 0.3  # probability of a blur
+    noise_std: float = 0.02  # in [0, 1] units; sensor noise
+    noise_p: float = 0.5  # probability of added noise
+
+    def __post_init__(self) -> None:
+        if not (0 < self.gamma[0] <= self.gamma[1] and 0 < self.scale[0] <= self.scale[1]):
+            raise ValueError(f"AugmentConfig: gamma/scale ranges must be 0 < lo <= hi, got {self}")
+        for name in ("flip_p", "affine_p", "blur_p", "noise_p"):
+            if not 0.0 <= getattr(self, name) <= 1.0:
+                raise ValueError(
+                    f"AugmentConfig.{name} must be in [0, 1], got {getattr(self, name)}"
+                )
+
+
+class Augmenter(torch.nn.Module):
+    """Random geometric + photometric transform of ``(x, mask)`` batches."""
+
+    def __init__(self, config: AugmentConfig, preprocess: PreprocessConfig) -> None:
+        super().__init__()
+        self.config = config
+        self.preprocess = preprocess
+        c = config
+        ops = [
+            K.RandomHorizontalFlip(p=c.flip_p),
+            K.RandomVerticalFlip(p=c.flip_p),
+            K.RandomAffine(
+                degrees=c.rotation_deg,
+                translate=(c.translate, c.translate),
+                scale=c.scale,
+                padding_mode="zeros",
+                p=c.affine_p,
+            ),
+            K.RandomBrightness(brightness=(1.0 - c.brightness, 1.0 + c.brightness), p=0.8),
+            K.RandomContrast(contrast=(1.0 - c.contrast, 1.0 + c.contrast), p=0.8),
+            K.RandomGamma(gamma=c.gamma, p=0.8),
+            K.RandomGaussianBlur(kernel_size=(5, 5), sigma=c.blur_sigma, p=c.blur_p),
+            K.RandomGaussianNoise(mean=0.0, std=c.noise_std, p=c.noise_p),
+        ]
+        self.seq = K.AugmentationSequential(*ops, data_keys=["input", "mask"])
+
+    def forward(self, x: torch.Tensor, mask: torch.Tensor) -> tuple[torch.Tensor, torch.Tensor]:
+        """Augment one batch.
+
+        Args:
+            x: ``(N, C, S, S) float32`` normalised network inputs (all channels get the same
+                transform, so the reference channel stays registered with the frame).
+            mask: ``(N, 1, S, S) float32`` in {0, 1}; warped with nearest-neighbour sampling.
+
+        Returns:
+            ``(x, mask)`` of the same shapes and dtypes; mask stays binary.
+        """
+        if not self.config.enabled:
+            return x, mask
+        u = network_to_unit(x, self.preprocess).clamp(0.0, 1.0)
+        u, m = self.seq(u, mask)
+        u = u.clamp(0.0, 1.0)
+        return unit_to_network(u, self.preprocess), (m > 0.5).to(mask.dtype)

@@ -1,0 +1,119 @@
+"""``contactcal train`` and ``contactcal export`` subcommands.
+
+This module imports neither torch nor onnx: the handlers import them when they run, so the
+deployment CLI stays fast and works without the ``train`` extra installed.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+from pathlib import Path
+from typing import Any
+
+
+def add_parsers(sub: Any) -> None:
+    """Add ``train`` and ``export`` to the CLI's subparsers object.
+
+    Args:
+        sub: what ``ArgumentParser.add_subparsers()`` returned.
+    """
+    t = sub.add_parser(
+        "train",
+        help="train the contact segmenter on synthetic datasets",
+        description="Train the U-Net contact segmenter. Options left out take the defaults "
+        "(or, with --resume, the run's saved settings).",
+    )
+    t.add_argument(
+        "--data", nargs="+", type=Path, required=True, metavar="DIR", help="dataset folder(s)"
+    )
+    t.add_argument("--out", type=Path, required=True, metavar="RUN_DIR", help="run folder")
+    t.add_argument("--epochs", type=int, help="number of epochs (default 40)")
+    t.add_argument("--device", choices=("cpu", "cuda", "auto"), help="default auto")
+    t.add_argument("--resume", action="store_true", help="continue from RUN_DIR/last.pt")
+    t.add_argument(
+        "--input-size", type=int, metavar="S", help="network input side, px (default 256)"
+    )
+    t.add_argument(
+        "--reference",
+        action=argparse.BooleanOptionalAction,
+        default=None,
+        help="feed the session's zero-pressure frame as a 2nd channel (default on)",
+    )
+    t.add_argument("--seed", type=int, help="split/init/shuffle/augmentation seed (default 0)")
+    t.add_argument("--batch-size", type=int, metavar="B", help="frames per step (default 16)")
+    t.add_argument("--threads", type=int, metavar="T", help="torch CPU threads (default: torch's)")
+    t.add_argument("--quiet", action="store_true", help="no progress bars")
+    t.set_defaults(func=_cmd_train)
+
+    e = sub.add_parser("export", help="export a trained run to ONNX")
+    e.add_argument("run_dir", type=Path, metavar="RUN_DIR", help="run folder with best.pt")
+    e.add_argument("--out", type=Path, required=True, metavar="MODEL.onnx", help="output model")
+    e.add_argument("--opset", type=int, default=17, help="ONNX opset (default 17)")
+    e.set_defaults(func=_cmd_export)
+
+
+def _check_dirs(dirs: list[Path]) -> None:
+    """Cheap path checks before torch is imported (clear message, exit 2 in the CLI)."""
+    for d in dirs:
+        if not d.is_dir():
+            raise ValueError(f"{d}: dataset folder does not exist")
+        if not (d / "index.csv").is_file():
+            raise ValueError(
+                f"{d / 'index.csv'}: missing index.csv (is {d} a `contactcal synth` output?)"
+            )
+
+
+def build_config(args: argparse.Namespace) -> Any:
+    """The TrainConfig for ``args``: defaults (or the saved run's with --resume) + given options.
+
+    Raises:
+        ValueError: unreadable saved config or invalid option values.
+    """
+    import dataclasses
+
+    from contactcal.train.checkpoint import config_from_dict
+    from contactcal.train.loop import TrainConfig
+
+    base = TrainConfig()
+    saved = args.out / "config.json"
+    if args.resume and saved.is_file():
+        try:
+            info = json.loads(saved.read_text(encoding="utf-8"))
+        except (OSError, json.JSONDecodeError) as exc:
+            raise ValueError(f"{saved}: unreadable run config ({exc})") from exc
+        base = config_from_dict(TrainConfig, info.get("train"), str(saved))
+    given = {
+        "epochs": args.epochs,
+        "device": args.device,
+        "input_size": args.input_size,
+        "use_reference": args.reference,
+        "seed": args.seed,
+        "batch_size": args.batch_size,
+        "num_threads": args.threads,
+    }
+    return dataclasses.replace(base, **{k: v for k, v in given.items() if v is not None})
+
+
+def _cmd_train(args: argparse.Namespace) -> int:
+    _check_dirs(list(args.data))
+    from contactcal.train.loop import train
+
+    summary = train(
+        args.data, args.out, build_config(args), resume=args.resume, progress=not args.quiet
+    )
+    val = summary["val"]
+    iou = val.get("val_iou")
+    print(
+        f"{summary['out_dir']}: best epoch {summary['best_epoch']}, "
+        f"val IoU {'-' if iou is None else f'{iou:.3f}'}, {summary['parameters']} parameters"
+    )
+    return 0
+
+
+def _cmd_export(args: argparse.Namespace) -> int:
+    from contactcal.train.export import export_onnx
+
+    path = export_onnx(args.run_dir, args.out, opset=args.opset)
+    print(f"wrote {path}")
+    return 0
