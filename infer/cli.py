@@ -96,8 +96,10 @@ def build_parser() -> argparse.ArgumentParser:
     d.set_defaults(func=_cmd_demo)
 
     # Heavy roles register their own subcommands; their modules import nothing heavy.
+    from contactcal.synth.commands import add_parsers as add_synth_parsers
     from contactcal.train.commands import add_parsers as add_train_parsers
 
+    add_synth_parsers(sub)
     add_train_parsers(sub)
     return parser
 
@@ -107,8 +109,13 @@ def _cmd_demo(args: argparse.Namespace) -> int:
     from contactcal.infer.examples import example_manifest
 
     manifest = example_manifest()
+    from contactcal.infer.segmenter import DEFAULT_MODEL
+
     for method in METHODS:
         out = args.out / method
+        if method == "unet" and not DEFAULT_MODEL.is_file():
+            print(f"== {method}: skipped, no shipped model at {DEFAULT_MODEL}")
+            continue
         scale = _resolve_scale(
             argparse.Namespace(mm_per_px=None, rig=None), manifest.parent / "rig.json"
         )

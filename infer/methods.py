@@ -64,15 +64,50 @@ class ClassicalMethod:
         return AreaResult(res.contact, res.area_px, res.reason, contour)
 
 
-METHODS = ("classical",)
+class UnetMethod:
+    """The learned segmenter (:class:`contactcal.infer.segmenter.OnnxSegmenter`)."""
+
+    name = "unet"
+
+    def __init__(self, model: str | None = None, threads: int = 1) -> None:
+        from contactcal.infer.segmenter import OnnxSegmenter
+
+        self.segmenter = OnnxSegmenter(model, threads=threads)
+
+    def prepare(self, reference: np.ndarray | None) -> None:
+        """Fix the crop and the reference channel from the session's zero-pressure frame."""
+        self.segmenter.set_reference(reference)
+
+    def measure(self, image: np.ndarray) -> AreaResult:
+        """Segment; the contour is the kept region's outline in input pixels."""
+        import cv2
+
+        seg = self.segmenter.predict(image)
+        if not seg.contact:
+            return AreaResult(False, 0.0, "no contact", None)
+        mask = self.segmenter.mask_in_input(seg, image.shape[:2]).astype(np.uint8)
+        contours, _ = cv2.findContours(mask, cv2.RETR_EXTERNAL, cv2.CHAIN_APPROX_SIMPLE)
+        contour = max(contours, key=cv2.contourArea) if contours else None
+        return AreaResult(True, seg.area_px, "", contour)
 
 
-def make_method(name: str, model: str | None = None) -> Method:
+#: Method names; the first is the default of ``measure`` and ``calibrate``.
+METHODS = ("classical", "unet")
+
+
+def make_method(name: str, model: str | None = None, threads: int = 1) -> Method:
     """Build a method by name.
 
+    Args:
+        name: ``"unet"`` or ``"classical"``.
+        model: ONNX file for ``"unet"`` (None → the shipped model).
+        threads: onnxruntime intra-op threads for ``"unet"``.
+
     Raises:
-        ValueError: unknown method name.
+        ValueError: unknown method name; ``ModelError`` for an unusable model file.
     """
     if name == "classical":
         return ClassicalMethod()
+    if name == "unet":
+        return UnetMethod(model, threads)
     raise ValueError(f"unknown method {name!r}; expected one of {', '.join(METHODS)}")

@@ -27,7 +27,9 @@ Model (one call to `solve_contact` per pressure):
    ``rm = sqrt(area/pi)`` (the formula equals g at onset); along each ray from the centre an
    axisymmetric clamped-annulus profile from r_b(phi) to the clamp R_c(phi) (see `membrane_shape`).
    The ``max(g, .)`` matters just after onset, where the uncoupled area law would put the plateau
-   below the finger; the indentation ``z_top - g`` is therefore >= 0.
+   below the finger; the indentation ``z_top - g`` is therefore >= 0. It is then softly capped
+   at ``MAX_INDENTATION_MM`` (the pulp's compliance is finite; with the several-mm gaps the
+   renderer needs for a shrinking inner ring, the raw formula would indent 5+ mm).
 """
 
 from __future__ import annotations
@@ -36,6 +38,7 @@ import math
 from dataclasses import dataclass
 
 import numpy as np
+
 from contactcal.synth.membrane_shape import (
     AREA_POLYGON_POINTS,
     ContactState,
@@ -46,6 +49,7 @@ from contactcal.synth.membrane_shape import (
 __all__ = [
     "CENTRE_MAX_FRACTION",
     "CLAMP_MARGIN_FRACTION",
+    "MAX_INDENTATION_MM",
     "TILT_EGG_GAIN",
     "ContactState",
     "FingerParams",
@@ -59,6 +63,8 @@ __all__ = [
 
 TILT_EGG_GAIN = 0.25  # eps_1 per sin(tilt): 0.3 rad tilt -> 7 % egg asymmetry
 CLAMP_MARGIN_FRACTION = 0.08  # patch kept within (1 - this) a, leaving room for the annulus
+MAX_INDENTATION_MM = 3.0  # finger pulp indentation saturates near this (soft clip); the
+#   uncoupled height law alone would push a soft membrane (large gap, low tension) 5+ mm in
 CENTRE_MAX_FRACTION = 0.5  # |patch centre| <= this * a; beyond, the finger is off the membrane
 
 
@@ -287,7 +293,7 @@ def solve_contact(
     area_b = polygon_area_mm2(state.boundary_polygon(AREA_POLYGON_POINTS))
     rm2 = area_b / math.pi
     z_formula = p / (4.0 * t) * ((a * a - rm2) - rm2 * math.log(a * a / rm2)) if rm2 > 0 else cap
-    z_top = max(g, z_formula)
+    z_top = g + MAX_INDENTATION_MM * _soft_clip(max(0.0, z_formula - g) / MAX_INDENTATION_MM)
     return ContactState(
         pressure_kpa,
         p_on,

@@ -14,7 +14,9 @@ from dataclasses import dataclass, replace
 import numpy as np
 
 from contactcal.synth.camera import CameraEffects
+from contactcal.synth.coating import MembraneOptics
 from contactcal.synth.mechanics import FingerParams, MembraneParams, tension_for_onset
+from contactcal.synth.rig import RigGeometry
 
 LED_COUNT = 16  # LEDs feeding the light guide plate (sets the azimuthal non-uniformity's scale)
 
@@ -25,13 +27,12 @@ class SessionParams:
 
     finger: FingerParams
     membrane: MembraneParams
+    rig: RigGeometry  # rig build tolerances: chamber depth, LGP depth, field of view, camera offset
     onset_kpa: float  # kPa, the onset the membrane parameters were solved for
     fingerprint_seed: int  # seed of the ridge texture (one finger = one texture)
     ridge_contrast: float  # 0-1, how strongly ridges couple to the membrane (faint ↔ crisp)
-    skin_albedo: tuple[float, float, float]  # linear RGB of the skin seen through the membrane
-    particle_seed: int  # seed of the mica particle normals
-    particle_density: float  # 0-1, fraction of the coating's texels with a tilted flake
-    particle_roughness: float  # GGX alpha of the coating; low = sharp rings, high = diffuse glow
+    particle_seed: int  # seed of the mica flake normal map
+    optics: MembraneOptics  # coating (flake density, tilt, sparkle, roughness) and skin colour
     lgp_radiance: float  # emitted radiance of the light guide plate (relative)
     lgp_profile: tuple[float, ...]  # (LED_COUNT,) relative brightness around the ring
     camera: CameraEffects  # session's base camera (exposure, blur, noise, JPEG, tilt)
@@ -71,13 +72,23 @@ def sample_session(rng: np.random.Generator, hard: bool = False) -> SessionParam
         harmonics=harmonics,
     )
     a = rng.uniform(11.5, 13.5)
-    gap = rng.uniform(1.0, 2.0)
+    # Several mm: the inner ring (LGP seen in the concave membrane) only comes back and shrinks
+    # for inflations of ~4.5-7 mm (docs/renderer.md), and the paper shows it shrinking before
+    # contact. A 70 µm silicone membrane's low tension makes such gaps consistent with onset.
+    gap = rng.uniform(3.5, 6.0)
     onset = rng.uniform(2.0, 4.0)
     membrane = MembraneParams(
         clamp_radius_mm=a,
         tension_n_per_mm=tension_for_onset(onset, gap, a),
         gap_mm=gap,
         onset_ramp_kpa=rng.uniform(0.5, 1.0),
+    )
+    rig = RigGeometry(
+        chamber_depth_mm=float(rng.uniform(2.5, 4.0)),
+        clamp_radius_mm=float(a),
+        lgp_gap_mm=float(rng.uniform(7.0, 12.0)),
+        fov_y_deg=float(rng.uniform(28.0, 30.5)),
+        camera_offset_mm=(float(rng.normal(0, 0.3)), float(rng.normal(0, 0.3))),
     )
     profile = 1.0 + rng.normal(0.0, 0.25 if hard else 0.08, LED_COUNT)
     if hard and rng.random() < 0.3:  # a dim sector: "ring partly missing"
@@ -95,17 +106,27 @@ def sample_session(rng: np.random.Generator, hard: bool = False) -> SessionParam
         tilt_deg=(float(rng.normal(0, 0.6)), float(rng.normal(0, 0.6))),
         shift_px=(float(rng.normal(0, 1.5)), float(rng.normal(0, 1.5))),
     )
-    skin = np.array([0.85, 0.55, 0.45]) * rng.uniform(0.6, 1.2)
+    skin = np.clip(np.array([0.62, 0.42, 0.36]) * rng.uniform(0.6, 1.3, 3) ** 0.3, 0.0, 1.0)
+    refl = float(rng.uniform(0.35, 0.75))
+    optics = MembraneOptics(
+        particle_density_per_mm2=float(rng.uniform(250.0, 1200.0)),
+        particle_tilt_deg=float(rng.uniform(1.0, 4.0)),
+        sparkle_fraction=float(rng.uniform(0.03, 0.2)),
+        sparkle_tilt_deg=float(rng.uniform(10.0, 30.0)),
+        roughness_alpha=float(rng.uniform(0.03, 0.12)),
+        coating_reflectance=(refl, refl, refl * float(rng.uniform(0.9, 1.05))),
+        coating_diffuse=float(rng.uniform(0.0, 0.08)),
+        skin_rgb=(float(skin[0]), float(skin[1]), float(skin[2])),
+    )
     return SessionParams(
         finger=finger,
         membrane=membrane,
+        rig=rig,
         onset_kpa=float(onset),
         fingerprint_seed=int(rng.integers(2**31)),
         ridge_contrast=float(rng.uniform(0.12, 0.4) if hard else rng.uniform(0.35, 1.0)),
-        skin_albedo=(float(skin[0]), float(skin[1]), float(skin[2])),
         particle_seed=int(rng.integers(2**31)),
-        particle_density=float(rng.uniform(0.2, 0.8)),
-        particle_roughness=float(rng.uniform(0.08, 0.3)),
+        optics=optics,
         lgp_radiance=float(rng.uniform(0.7, 1.4)),
         lgp_profile=tuple(float(v) for v in np.clip(profile, 0.05, None)),
         camera=camera,

@@ -8,6 +8,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+
 from contactcal.synth.mechanics import (
     CLAMP_MARGIN_FRACTION,
     FingerParams,

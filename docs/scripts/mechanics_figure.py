@@ -11,6 +11,7 @@ import matplotlib
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt
 import numpy as np
+
 from contactcal.synth.mechanics import (
     FingerParams,
     MembraneParams,

@@ -1,0 +1,56 @@
+"""``contactcal synth`` subcommand (arguments only; Mitsuba is imported when it runs)."""
+
+from __future__ import annotations
+
+import argparse
+from pathlib import Path
+
+
+def add_parsers(sub: argparse._SubParsersAction) -> None:
+    """Add ``synth`` to the ``contactcal`` subcommands."""
+    s = sub.add_parser("synth", help="render a synthetic dataset of calibration sessions")
+    s.add_argument("--fingers", type=int, required=True, help="sessions in the whole set")
+    s.add_argument("--pressures", default="0:20:1", help="kPa, start:stop:step or a,b,c")
+    s.add_argument("--size", default="320x240", help="frame size W[xH], 4:3 (default 320x240)")
+    s.add_argument("--spp", type=int, default=16, help="samples per pixel (default 16)")
+    s.add_argument("--seed", type=int, default=0, help="dataset seed (default 0)")
+    s.add_argument("--hard-fraction", type=float, default=0.25, help="share of hard sessions")
+    s.add_argument("--out", type=Path, required=True, help="dataset folder")
+    s.add_argument("--workers", type=int, default=1, help="worker processes (default 1)")
+    s.add_argument("--shard", default="0/1", help="render only shard i of n (i/n)")
+    s.add_argument("--variant", default="auto", choices=("auto", "llvm_ad_rgb", "scalar_rgb"))
+    s.add_argument("--quiet", action="store_true", help="no progress bar")
+    s.set_defaults(func=_cmd_synth)
+
+
+def _cmd_synth(args: argparse.Namespace) -> int:
+    from contactcal.infer.atomic import write_json
+    from contactcal.synth.dataset import (
+        DatasetConfig,
+        build_dataset,
+        parse_pressures,
+        parse_shard,
+        parse_size,
+    )
+    from contactcal.synth.session import RenderConfig
+
+    if args.workers < 1:
+        raise ValueError(f"--workers must be >= 1, got {args.workers}")
+    width, height = parse_size(args.size)
+    config = DatasetConfig(
+        fingers=args.fingers,
+        pressures_kpa=parse_pressures(args.pressures),
+        seed=args.seed,
+        hard_fraction=args.hard_fraction,
+        render=RenderConfig(width=width, height=height, spp=args.spp, variant=args.variant),
+    )
+    shard = parse_shard(args.shard)
+    stats = build_dataset(args.out, config, args.workers, shard, progress=not args.quiet)
+    write_json(args.out / f"run_shard{shard[0]}of{shard[1]}.json", {"args": _args(args), **stats})
+    made, fingers = stats["frames_rendered"], stats["fingers"]
+    print(f"synth: {made} frames rendered, {fingers} fingers → {args.out}")
+    return 0
+
+
+def _args(args: argparse.Namespace) -> dict[str, object]:
+    return {k: str(v) if isinstance(v, Path) else v for k, v in vars(args).items() if k != "func"}

@@ -1,0 +1,245 @@
+"""``contactcal synth``: write a dataset of rendered sessions (layout in docs/CONVENTIONS.md).
+
+Work is split by finger (one finger = one session = one seed). ``--shard i/n`` renders fingers
+``f`` with ``f % n == i``, so a cluster job array covers the set exactly once; ``--workers K``
+renders K fingers at a time in worker processes that are recycled after each finger (Mitsuba
+leaks memory across scene loads). Every file is written atomically and a frame's truth JSON is
+written last, so a killed run resumes by skipping frames whose JSON exists. The same seed gives
+byte-identical files (for the same Mitsuba variant).
+"""
+
+from __future__ import annotations
+
+import csv
+import io
+import json
+import multiprocessing as mp
+import os
+from dataclasses import asdict, dataclass, field
+from pathlib import Path
+from typing import Any
+
+import cv2
+import numpy as np
+
+from contactcal.infer.atomic import atomic_path, write_json, write_text
+from contactcal.synth.randomize import SessionParams, sample_session
+from contactcal.synth.session import FrameOutput, RenderConfig, render_session
+
+INDEX_COLUMNS = (
+    "finger", "session", "frame", "mask", "pressure_kpa", "contact", "area_px", "area_mm2",
+    "area_mm2_projected", "mm_per_px", "onset_kpa", "width", "height", "hard",
+)  # fmt: skip
+
+
+@dataclass(frozen=True)
+class DatasetConfig:
+    """What ``contactcal synth`` renders (written to ``config.json``)."""
+
+    fingers: int  # sessions in the whole set (all shards together)
+    pressures_kpa: tuple[float, ...]  # pressure steps of every session, kPa
+    seed: int  # dataset seed; finger f uses (seed, f)
+    hard_fraction: float = 0.25  # share of sessions from the hard-case distribution
+    render: RenderConfig = field(default_factory=RenderConfig)  # size, spp, mesh, variant
+
+    def __post_init__(self) -> None:
+        if self.fingers < 1:
+            raise ValueError(f"--fingers must be >= 1, got {self.fingers}")
+        if not self.pressures_kpa or min(self.pressures_kpa) < 0:
+            raise ValueError(f"pressures must be >= 0 kPa, got {self.pressures_kpa}")
+        if len(set(self.pressures_kpa)) != len(self.pressures_kpa):
+            raise ValueError("pressures must be distinct")
+        if not 0.0 <= self.hard_fraction <= 1.0:
+            raise ValueError(f"--hard-fraction must be in [0, 1], got {self.hard_fraction}")
+
+
+def frame_name(p: float) -> str:
+    """File stem of the frame at ``p`` kPa, e.g. ``p05.0kpa``."""
+    return f"p{p:04.1f}kpa"
+
+
+def session_params(config: DatasetConfig, finger: int) -> SessionParams:
+    """The deterministic parameters of finger ``finger``."""
+    rng = np.random.default_rng([config.seed, finger])
+    hard = bool(rng.random() < config.hard_fraction)
+    return sample_session(rng, hard=hard)
+
+
+def _write_png(path: Path, image: np.ndarray) -> None:
+    ok, buf = cv2.imencode(".png", image)
+    if not ok:
+        raise OSError(f"{path}: PNG encoding failed")
+    with atomic_path(path) as tmp:
+        tmp.write_bytes(buf.tobytes())
+
+
+def _truth(out: FrameOutput, finger: int, session: str, hard: bool) -> dict[str, Any]:
+    name = frame_name(out.pressure_kpa)
+    area_px = int(out.mask.sum())
+    h, w = out.mask.shape
+    return {
+        "finger": finger, "session": session,
+        "frame": f"{session}/frames/{name}.png", "mask": f"{session}/masks/{name}.png",
+        "pressure_kpa": out.pressure_kpa, "contact": int(area_px > 0), "area_px": area_px,
+        "area_mm2": round(out.state.area_mm2, 6),
+        "area_mm2_projected": round(area_px * out.mm_per_px**2, 6),
+        "mm_per_px": round(out.mm_per_px, 8), "onset_kpa": round(out.state.onset_kpa, 6),
+        "width": w, "height": h, "hard": int(hard),
+    }  # fmt: skip
+
+
+def render_finger(out_dir: str, config: DatasetConfig, finger: int) -> int:
+    """Render (or finish) one finger's session folder; returns the frames rendered now."""
+    root = Path(out_dir)
+    name = f"finger_{finger:04d}"
+    folder = root / name
+    params = session_params(config, finger)
+    pressures = sorted(config.pressures_kpa)
+    truth_paths = [folder / "frames" / f"{frame_name(p)}.json" for p in pressures]
+    skip = [t.is_file() for t in truth_paths]
+    made = 0
+    if not all(skip):
+        frames = render_session(params, pressures, config.render, (config.seed, finger), None, skip)
+        for out, tpath in zip(frames, truth_paths, strict=True):
+            if out is None:
+                continue
+            stem = frame_name(out.pressure_kpa)
+            _write_png(
+                folder / "frames" / f"{stem}.png", np.ascontiguousarray(out.frame[:, :, ::-1])
+            )
+            _write_png(folder / "masks" / f"{stem}.png", out.mask.astype(np.uint8) * 255)
+            write_json(tpath, _truth(out, finger, name, params.hard))
+            made += 1
+    rows = [json.loads(t.read_text()) for t in truth_paths]
+    manifest = "file,pressure_kpa\n" + "".join(
+        f"frames/{frame_name(r['pressure_kpa'])}.png,{r['pressure_kpa']}\n" for r in rows
+    )
+    write_text(folder / "manifest.csv", manifest)
+    # Scale at the contact plane: the median plateau height's pixel size over contact frames.
+    scales = [r["mm_per_px"] for r in rows if r["contact"]] or [r["mm_per_px"] for r in rows]
+    write_json(folder / "rig.json", {"mm_per_px": float(np.median(scales)),
+                                     "image_width_px": config.render.width})  # fmt: skip
+    write_json(folder / "session.json", _jsonable(asdict(params)))
+    return made
+
+
+def _jsonable(obj: Any) -> Any:
+    if isinstance(obj, dict):
+        return {k: _jsonable(v) for k, v in obj.items()}
+    if isinstance(obj, (list, tuple)):
+        return [_jsonable(v) for v in obj]
+    if isinstance(obj, (np.floating, np.integer)):
+        return obj.item()
+    return obj
+
+
+def _run_finger(task: tuple[str, DatasetConfig, int]) -> tuple[int, int]:
+    out_dir, config, finger = task
+    return finger, render_finger(out_dir, config, finger)
+
+
+def write_index(out_dir: str | os.PathLike[str]) -> Path:
+    """Rebuild ``index.csv`` from every finished frame under ``out_dir`` (sorted, atomic)."""
+    root = Path(out_dir)
+    rows = [json.loads(p.read_text()) for p in sorted(root.glob("finger_*/frames/*.json"))]
+    rows.sort(key=lambda r: (r["finger"], r["pressure_kpa"]))
+    buf = io.StringIO()
+    writer = csv.DictWriter(buf, fieldnames=INDEX_COLUMNS, lineterminator="\n")
+    writer.writeheader()
+    writer.writerows(rows)
+    write_text(root / "index.csv", buf.getvalue())
+    return root / "index.csv"
+
+
+def shard_fingers(fingers: int, shard: tuple[int, int]) -> list[int]:
+    """Fingers of shard ``(i, n)``: ``f % n == i``."""
+    i, n = shard
+    if not (n >= 1 and 0 <= i < n):
+        raise ValueError(f"--shard must be i/n with 0 <= i < n, got {i}/{n}")
+    return [f for f in range(fingers) if f % n == i]
+
+
+def build_dataset(
+    out_dir: str | os.PathLike[str],
+    config: DatasetConfig,
+    workers: int = 1,
+    shard: tuple[int, int] = (0, 1),
+    progress: bool = True,
+) -> dict[str, int]:
+    """Render this shard's fingers into ``out_dir`` (resuming), then rebuild ``index.csv``."""
+    root = Path(out_dir)
+    root.mkdir(parents=True, exist_ok=True)
+    _check_config_matches(root, config)
+    fingers = shard_fingers(config.fingers, shard)
+    tasks = [(str(root), config, f) for f in fingers]
+    made = 0
+    bar = None
+    if progress:
+        from tqdm import tqdm
+
+        total = len(fingers) * len(config.pressures_kpa)
+        bar = tqdm(total=total, desc=f"synth shard {shard[0]}/{shard[1]}", unit="frame")
+    ctx = mp.get_context("spawn")
+    with ctx.Pool(max(1, workers), maxtasksperchild=1) as pool:
+        for _, n in pool.imap_unordered(_run_finger, tasks):
+            made += n
+            if bar is not None:
+                bar.update(len(config.pressures_kpa))
+    if bar is not None:
+        bar.close()
+    write_index(root)
+    return {"fingers": len(fingers), "frames_rendered": made}
+
+
+def _check_config_matches(root: Path, config: DatasetConfig) -> None:
+    """Write ``config.json``, or refuse to mix a different config into an existing folder."""
+    path = root / "config.json"
+    data = _jsonable(asdict(config))
+    if path.is_file():
+        old = json.loads(path.read_text())
+        if old != json.loads(json.dumps(data)):
+            raise ValueError(
+                f"{path}: this folder was rendered with a different config; use a new --out "
+                "or the same arguments to resume"
+            )
+        return
+    write_json(path, data)
+
+
+def parse_pressures(text: str) -> tuple[float, ...]:
+    """``"0:20:1"`` (start:stop:step, stop included) or ``"0,2.5,5"`` → kPa tuple."""
+    try:
+        if ":" in text:
+            start, stop, step = (float(v) for v in text.split(":"))
+            if step <= 0 or stop < start:
+                raise ValueError
+            n = int(np.floor((stop - start) / step + 1e-9)) + 1
+            return tuple(round(start + k * step, 6) for k in range(n))
+        return tuple(float(v) for v in text.split(","))
+    except ValueError:
+        raise ValueError(
+            f"--pressures: expected start:stop:step (e.g. 0:20:1) or a comma list, got {text!r}"
+        ) from None
+
+
+def parse_size(text: str) -> tuple[int, int]:
+    """``"320x240"`` or ``"320"`` (4:3 implied) → (width, height)."""
+    try:
+        if "x" in text:
+            w, h = (int(v) for v in text.lower().split("x"))
+        else:
+            w = int(text)
+            h = round(w * 3 / 4)
+    except ValueError:
+        raise ValueError(f"--size: expected W or WxH (4:3, e.g. 320x240), got {text!r}") from None
+    return w, h
+
+
+def parse_shard(text: str) -> tuple[int, int]:
+    """``"i/n"`` → (i, n)."""
+    try:
+        i, n = (int(v) for v in text.split("/"))
+    except ValueError:
+        raise ValueError(f"--shard: expected i/n (e.g. 0/4), got {text!r}") from None
+    shard_fingers(1, (i, n))
+    return i, n
