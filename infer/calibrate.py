@@ -3,15 +3,27 @@
 from __future__ import annotations
 
 import os
+from dataclasses import dataclass
 from pathlib import Path
 
 from contactcal.infer.calibration_io import FrameResult, format_table, write_calibration
-from contactcal.infer.curve import CurveConfig, fit_monotone
+from contactcal.infer.curve import Curve, CurveConfig, fit_monotone
 from contactcal.infer.errors import RunError
-from contactcal.infer.manifest import read_manifest
+from contactcal.infer.manifest import Frame, read_manifest
 from contactcal.infer.methods import make_method
 from contactcal.infer.scale import PixelScale
-from contactcal.infer.session import measure_files
+from contactcal.infer.session import Measured, measure_files
+
+
+@dataclass(frozen=True)
+class CalibrationReport:
+    """What a calibration run produced."""
+
+    table: str  # the short text table the CLI prints
+    frames: list[Frame]  # manifest rows, sorted by pressure
+    measured: list[Measured]  # per frame, same order
+    curve: Curve
+    files: dict[str, Path]  # "json", "csv", "png"
 
 
 def calibrate_session(
@@ -21,7 +33,7 @@ def calibrate_session(
     model: str | os.PathLike[str] | None = None,
     scale: PixelScale | None = None,
     curve_config: CurveConfig | None = None,
-) -> str:
+) -> CalibrationReport:
     """Calibrate the session listed in ``manifest`` and write its outputs into ``out_dir``.
 
     The lowest-pressure frame is the session's reference (ROI for the classical method).
@@ -35,7 +47,7 @@ def calibrate_session(
         curve_config: fit settings (None → defaults).
 
     Returns:
-        The short text table the CLI prints.
+        The :class:`CalibrationReport` (table, measurements, curve, written files).
 
     Raises:
         ManifestError / ImageError: bad manifest or frame (nothing written).
@@ -75,5 +87,5 @@ def calibrate_session(
         "mm_per_px": None if scale is None else scale.mm_per_px,
         "scale_image_width_px": None if scale is None else scale.image_width_px,
     }
-    write_calibration(out_dir, results, curve, method.name, extra)
-    return format_table(results, curve)
+    files = write_calibration(out_dir, results, curve, method.name, extra)
+    return CalibrationReport(format_table(results, curve), frames, measured, curve, files)

@@ -10,9 +10,14 @@ import argparse
 import sys
 from collections.abc import Sequence
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 from contactcal.infer.errors import RunError
 from contactcal.infer.methods import METHODS
+
+if TYPE_CHECKING:
+    from contactcal.infer.scale import PixelScale
+    from contactcal.infer.session import Measured
 
 
 def _scale_args(p: argparse.ArgumentParser) -> None:
@@ -21,45 +26,96 @@ def _scale_args(p: argparse.ArgumentParser) -> None:
     g.add_argument("--rig", type=Path, help="rig config JSON with mm_per_px and image_width_px")
 
 
-def _resolve_scale(args: argparse.Namespace, default_rig: Path | None = None):
+def _method_args(p: argparse.ArgumentParser) -> None:
+    p.add_argument("--method", choices=METHODS, default=METHODS[0], help="default %(default)s")
+    p.add_argument("--model", type=Path, help="ONNX model for --method unet (default: shipped)")
+    p.add_argument("--threads", type=int, default=1, help="onnxruntime threads (default 1)")
+    p.add_argument(
+        "--overlay",
+        type=Path,
+        metavar="DIR",
+        help="also write each frame with the learned and classical outlines to DIR",
+    )
+
+
+def _resolve_scale(args: argparse.Namespace, default_rig: Path | None = None) -> PixelScale | None:
     from contactcal.infer.scale import PixelScale, load_rig_config
 
-    if args.mm_per_px is not None:
+    if getattr(args, "mm_per_px", None) is not None:
         return PixelScale(args.mm_per_px, None)
-    if args.rig is not None:
+    if getattr(args, "rig", None) is not None:
         return load_rig_config(args.rig)
     if default_rig is not None and default_rig.is_file():
         return load_rig_config(default_rig)
     return None
 
 
-def _cmd_measure(args: argparse.Namespace) -> int:
-    from contactcal.infer.atomic import write_json
+def _overlay_runs(
+    args: argparse.Namespace, primary: list[Measured], files: list[Path], reference: Path | None
+) -> dict[str, list[Measured]]:
+    """Measurements of every method for the overlays (the primary run is reused)."""
     from contactcal.infer.methods import make_method
     from contactcal.infer.session import measure_files
 
-    method = make_method(args.method, args.model)
+    runs = {args.method: primary}
+    for name in METHODS:
+        if name not in runs:
+            runs[name] = measure_files(
+                files, make_method(name, args.model, args.threads), reference
+            )
+    return runs
+
+
+def _cmd_measure(args: argparse.Namespace) -> int:
+    from contactcal.infer.atomic import write_json
+    from contactcal.infer.methods import make_method
+    from contactcal.infer.session import measure_files, write_overlays
+
+    method = make_method(args.method, args.model, args.threads)
     measured = measure_files(args.images, method, args.reference, _resolve_scale(args))
     write_json(args.out, [m.to_json(method.name) for m in measured])
+    if args.overlay is not None:
+        write_overlays(_overlay_runs(args, measured, args.images, args.reference), args.overlay)
     for m in measured:
-        area = (
-            f"{m.area_mm2:8.1f} mm²" if m.area_mm2 is not None else f"{m.result.area_px:10.0f} px"
-        )
+        mm2 = m.area_mm2
+        area = f"{mm2:8.1f} mm²" if mm2 is not None else f"{m.result.area_px:10.0f} px"
         print(f"{m.file}  contact={'yes' if m.result.contact else 'no ':3s} area={area}")
     return 0
 
 
 def _cmd_calibrate(args: argparse.Namespace) -> int:
     from contactcal.infer.calibrate import calibrate_session
+    from contactcal.infer.session import write_overlays
 
-    report = calibrate_session(
-        args.manifest,
-        args.out,
-        args.method,
-        args.model,
-        _resolve_scale(args, args.manifest.parent / "rig.json"),
-    )
-    print(report)
+    scale = _resolve_scale(args, args.manifest.parent / "rig.json")
+    rep = calibrate_session(args.manifest, args.out, args.method, args.model, scale)
+    if args.overlay is not None:
+        files = [f.file for f in rep.frames]
+        runs = _overlay_runs(args, rep.measured, files, files[0])
+        write_overlays(runs, args.overlay, [f"{f.pressure_kpa:g} kPa" for f in rep.frames])
+    print(rep.table)
+    return 0
+
+
+def _cmd_demo(args: argparse.Namespace) -> int:
+    from contactcal.infer.demo import run_demo
+
+    print(run_demo(args.out, args.manifest))
+    return 0
+
+
+def _cmd_bench(args: argparse.Namespace) -> int:
+    from contactcal.infer.bench import BenchConfig, run_bench
+
+    if args.repeats < 1 or args.timing_frames < 1:
+        raise ValueError("--repeats and --timing-frames must be >= 1")
+    cfg = BenchConfig(repeats=args.repeats, timing_frames=args.timing_frames)
+    res = run_bench(args.data, args.out, None if args.model is None else str(args.model), cfg)
+    for row in res["bins"]:
+        err = row["median_abs_rel_error"]
+        shown = "–" if err is None else f"{100 * err:6.2f} %"
+        print(f"{row['method']:>16s} {row['bin_kpa']:>6s} kPa  median |rel err| {shown}")
+    print(f"report: {args.out / 'report.md'}")
     return 0
 
 
@@ -76,8 +132,7 @@ def build_parser() -> argparse.ArgumentParser:
 
     m = sub.add_parser("measure", help="measure the contact area in images")
     m.add_argument("images", nargs="+", type=Path, metavar="IMAGE")
-    m.add_argument("--method", choices=METHODS, default=METHODS[0])
-    m.add_argument("--model", type=Path, help="ONNX model for --method unet")
+    _method_args(m)
     m.add_argument("--reference", type=Path, help="the session's zero-pressure frame")
     m.add_argument("--out", type=Path, required=True, help="results JSON (list, one per image)")
     _scale_args(m)
@@ -85,15 +140,23 @@ def build_parser() -> argparse.ArgumentParser:
 
     c = sub.add_parser("calibrate", help="calibrate a session: area vs pressure and its inverse")
     c.add_argument("manifest", type=Path, metavar="MANIFEST.csv")
-    c.add_argument("--method", choices=METHODS, default=METHODS[0])
-    c.add_argument("--model", type=Path, help="ONNX model for --method unet")
+    _method_args(c)
     c.add_argument("--out", type=Path, required=True, help="output folder")
     _scale_args(c)
     c.set_defaults(func=_cmd_calibrate)
 
-    d = sub.add_parser("demo", help="calibrate the bundled example session")
+    d = sub.add_parser("demo", help="calibrate the bundled example session with both methods")
     d.add_argument("--out", type=Path, default=Path("out/demo"), help="output folder")
+    d.add_argument("--manifest", type=Path, help="another session instead of the example")
     d.set_defaults(func=_cmd_demo)
+
+    b = sub.add_parser("bench", help="accuracy and speed of every method on rendered sessions")
+    b.add_argument("--data", type=Path, required=True, help="dataset folder (index.csv)")
+    b.add_argument("--out", type=Path, required=True, help="report folder")
+    b.add_argument("--model", type=Path, help="ONNX model (default: shipped)")
+    b.add_argument("--repeats", type=int, default=5, help="timing runs; median (default 5)")
+    b.add_argument("--timing-frames", type=int, default=6, help="frames per timing run")
+    b.set_defaults(func=_cmd_bench)
 
     # Heavy roles register their own subcommands; their modules import nothing heavy.
     from contactcal.synth.commands import add_parsers as add_synth_parsers
@@ -104,30 +167,12 @@ def build_parser() -> argparse.ArgumentParser:
     return parser
 
 
-def _cmd_demo(args: argparse.Namespace) -> int:
-    from contactcal.infer.calibrate import calibrate_session
-    from contactcal.infer.examples import example_manifest
-
-    manifest = example_manifest()
-    from contactcal.infer.segmenter import DEFAULT_MODEL
-
-    for method in METHODS:
-        out = args.out / method
-        if method == "unet" and not DEFAULT_MODEL.is_file():
-            print(f"== {method}: skipped, no shipped model at {DEFAULT_MODEL}")
-            continue
-        scale = _resolve_scale(
-            argparse.Namespace(mm_per_px=None, rig=None), manifest.parent / "rig.json"
-        )
-        print(f"== {method} → {out}")
-        print(calibrate_session(manifest, out, method, None, scale))
-    return 0
-
-
 def main(argv: Sequence[str] | None = None) -> int:
     """Entry point of the ``contactcal`` console script."""
     parser = build_parser()
     args = parser.parse_args(argv)
+    if getattr(args, "threads", 1) < 1:
+        parser.error("--threads must be >= 1")
     try:
         return int(args.func(args))
     except RunError as exc:

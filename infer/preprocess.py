@@ -226,7 +226,7 @@ def crop_resize(image: np.ndarray, box: CropBox, size: int) -> np.ndarray:
     return cv2.resize(crop, (size, size), interpolation=interp)
 
 
-def _valid_window(box: CropBox, shape: tuple[int, int], size: int) -> tuple[slice, slice]:
+def valid_window(box: CropBox, shape: tuple[int, int], size: int) -> tuple[slice, slice]:
     """Network-pixel rows/cols whose centres fall inside the image."""
     k = box.side / size
     u = (np.arange(size) + 0.5) * k - 0.5
@@ -263,7 +263,7 @@ def to_network(
     gray = _gray(gray, "to_network input")
     s = config.input_size
     crop = crop_resize(gray, box, s)
-    rows, cols = _valid_window(box, gray.shape, s)
+    rows, cols = valid_window(box, gray.shape, s)
     ref = float(np.percentile(crop[rows, cols], config.norm_percentile))
     u = np.clip(crop / max(ref, 1.0), 0.0, 1.0)
     return unit_to_network(u, config).astype(np.float32)

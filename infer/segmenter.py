@@ -23,6 +23,7 @@ from contactcal.infer.preprocess import (
     from_network,
     locate_ring,
     to_network,
+    valid_window,
 )
 
 #: The shipped model (source tree; present in editable installs and the repository).
@@ -135,7 +136,9 @@ class OnnxSegmenter:
         batch = np.stack(chans)[None].astype(np.float32)
         logits = self.session.run(None, {self.input_name: batch})[0][0, 0]
         prob = 1.0 / (1.0 + np.exp(-np.clip(logits, -30.0, 30.0)))
-        return _postprocess(prob.astype(np.float32), box, self.spec)
+        inside = np.zeros(prob.shape, bool)  # network pixels that map into the image
+        inside[valid_window(box, gray.shape, prob.shape[0])] = True
+        return _postprocess(np.where(inside, prob, 0.0).astype(np.float32), box, self.spec)
 
     def mask_in_input(self, seg: Segmentation, shape: tuple[int, int]) -> np.ndarray:
         """``(H, W) bool`` contact mask in input pixels (for overlays)."""

@@ -77,3 +77,31 @@ def measure_files(
         mm2 = None if scale is None else scale.area_mm2(res.area_px, img.shape[1])
         out.append(Measured(path, img.shape[1], img.shape[0], res, mm2))
     return out
+
+
+def write_overlays(
+    runs: dict[str, list[Measured]],
+    out_dir: str | os.PathLike[str],
+    titles: Sequence[str] | None = None,
+) -> list[Path]:
+    """Draw every method's outline on each frame and write ``<stem>_overlay.png`` files.
+
+    Args:
+        runs: method name → its measurements of the same files (same order).
+        out_dir: folder for the overlays.
+        titles: per-file caption (e.g. ``"8.0 kPa"``); default the file name.
+
+    Returns:
+        The written paths, in file order.
+    """
+    from contactcal.infer.overlay import draw_overlay, write_image
+
+    first = next(iter(runs.values()))
+    paths: list[Path] = []
+    for k, m in enumerate(first):
+        gray = load_image(m.file)
+        contours = {name: ms[k].result.contour for name, ms in runs.items()}
+        title = titles[k] if titles is not None else m.file.name
+        img = draw_overlay(gray, contours, title)
+        paths.append(write_image(Path(out_dir) / f"{m.file.stem}_overlay.png", img))
+    return paths

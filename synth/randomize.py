@@ -19,6 +19,8 @@ from contactcal.synth.mechanics import FingerParams, MembraneParams, tension_for
 from contactcal.synth.rig import RigGeometry
 
 LED_COUNT = 16  # LEDs feeding the light guide plate (sets the azimuthal non-uniformity's scale)
+BASE_EXPOSURE = 2.0  # × render radiance: puts the window ring near 200-250 grey, like the rig's
+#   photographs (the published routine finds the ring at threshold 150)
 
 
 @dataclass(frozen=True)
@@ -97,7 +99,7 @@ def sample_session(rng: np.random.Generator, hard: bool = False) -> SessionParam
             profile[(start + k) % LED_COUNT] *= 0.15
     exposure_sd = 0.6 if hard else 0.25
     camera = CameraEffects(
-        exposure=_lognormal(rng, exposure_sd),
+        exposure=BASE_EXPOSURE * _lognormal(rng, exposure_sd),
         defocus_sigma_px=float(rng.uniform(0.0, 2.2 if hard else 1.0)),
         full_well=float(math.exp(rng.uniform(math.log(300), math.log(5000)))),
         read_noise=float(rng.uniform(0.002, 0.012)),

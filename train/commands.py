@@ -43,6 +43,8 @@ def add_parsers(sub: Any) -> None:
     t.add_argument("--seed", type=int, help="split/init/shuffle/augmentation seed (default 0)")
     t.add_argument("--batch-size", type=int, metavar="B", help="frames per step (default 16)")
     t.add_argument("--threads", type=int, metavar="T", help="torch CPU threads (default: torch's)")
+    t.add_argument("--base", type=int, help="U-Net channels at the first level (default 8)")
+    t.add_argument("--levels", type=int, help="U-Net resolution levels (default 3)")
     t.add_argument("--quiet", action="store_true", help="no progress bars")
     t.set_defaults(func=_cmd_train)
 
@@ -92,7 +94,10 @@ def build_config(args: argparse.Namespace) -> Any:
         "batch_size": args.batch_size,
         "num_threads": args.threads,
     }
-    return dataclasses.replace(base, **{k: v for k, v in given.items() if v is not None})
+    cfg = dataclasses.replace(base, **{k: v for k, v in given.items() if v is not None})
+    arch = {"base": args.base, "levels": args.levels}
+    arch = {k: v for k, v in arch.items() if v is not None}
+    return dataclasses.replace(cfg, model=dataclasses.replace(cfg.model, **arch)) if arch else cfg
 
 
 def _cmd_train(args: argparse.Namespace) -> int:
