@@ -128,7 +128,7 @@ def _plots(out: Path, results: dict[str, Any]) -> None:
     bins = {(r["method"]): r for r in results["bins"] if r["bin_kpa"].startswith("5-")}
     fig, ax = plt.subplots(figsize=(6.5, 4.5), dpi=110)
     for t in results["timing"]:
-        base = t["config"].split("+")[0]
+        base = t["config"].split("+")[0].split("@")[0].split(" ")[0]
         err = bins.get(base, {}).get("median_abs_rel_error")
         if err is None or "ms_end_to_end_jpg" not in t:
             continue
@@ -158,9 +158,9 @@ def write_report(
     _plots(out, results)
     bcols = [("method", "method", False), ("bin_kpa", "kPa", False),
              ("contact_frames", "frames", False),
-             ("median_abs_rel_error", "median |rel err|", True),
+             ("median_abs_rel_error", "median abs. rel. error", True),
              ("mean_rel_error", "mean rel err", True), ("sd_rel_error", "sd", True),
-             ("median_abs_error_mm2", "median |err| mm²", False),
+             ("median_abs_error_mm2", "median abs. error mm²", False),
              ("contact_recall", "contact recall", True),
              ("no_contact_accuracy", "no-contact acc.", True)]  # fmt: skip
     tcols = [("config", "configuration", False), ("threads", "threads", False),
@@ -171,10 +171,10 @@ def write_report(
         t.setdefault("ms_end_to_end_jpg", None)
         t.setdefault("ms_end_to_end_png", None)
     hcols = [("method", "method", False), ("sessions", "sessions", False), ("n", "n", False),
-             ("median_abs_rel_error_ge5", "median |rel err| ≥5 kPa", True),
-             ("median_abs_rel_error_3to5", "median |rel err| 3-5 kPa", True),
+             ("median_abs_rel_error_ge5", "median abs. rel. error ≥5 kPa", True),
+             ("median_abs_rel_error_3to5", "median abs. rel. error 3-5 kPa", True),
              ("no_contact_accuracy", "no-contact acc.", True),
-             ("median_abs_onset_error_kpa", "median |onset err| kPa", False),
+             ("median_abs_onset_error_kpa", "median abs. onset error kPa", False),
              ("onset_missing", "no onset found", False)]  # fmt: skip
     on = [o for o in results["onset"] if o["error_kpa"] is not None]
     onset_rows = [{"method": m, "median_abs": _med([abs(o["error_kpa"]) for o in on
@@ -209,8 +209,8 @@ errors over frames with true contact. Timing: median of {results["config"]["repe
             onset_rows,
             [
                 ("method", "method", False),
-                ("median_abs", "median |error| kPa", False),
-                ("max_abs", "max |error| kPa", False),
+                ("median_abs", "median abs. error kPa", False),
+                ("max_abs", "max abs. error kPa", False),
             ],
         )
     }

@@ -33,6 +33,7 @@ def calibrate_session(
     model: str | os.PathLike[str] | None = None,
     scale: PixelScale | None = None,
     curve_config: CurveConfig | None = None,
+    outline: bool = False,
 ) -> CalibrationReport:
     """Calibrate the session listed in ``manifest`` and write its outputs into ``out_dir``.
 
@@ -45,6 +46,7 @@ def calibrate_session(
         model: ONNX model path for learned methods (None → the shipped one).
         scale: pixel scale; None → the curve is in px (``area_mm2`` null).
         curve_config: fit settings (None → defaults).
+        outline: keep each frame's outline in input pixels (for overlays).
 
     Returns:
         The :class:`CalibrationReport` (table, measurements, curve, written files).
@@ -55,7 +57,7 @@ def calibrate_session(
     """
     manifest = Path(manifest)
     frames = read_manifest(manifest)
-    method = make_method(method_name, None if model is None else str(model))
+    method = make_method(method_name, None if model is None else str(model), outline=outline)
     measured = measure_files([f.file for f in frames], method, frames[0].file, scale)
     results = [
         FrameResult(

@@ -61,7 +61,7 @@ def _overlay_runs(
     for name in METHODS:
         if name not in runs:
             runs[name] = measure_files(
-                files, make_method(name, args.model, args.threads), reference
+                files, make_method(name, args.model, args.threads, outline=True), reference
             )
     return runs
 
@@ -71,7 +71,7 @@ def _cmd_measure(args: argparse.Namespace) -> int:
     from contactcal.infer.methods import make_method
     from contactcal.infer.session import measure_files, write_overlays
 
-    method = make_method(args.method, args.model, args.threads)
+    method = make_method(args.method, args.model, args.threads, args.overlay is not None)
     measured = measure_files(args.images, method, args.reference, _resolve_scale(args))
     write_json(args.out, [m.to_json(method.name) for m in measured])
     if args.overlay is not None:
@@ -88,7 +88,9 @@ def _cmd_calibrate(args: argparse.Namespace) -> int:
     from contactcal.infer.session import write_overlays
 
     scale = _resolve_scale(args, args.manifest.parent / "rig.json")
-    rep = calibrate_session(args.manifest, args.out, args.method, args.model, scale)
+    rep = calibrate_session(
+        args.manifest, args.out, args.method, args.model, scale, outline=args.overlay is not None
+    )
     if args.overlay is not None:
         files = [f.file for f in rep.frames]
         runs = _overlay_runs(args, rep.measured, files, files[0])

@@ -35,7 +35,7 @@ def run_demo(
     reports: dict[str, CalibrationReport] = {}
     lines = [f"session: {manifest}"]
     for method in METHODS:
-        rep = calibrate_session(manifest, out / method, method, None, scale)
+        rep = calibrate_session(manifest, out / method, method, None, scale, outline=True)
         reports[method] = rep
         lines += [f"\n== {method} → {out / method}", rep.table]
     frames = next(iter(reports.values())).frames

@@ -69,10 +69,11 @@ class UnetMethod:
 
     name = "unet"
 
-    def __init__(self, model: str | None = None, threads: int = 1) -> None:
+    def __init__(self, model: str | None = None, threads: int = 1, outline: bool = False) -> None:
         from contactcal.infer.segmenter import OnnxSegmenter
 
         self.segmenter = OnnxSegmenter(model, threads=threads)
+        self.outline = outline  # map the mask back to input pixels for an outline (overlays)
 
     def prepare(self, reference: np.ndarray | None) -> None:
         """Fix the crop and the reference channel from the session's zero-pressure frame."""
@@ -85,6 +86,8 @@ class UnetMethod:
         seg = self.segmenter.predict(image)
         if not seg.contact:
             return AreaResult(False, 0.0, "no contact", None)
+        if not self.outline:
+            return AreaResult(True, seg.area_px, "", None)
         mask = self.segmenter.mask_in_input(seg, image.shape[:2]).astype(np.uint8)
         contours, _ = cv2.findContours(mask, cv2.RETR_EXTERNAL, cv2.CHAIN_APPROX_SIMPLE)
         contour = max(contours, key=cv2.contourArea) if contours else None
@@ -92,16 +95,20 @@ class UnetMethod:
 
 
 #: Method names; the first is the default of ``measure`` and ``calibrate``.
-METHODS = ("classical", "unet")
+METHODS = ("unet", "classical")
 
 
-def make_method(name: str, model: str | None = None, threads: int = 1) -> Method:
+def make_method(
+    name: str, model: str | None = None, threads: int = 1, outline: bool = False
+) -> Method:
     """Build a method by name.
 
     Args:
         name: ``"unet"`` or ``"classical"``.
         model: ONNX file for ``"unet"`` (None → the shipped model).
         threads: onnxruntime intra-op threads for ``"unet"``.
+        outline: compute the U-Net's outline in input pixels (for overlays; costs a full-size
+            warp per frame). The classical ellipse outline is always given.
 
     Raises:
         ValueError: unknown method name; ``ModelError`` for an unusable model file.
@@ -109,5 +116,5 @@ def make_method(name: str, model: str | None = None, threads: int = 1) -> Method
     if name == "classical":
         return ClassicalMethod()
     if name == "unet":
-        return UnetMethod(model, threads)
+        return UnetMethod(model, threads, outline)
     raise ValueError(f"unknown method {name!r}; expected one of {', '.join(METHODS)}")

@@ -1,0 +1,83 @@
+"""The CLI contract: measure / calibrate / demo outputs, exit codes and atomicity."""
+
+from __future__ import annotations
+
+import json
+import shutil
+from pathlib import Path
+
+import pytest
+
+from contactcal.infer.cli import main
+
+EXAMPLE = Path(__file__).resolve().parents[1] / "examples" / "session"
+
+
+def test_measure_contract(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    out = tmp_path / "r.json"
+    frames = [str(EXAMPLE / "p00.0kpa.jpg"), str(EXAMPLE / "p12.0kpa.jpg")]
+    code = main(["measure", "--method", "classical", "--reference", frames[0],
+                 "--rig", str(EXAMPLE / "rig.json"), "--out", str(out), *frames])  # fmt: skip
+    assert code == 0
+    rows = json.loads(out.read_text())
+    assert [Path(r["file"]).name for r in rows] == ["p00.0kpa.jpg", "p12.0kpa.jpg"]
+    for r in rows:
+        assert {"file", "contact", "area_px", "area_mm2"} <= set(r)
+        assert isinstance(r["contact"], bool) and isinstance(r["area_px"], float)
+        assert (r["area_px"] > 0) == r["contact"] and r["area_mm2"] is not None
+    assert "p12.0kpa.jpg" in capsys.readouterr().out
+
+
+def test_default_method_is_unet(tmp_path: Path) -> None:
+    out = tmp_path / "r.json"
+    assert main(["measure", "--out", str(out), str(EXAMPLE / "p12.0kpa.jpg")]) == 0
+    assert json.loads(out.read_text())[0]["method"] == "unet"
+
+
+def test_calibrate_and_overlays(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    code = main(["calibrate", str(EXAMPLE / "manifest.csv"), "--out", str(tmp_path / "cal"),
+                 "--overlay", str(tmp_path / "ov")])  # fmt: skip
+    assert code == 0
+    cal = json.loads((tmp_path / "cal" / "calibration.json").read_text())
+    assert cal["method"] == "unet" and cal["onset_kpa"] is not None
+    assert (tmp_path / "cal" / "curve.png").is_file()
+    assert (tmp_path / "cal" / "calibration.csv").is_file()
+    assert len(list((tmp_path / "ov").glob("*_overlay.png"))) == 21
+    assert "pressure" in capsys.readouterr().out
+
+
+def test_bad_inputs_exit_2_and_write_nothing(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    out = tmp_path / "r.json"
+    assert main(["measure", "--out", str(out), str(tmp_path / "missing.png")]) == 2
+    err = capsys.readouterr().err
+    assert "missing.png" in err and "no such file" in err and not out.exists()
+    bad = tmp_path / "bad.png"
+    bad.write_bytes(b"\x89PNG\r\n\x1a\n garbage")
+    assert main(["measure", "--method", "classical", "--out", str(out), str(bad)]) == 2
+    assert "bad.png" in capsys.readouterr().err and not out.exists()
+    manifest = tmp_path / "m.csv"
+    manifest.write_text("file,pressure\nx.png,1\n")
+    assert main(["calibrate", str(manifest), "--out", str(tmp_path / "cal")]) == 2
+    assert "m.csv" in capsys.readouterr().err
+    assert not (tmp_path / "cal").exists()
+    assert main(["measure", "--model", str(tmp_path / "none.onnx"), "--out", str(out),
+                 str(EXAMPLE / "p12.0kpa.jpg")]) == 2  # fmt: skip
+    assert "none.onnx" in capsys.readouterr().err
+
+
+def test_no_contact_session_exits_1(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    for name in ("p00.0kpa.jpg", "p01.0kpa.jpg"):  # the example's onset is 2.35 kPa
+        shutil.copy(EXAMPLE / name, tmp_path / name)
+    (tmp_path / "manifest.csv").write_text("file,pressure_kpa\np00.0kpa.jpg,0\np01.0kpa.jpg,1\n")
+    assert main(["calibrate", str(tmp_path / "manifest.csv"), "--out", str(tmp_path / "c")]) == 1
+    assert "no contact detected" in capsys.readouterr().err
+    assert not (tmp_path / "c" / "calibration.json").exists()
+
+
+def test_demo(tmp_path: Path) -> None:
+    assert main(["demo", "--out", str(tmp_path)]) == 0
+    for method in ("unet", "classical"):
+        assert (tmp_path / method / "calibration.json").is_file()
+    assert (tmp_path / "overlay_montage.png").is_file()
