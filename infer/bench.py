@@ -109,13 +109,18 @@ def evaluate(sessions: dict[str, list[Row]], model: str | None) -> list[dict[str
             method.prepare(load_image(rows[0].frame))
             for r in rows:
                 res = method.measure(load_image(r.frame))
-                records.append({
+                rec = {
                     "method": name, "session": session, "frame": str(r.frame),
                     "pressure_kpa": r.pressure_kpa, "hard": r.hard, "onset_kpa": r.onset_kpa,
                     "true_area_px": r.area_px, "true_contact": r.area_px > 0,
                     "area_px": float(res.area_px), "contact": bool(res.contact),
                     "mm_per_px": r.mm_per_px,
-                })  # fmt: skip
+                }  # fmt: skip
+                records.append(rec)
+                if res.soft_area_px is not None or name == "unet":
+                    # The same prediction measured by its probability mass (sub-pixel area).
+                    soft = res.soft_area_px if res.soft_area_px is not None else 0.0
+                    records.append({**rec, "method": f"{name} (soft area)", "area_px": soft})
     return records
 
 

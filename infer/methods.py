@@ -22,6 +22,7 @@ class AreaResult:
     area_px: float  # in pixels of the input image; 0.0 when no contact
     note: str  # "" or why there is no contact
     contour: np.ndarray | None  # (N, 1, 2) int32 outline in input pixels, for overlays
+    soft_area_px: float | None = None  # U-Net: sum of probabilities over the region (sub-pixel)
 
 
 class Method(Protocol):
@@ -87,11 +88,11 @@ class UnetMethod:
         if not seg.contact:
             return AreaResult(False, 0.0, "no contact", None)
         if not self.outline:
-            return AreaResult(True, seg.area_px, "", None)
+            return AreaResult(True, seg.area_px, "", None, seg.soft_area_px)
         mask = self.segmenter.mask_in_input(seg, image.shape[:2]).astype(np.uint8)
         contours, _ = cv2.findContours(mask, cv2.RETR_EXTERNAL, cv2.CHAIN_APPROX_SIMPLE)
         contour = max(contours, key=cv2.contourArea) if contours else None
-        return AreaResult(True, seg.area_px, "", contour)
+        return AreaResult(True, seg.area_px, "", contour, seg.soft_area_px)
 
 
 #: Method names; the first is the default of ``measure`` and ``calibrate``.
