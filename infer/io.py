@@ -141,3 +141,31 @@ def to_gray_u8(image: np.ndarray, name: str = "<array>", bgr: bool = False) -> n
         code = cv2.COLOR_BGR2GRAY if bgr else cv2.COLOR_RGB2GRAY
         image = cv2.cvtColor(np.ascontiguousarray(image), code)
     return np.ascontiguousarray(image)
+
+
+_SOF_MARKERS = {0xC0, 0xC1, 0xC2, 0xC3, 0xC5, 0xC6, 0xC7, 0xC9, 0xCA, 0xCB, 0xCD, 0xCE, 0xCF}
+
+
+def jpeg_size(path: str | os.PathLike[str]) -> tuple[int, int]:
+    """``(height, width)`` of a JPEG file from its frame header, without decoding it.
+
+    Raises:
+        ImageError: not a JPEG, or no frame header found.
+    """
+    p = Path(path)
+    data = read_file_bytes(p)
+    i = 2
+    while data[:2] == b"\xff\xd8" and i + 9 < len(data):
+        if data[i] != 0xFF:
+            i += 1
+            continue
+        marker = data[i + 1]
+        if marker == 0xFF or marker == 0x01 or 0xD0 <= marker <= 0xD8:
+            i += 2 if marker != 0xFF else 1
+            continue
+        if marker in _SOF_MARKERS:
+            return int.from_bytes(data[i + 5 : i + 7], "big"), int.from_bytes(
+                data[i + 7 : i + 9], "big"
+            )
+        i += 2 + int.from_bytes(data[i + 2 : i + 4], "big")
+    raise ImageError(f"{p}: no JPEG frame header found; expected a baseline or progressive JPEG")

@@ -138,7 +138,7 @@ class OnnxSegmenter:
         prob = 1.0 / (1.0 + np.exp(-np.clip(logits, -30.0, 30.0)))
         inside = np.zeros(prob.shape, bool)  # network pixels that map into the image
         inside[valid_window(box, gray.shape, prob.shape[0])] = True
-        return _postprocess(np.where(inside, prob, 0.0).astype(np.float32), box, self.spec)
+        return postprocess(np.where(inside, prob, 0.0).astype(np.float32), box, self.spec)
 
     def mask_in_input(self, seg: Segmentation, shape: tuple[int, int]) -> np.ndarray:
         """``(H, W) bool`` contact mask in input pixels (for overlays)."""
@@ -146,7 +146,7 @@ class OnnxSegmenter:
         return full >= 0.5
 
 
-def _postprocess(prob: np.ndarray, box: CropBox, spec: ModelSpec) -> Segmentation:
+def postprocess(prob: np.ndarray, box: CropBox, spec: ModelSpec) -> Segmentation:
     """Keep the largest connected region above the threshold; decide contact; measure it.
 
     Ring reflections and sparkle give small or detached specks: only the largest region counts,

@@ -8,11 +8,11 @@ from __future__ import annotations
 
 import os
 from collections.abc import Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from pathlib import Path
 from typing import Any
 
-from contactcal.infer.io import load_image
+from contactcal.infer.io import jpeg_size, load_image
 from contactcal.infer.methods import AreaResult, Method
 from contactcal.infer.scale import PixelScale
 
@@ -64,7 +64,8 @@ def measure_files(
         contactcal.infer.io.ImageError: any unreadable file (nothing is measured after it).
     """
     images = [Path(f) for f in files]
-    method.prepare(None if reference is None else load_image(reference))
+    k = decode_reduction(method, images, None if reference is None else Path(reference))
+    method.prepare(None if reference is None else load_image(reference, reduce=k))
     out: list[Measured] = []
     it: Any = images
     if progress:
@@ -72,11 +73,46 @@ def measure_files(
 
         it = tqdm(images, desc=f"measure ({method.name})", unit="frame", leave=False)
     for path in it:
-        img = load_image(path)
+        img = load_image(path, reduce=k)
         res = method.measure(img)
-        mm2 = None if scale is None else scale.area_mm2(res.area_px, img.shape[1])
-        out.append(Measured(path, img.shape[1], img.shape[0], res, mm2))
+        if k > 1:  # back to the file's pixels: the reduced decode is exactly 1/k per side
+            contour = None if res.contour is None else res.contour * k
+            res = replace(res, area_px=res.area_px * k * k, contour=contour,
+                          soft_area_px=None if res.soft_area_px is None
+                          else res.soft_area_px * k * k)  # fmt: skip
+        w, h = img.shape[1] * k, img.shape[0] * k
+        mm2 = None if scale is None else scale.area_mm2(res.area_px, w)
+        out.append(Measured(path, w, h, res, mm2))
     return out
+
+
+def decode_reduction(method: Method, files: Sequence[Path], reference: Path | None) -> int:
+    """The cheapest correct JPEG decoding for ``method``: 1, 2, 4 or 8 (1/k per side).
+
+    Only the U-Net benefits: it resizes a crop around the window ring to its input size anyway,
+    so decoding a JPEG at 1/k (libjpeg's DCT scaling, several times cheaper) changes nothing as
+    long as the crop stays at least the network's input size. Used only when every file is a
+    JPEG whose width and height are divisible by k (so areas scale back exactly by k²).
+    """
+    seg = getattr(method, "segmenter", None)
+    paths = [*files, *([reference] if reference is not None else [])]
+    if seg is None or not all(p.suffix.lower() in (".jpg", ".jpeg") for p in paths):
+        return 1
+    from contactcal.infer.preprocess import crop_box, locate_ring
+
+    cfg = seg.spec.preprocess
+    sizes = {jpeg_size(p) for p in paths}
+    if len(sizes) != 1:
+        return 1  # frames of several sizes: decode fully
+    h, w = sizes.pop()
+    ring = locate_ring(load_image(paths[-1], reduce=8), cfg)
+    if not ring.found:
+        return 1
+    side = crop_box(ring, (h // 8, w // 8), cfg).side * 8  # crop side in file pixels
+    for k in (8, 4, 2):
+        if side / k >= cfg.input_size and h % k == 0 and w % k == 0:
+            return k
+    return 1
 
 
 def write_overlays(

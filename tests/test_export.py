@@ -63,3 +63,16 @@ def test_export_errors(run_dir: Path, tmp_path: Path) -> None:
         export_onnx(tmp_path / "nothing", tmp_path / "m.onnx")
     with pytest.raises(ValueError, match=r"\.onnx"):
         export_onnx(run_dir, tmp_path / "m.txt")
+
+
+@pytest.mark.slow
+def test_tune_min_area_never_worse(run_dir: Path, tmp_path: Path) -> None:
+    from contactcal.train.threshold import tune_min_area
+
+    best, s = tune_min_area(run_dir)
+    assert best >= 0 and s["frames"] > 0
+    tuned = s["tuned_false_contacts"] + s["tuned_missed_contacts"]
+    assert tuned <= s["default_false_contacts"] + s["default_missed_contacts"]
+    out = export_onnx(run_dir, tmp_path / "t.onnx", min_contact_area_px=best)
+    meta = {p.key: p.value for p in onnx.load(str(out)).metadata_props}
+    assert float(meta["min_contact_area_px"]) == best

@@ -52,6 +52,11 @@ def add_parsers(sub: Any) -> None:
     e.add_argument("run_dir", type=Path, metavar="RUN_DIR", help="run folder with best.pt")
     e.add_argument("--out", type=Path, required=True, metavar="MODEL.onnx", help="output model")
     e.add_argument("--opset", type=int, default=17, help="ONNX opset (default 17)")
+    e.add_argument(
+        "--tune-min-area",
+        action="store_true",
+        help="choose the no-contact minimum area on the run's validation fingers",
+    )
     e.set_defaults(func=_cmd_export)
 
 
@@ -119,6 +124,12 @@ def _cmd_train(args: argparse.Namespace) -> int:
 def _cmd_export(args: argparse.Namespace) -> int:
     from contactcal.train.export import export_onnx
 
-    path = export_onnx(args.run_dir, args.out, opset=args.opset)
+    min_area = None
+    if args.tune_min_area:
+        from contactcal.train.threshold import tune_min_area
+
+        min_area, summary = tune_min_area(args.run_dir)
+        print(f"minimum contact area tuned on the validation fingers: {summary}")
+    path = export_onnx(args.run_dir, args.out, opset=args.opset, min_contact_area_px=min_area)
     print(f"wrote {path}")
     return 0

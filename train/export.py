@@ -106,7 +106,10 @@ def check_parity(model: torch.nn.Module, onnx_bytes: bytes, channels: int, seed:
 
 
 def export_onnx(
-    run_dir: str | os.PathLike[str], out_path: str | os.PathLike[str], opset: int = 17
+    run_dir: str | os.PathLike[str],
+    out_path: str | os.PathLike[str],
+    opset: int = 17,
+    min_contact_area_px: float | None = None,
 ) -> Path:
     """Export ``run_dir/best.pt`` to ``out_path`` (atomic), checked and parity-tested.
 
@@ -114,6 +117,8 @@ def export_onnx(
         run_dir: a ``contactcal train`` run folder (``config.json``, ``best.pt``).
         out_path: destination ``.onnx`` file.
         opset: ONNX opset version.
+        min_contact_area_px: network pixels; overrides the run's value in the metadata (e.g.
+            from :func:`contactcal.train.threshold.tune_min_area`).
 
     Returns:
         ``out_path`` as a Path.
@@ -126,6 +131,10 @@ def export_onnx(
     if out.suffix.lower() != ".onnx":
         raise ValueError(f"{out}: expected an output file name ending in .onnx")
     cfg, info, ckpt = load_run(run_dir)
+    if min_contact_area_px is not None:
+        if not min_contact_area_px >= 0:
+            raise ValueError(f"min_contact_area_px must be >= 0, got {min_contact_area_px}")
+        cfg = dataclasses.replace(cfg, min_contact_area_px=float(min_contact_area_px))
     model = UNet(cfg.model)
     model.load_state_dict(ckpt["model"])
     model.eval()

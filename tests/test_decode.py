@@ -1,0 +1,52 @@
+"""Reduced JPEG decoding for the U-Net: chosen only when correct, and areas agree."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import cv2
+import numpy as np
+import pytest
+
+from contactcal.infer.io import ImageError, jpeg_size, load_image
+from contactcal.infer.methods import ClassicalMethod, UnetMethod
+from contactcal.infer.session import decode_reduction, measure_files
+
+EXAMPLE = Path(__file__).resolve().parents[1] / "examples" / "session"
+
+
+def _upscaled(tmp_path: Path, kpa: int, size: tuple[int, int], ext: str = ".jpg") -> Path:
+    img = cv2.imread(str(EXAMPLE / f"p{kpa:04.1f}kpa.jpg"), cv2.IMREAD_COLOR)
+    path = tmp_path / f"p{kpa:02d}{ext}"
+    assert cv2.imwrite(str(path), cv2.resize(img, size, interpolation=cv2.INTER_CUBIC))
+    return path
+
+
+def test_jpeg_size(tmp_path: Path) -> None:
+    assert jpeg_size(_upscaled(tmp_path, 0, (1600, 1200))) == (1200, 1600)
+    with pytest.raises(ImageError, match="no JPEG frame header"):
+        jpeg_size(_upscaled(tmp_path, 0, (64, 48), ".png"))
+
+
+def test_reduced_decoding_agrees_with_full(tmp_path: Path) -> None:
+    ref, frame = _upscaled(tmp_path, 0, (1600, 1200)), _upscaled(tmp_path, 12, (1600, 1200))
+    unet = UnetMethod()
+    k = decode_reduction(unet, [frame], ref)
+    assert k == 4  # crop ≈ 1050 px: 1/4 keeps >= 192 px, 1/8 would not
+    fast = measure_files([frame], unet, ref)[0]
+    unet.prepare(load_image(ref))
+    full = unet.measure(load_image(frame))
+    assert (fast.width, fast.height) == (1600, 1200)
+    assert fast.result.area_px == pytest.approx(full.area_px, rel=0.03)
+
+
+def test_reduction_not_used_when_unsafe(tmp_path: Path) -> None:
+    unet = UnetMethod()
+    small = _upscaled(tmp_path, 12, (400, 300))
+    assert decode_reduction(unet, [small], None) == 1  # crop already near the input size
+    odd = _upscaled(tmp_path, 12, (1601, 1201))
+    assert decode_reduction(unet, [odd], None) == 1  # not divisible: areas would not scale exactly
+    png = _upscaled(tmp_path, 12, (1600, 1200), ".png")
+    assert decode_reduction(unet, [png], None) == 1
+    assert decode_reduction(ClassicalMethod(), [_upscaled(tmp_path, 5, (1600, 1200))], None) == 1
+    assert np.isfinite(measure_files([odd], unet)[0].result.area_px)
