@@ -26,6 +26,7 @@ from contactcal.infer.classical import ClassicalConfig
 from contactcal.infer.curve import estimate_onset
 from contactcal.infer.io import load_image
 from contactcal.infer.methods import ClassicalMethod, Method, UnetMethod
+from contactcal.infer.session import decode_reduction
 
 PRESSURE_BINS = ((0.0, 3.0), (3.0, 5.0), (5.0, 10.0), (10.0, 20.0001))  # kPa, [lo, hi)
 
@@ -39,7 +40,6 @@ class BenchConfig:
     full_size: tuple[int, int] = (2592, 1944)  # rig resolution for the speed comparison, px
     threads: tuple[int, ...] = (1, 2)  # onnxruntime intra-op threads timed
     classical_scales: tuple[float, ...] = (1.0, 0.25)  # full and reduced-resolution baseline
-    decode_reduce: int = 4  # JPEG reduced decoding for the U-Net (crop stays >= its input)
     bins: tuple[tuple[float, float], ...] = field(default=PRESSURE_BINS)
 
 
@@ -176,10 +176,12 @@ def timing(
         for s in config.classical_scales:
             name = "classical" if s == 1.0 else f"classical@{s:g}"
             configs.append((name, 1, ClassicalMethod(ClassicalConfig(work_scale=s)), 1))
+        # The reduction `measure`/`calibrate` would choose for these files (crop >= input).
+        reduce_k = decode_reduction(UnetMethod(model), files[".jpg"], None)
         for t in config.threads:
             configs.append(("unet", t, UnetMethod(model, threads=t), 1))
-            configs.append(("unet+reduced-decode", t, UnetMethod(model, threads=t),
-                            config.decode_reduce))  # fmt: skip
+            configs.append((f"unet+reduced-decode 1/{reduce_k}", t, UnetMethod(model, threads=t),
+                            reduce_k))  # fmt: skip
         for name, threads, method, reduce in configs:
             # Reduced decoding: the frame arrives at 1/reduce size; areas then scale by reduce².
             jpgs = files[".jpg"]
