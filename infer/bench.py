@@ -9,7 +9,6 @@ as the median of several runs in one process, so ratios compare like with like.
 from __future__ import annotations
 
 import csv
-import json
 import os
 import statistics
 import tempfile
@@ -247,8 +246,3 @@ def run_bench(
     }  # fmt: skip
     write_report(out_dir, results, config.bins)
     return results
-
-
-def dumps(results: dict[str, Any]) -> str:
-    """JSON text of the results (no NaN)."""
-    return json.dumps(results, indent=1, allow_nan=False)

@@ -41,9 +41,9 @@ def _method_args(p: argparse.ArgumentParser) -> None:
 def _resolve_scale(args: argparse.Namespace, default_rig: Path | None = None) -> PixelScale | None:
     from contactcal.infer.scale import PixelScale, load_rig_config
 
-    if getattr(args, "mm_per_px", None) is not None:
+    if args.mm_per_px is not None:
         return PixelScale(args.mm_per_px, None)
-    if getattr(args, "rig", None) is not None:
+    if args.rig is not None:
         return load_rig_config(args.rig)
     if default_rig is not None and default_rig.is_file():
         return load_rig_config(default_rig)

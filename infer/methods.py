@@ -9,6 +9,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 from typing import Protocol
 
+import cv2
 import numpy as np
 
 from contactcal.infer.classical import ClassicalConfig, Roi, find_roi, measure_classical
@@ -55,8 +56,6 @@ class ClassicalMethod:
         res = measure_classical(image, self.roi, self.config)
         contour = None
         if res.ellipse is not None:
-            import cv2
-
             (cx, cy), (w, h), ang = res.ellipse
             pts = cv2.ellipse2Poly(
                 (round(cx), round(cy)), (round(w / 2), round(h / 2)), round(ang), 0, 360, 5
@@ -82,8 +81,6 @@ class UnetMethod:
 
     def measure(self, image: np.ndarray) -> AreaResult:
         """Segment; the contour is the kept region's outline in input pixels."""
-        import cv2
-
         seg = self.segmenter.predict(image)
         if not seg.contact:
             return AreaResult(False, 0.0, "no contact", None)
