@@ -13,7 +13,6 @@ import contextlib
 import csv
 import io
 import json
-import math
 import os
 from dataclasses import dataclass
 from datetime import datetime, timezone
@@ -23,7 +22,7 @@ from typing import Any
 
 import numpy as np
 
-from contactcal.infer.atomic import atomic_path
+from contactcal.infer.atomic import atomic_path, finite_or_none, jsonable
 from contactcal.infer.curve import Curve
 from contactcal.infer.curve_plot import plot_curve
 
@@ -66,34 +65,6 @@ class FrameResult:
     area_px: float
     area_mm2: float | None
     note: str = ""
-
-
-def _finite_or_none(x: Any) -> float | None:
-    if x is None:
-        return None
-    v = float(x)
-    return v if math.isfinite(v) else None
-
-
-def _jsonable(obj: Any) -> Any:
-    """Plain JSON types; NaN/inf become None, numpy and Path values are converted."""
-    if isinstance(obj, dict):
-        return {str(k): _jsonable(v) for k, v in obj.items()}
-    if isinstance(obj, (list, tuple, set, frozenset)):
-        return [_jsonable(v) for v in obj]
-    if isinstance(obj, np.ndarray):
-        return _jsonable(obj.tolist())
-    if isinstance(obj, (bool, np.bool_)):
-        return bool(obj)
-    if isinstance(obj, (int, np.integer)):
-        return int(obj)
-    if isinstance(obj, (float, np.floating)):
-        return _finite_or_none(obj)
-    if obj is None or isinstance(obj, str):
-        return obj
-    if isinstance(obj, os.PathLike):
-        return os.fspath(obj)
-    return str(obj)
 
 
 def package_versions() -> dict[str, str | None]:
@@ -153,7 +124,7 @@ def calibration_record(
         "versions": package_versions(),
         "extra": extra,
     }
-    return _jsonable(record)
+    return jsonable(record)
 
 
 def _csv_text(results: list[FrameResult], curve: Curve) -> str:
@@ -162,7 +133,7 @@ def _csv_text(results: list[FrameResult], curve: Curve) -> str:
     writer.writerow(CSV_COLUMNS)
 
     def num(x: float | None) -> str:
-        v = _finite_or_none(x)
+        v = finite_or_none(x)
         return "" if v is None else f"{v:.10g}"
 
     for r in sorted(results, key=lambda r: r.pressure_kpa):
@@ -262,7 +233,7 @@ def format_table(results: list[FrameResult], curve: Curve) -> str:
     """Aligned text table: pressure (kPa), area (mm² if every frame has it, else px), fit
     (curve unit), contact yes/no, and a note column when any frame has a note."""
     ordered = sorted(results, key=lambda r: r.pressure_kpa)
-    use_mm2 = bool(ordered) and all(_finite_or_none(r.area_mm2) is not None for r in ordered)
+    use_mm2 = bool(ordered) and all(finite_or_none(r.area_mm2) is not None for r in ordered)
     head = [
         "pressure (kPa)",
         "area (mm²)" if use_mm2 else "area (px)",

@@ -22,7 +22,7 @@ from typing import Any
 import cv2
 import numpy as np
 
-from contactcal.infer.atomic import atomic_path, write_json, write_text
+from contactcal.infer.atomic import atomic_path, jsonable, write_json, write_text
 from contactcal.synth.randomize import SessionParams, sample_session
 from contactcal.synth.session import FrameOutput, RenderConfig, render_session
 
@@ -119,18 +119,8 @@ def render_finger(out_dir: str, config: DatasetConfig, finger: int) -> int:
     scales = [r["mm_per_px"] for r in rows if r["contact"]] or [r["mm_per_px"] for r in rows]
     write_json(folder / "rig.json", {"mm_per_px": float(np.median(scales)),
                                      "image_width_px": config.render.width})  # fmt: skip
-    write_json(folder / "session.json", _jsonable(asdict(params)))
+    write_json(folder / "session.json", jsonable(asdict(params)))
     return made
-
-
-def _jsonable(obj: Any) -> Any:
-    if isinstance(obj, dict):
-        return {k: _jsonable(v) for k, v in obj.items()}
-    if isinstance(obj, (list, tuple)):
-        return [_jsonable(v) for v in obj]
-    if isinstance(obj, (np.floating, np.integer)):
-        return obj.item()
-    return obj
 
 
 def _run_finger(task: tuple[str, DatasetConfig, int]) -> tuple[int, int]:
@@ -194,7 +184,7 @@ def build_dataset(
 def _check_config_matches(root: Path, config: DatasetConfig) -> None:
     """Write ``config.json``, or refuse to mix a different config into an existing folder."""
     path = root / "config.json"
-    data = _jsonable(asdict(config))
+    data = jsonable(asdict(config))
     if path.is_file():
         old = json.loads(path.read_text())
         if old != json.loads(json.dumps(data)):
