@@ -146,14 +146,8 @@ def to_gray_u8(image: np.ndarray, name: str = "<array>", bgr: bool = False) -> n
 _SOF_MARKERS = {0xC0, 0xC1, 0xC2, 0xC3, 0xC5, 0xC6, 0xC7, 0xC9, 0xCA, 0xCB, 0xCD, 0xCE, 0xCF}
 
 
-def jpeg_size(path: str | os.PathLike[str]) -> tuple[int, int]:
-    """``(height, width)`` of a JPEG file from its frame header, without decoding it.
-
-    Raises:
-        ImageError: not a JPEG, or no frame header found.
-    """
-    p = Path(path)
-    data = read_file_bytes(p)
+def _sof_size(data: bytes) -> tuple[int, int] | None:
+    """``(height, width)`` from the first JPEG frame header in ``data``, or None."""
     i = 2
     while data[:2] == b"\xff\xd8" and i + 9 < len(data):
         if data[i] != 0xFF:
@@ -164,8 +158,31 @@ def jpeg_size(path: str | os.PathLike[str]) -> tuple[int, int]:
             i += 2 if marker != 0xFF else 1
             continue
         if marker in _SOF_MARKERS:
-            return int.from_bytes(data[i + 5 : i + 7], "big"), int.from_bytes(
-                data[i + 7 : i + 9], "big"
-            )
+            h, w = data[i + 5 : i + 7], data[i + 7 : i + 9]
+            return int.from_bytes(h, "big"), int.from_bytes(w, "big")
         i += 2 + int.from_bytes(data[i + 2 : i + 4], "big")
-    raise ImageError(f"{p}: no JPEG frame header found; expected a baseline or progressive JPEG")
+    return None
+
+
+def jpeg_size(path: str | os.PathLike[str]) -> tuple[int, int]:
+    """``(height, width)`` of a JPEG file from its frame header, without decoding it.
+
+    Reads only the first 64 KiB (the header sits there unless large metadata precede it; then
+    the whole file is read).
+
+    Raises:
+        ImageError: missing or unreadable file, not a JPEG, or no frame header found.
+    """
+    p = Path(path)
+    try:
+        with open(p, "rb") as fh:
+            size = _sof_size(fh.read(65536))
+    except OSError:
+        size = None  # read_file_bytes below raises the clear error
+    if size is None:
+        size = _sof_size(read_file_bytes(p))
+    if size is None:
+        raise ImageError(
+            f"{p}: no JPEG frame header found; expected a baseline or progressive JPEG"
+        )
+    return size
