@@ -13,7 +13,7 @@ from pathlib import Path
 
 import cv2
 
-from contactcal.infer.atomic import write_text
+from contactcal.infer.files.atomic import write_text
 from contactcal.synth.dataset import DatasetConfig, build_dataset, parse_pressures
 from contactcal.synth.session import RenderConfig
 
@@ -45,8 +45,8 @@ def main() -> None:
             cv2.imwrite(str(OUT / f"{stem}.jpg"), img, [cv2.IMWRITE_JPEG_QUALITY, 85])
             shutil.copy(Path(tmp) / r["mask"], OUT / "masks" / f"{stem}.png")
             manifest.append(f"{stem}.jpg,{r['pressure_kpa']}")
-            truth.append(f"{stem}.jpg,{r['pressure_kpa']},{r['contact']},{r['area_px']},"
-                         f"{r['area_mm2']}")  # fmt: skip
+            cells = (f"{stem}.jpg", r["pressure_kpa"], r["contact"], r["area_px"], r["area_mm2"])
+            truth.append(",".join(str(c) for c in cells))
         write_text(OUT / "manifest.csv", "\n".join(manifest) + "\n")
         write_text(OUT / "truth.csv", "\n".join(truth) + "\n")
         shutil.copy(src / "rig.json", OUT / "rig.json")

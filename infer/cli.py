@@ -9,15 +9,19 @@ from __future__ import annotations
 import argparse
 import sys
 from collections.abc import Sequence
+from importlib.metadata import entry_points
 from pathlib import Path
 from typing import TYPE_CHECKING
 
 from contactcal.infer.errors import RunError
-from contactcal.infer.methods import METHODS
+from contactcal.infer.methods.registry import METHODS
+
+#: Entry-point group through which other roles add subcommands (see pyproject.toml).
+COMMAND_GROUP = "contactcal.commands"
 
 if TYPE_CHECKING:
-    from contactcal.infer.scale import PixelScale
-    from contactcal.infer.session import Measured
+    from contactcal.infer.pipeline.measure import Measured
+    from contactcal.infer.pipeline.scale import PixelScale
 
 
 def _scale_args(p: argparse.ArgumentParser) -> None:
@@ -39,7 +43,7 @@ def _method_args(p: argparse.ArgumentParser) -> None:
 
 
 def _resolve_scale(args: argparse.Namespace, default_rig: Path | None = None) -> PixelScale | None:
-    from contactcal.infer.scale import PixelScale, load_rig_config
+    from contactcal.infer.pipeline.scale import PixelScale, load_rig_config
 
     if args.mm_per_px is not None:
         return PixelScale(args.mm_per_px, None)
@@ -54,8 +58,8 @@ def _overlay_runs(
     args: argparse.Namespace, primary: list[Measured], files: list[Path], reference: Path | None
 ) -> dict[str, list[Measured]]:
     """Measurements of every method for the overlays (the primary run is reused)."""
-    from contactcal.infer.methods import make_method
-    from contactcal.infer.session import measure_files
+    from contactcal.infer.methods.registry import make_method
+    from contactcal.infer.pipeline.measure import measure_files
 
     runs = {args.method: primary}
     for name in METHODS:
@@ -67,9 +71,10 @@ def _overlay_runs(
 
 
 def _cmd_measure(args: argparse.Namespace) -> int:
-    from contactcal.infer.atomic import write_json
-    from contactcal.infer.methods import make_method
-    from contactcal.infer.session import measure_files, write_overlays
+    from contactcal.infer.files.atomic import write_json
+    from contactcal.infer.methods.registry import make_method
+    from contactcal.infer.pipeline.measure import measure_files
+    from contactcal.infer.pipeline.overlay import write_overlays
 
     method = make_method(args.method, args.model, args.threads, args.overlay is not None)
     measured = measure_files(args.images, method, args.reference, _resolve_scale(args))
@@ -84,8 +89,8 @@ def _cmd_measure(args: argparse.Namespace) -> int:
 
 
 def _cmd_calibrate(args: argparse.Namespace) -> int:
-    from contactcal.infer.calibrate import calibrate_session
-    from contactcal.infer.session import write_overlays
+    from contactcal.infer.calibration.calibrate import calibrate_session
+    from contactcal.infer.pipeline.overlay import write_overlays
 
     scale = _resolve_scale(args, args.manifest.parent / "rig.json")
     rep = calibrate_session(
@@ -100,14 +105,15 @@ def _cmd_calibrate(args: argparse.Namespace) -> int:
 
 
 def _cmd_demo(args: argparse.Namespace) -> int:
-    from contactcal.infer.demo import run_demo
+    from contactcal.infer.pipeline.demo import run_demo
 
     print(run_demo(args.out, args.manifest))
     return 0
 
 
 def _cmd_bench(args: argparse.Namespace) -> int:
-    from contactcal.infer.bench import BenchConfig, run_bench
+    from contactcal.infer.bench.config import BenchConfig
+    from contactcal.infer.bench.run import run_bench
 
     if args.repeats < 1 or args.timing_frames < 1:
         raise ValueError("--repeats and --timing-frames must be >= 1")
@@ -160,13 +166,18 @@ def build_parser() -> argparse.ArgumentParser:
     b.add_argument("--timing-frames", type=int, default=6, help="frames per timing run")
     b.set_defaults(func=_cmd_bench)
 
-    # Heavy roles register their own subcommands; their modules import nothing heavy.
-    from contactcal.synth.commands import add_parsers as add_synth_parsers
-    from contactcal.train.commands import add_parsers as add_train_parsers
-
-    add_synth_parsers(sub)
-    add_train_parsers(sub)
+    add_plugin_commands(sub)
     return parser
+
+
+def add_plugin_commands(sub: argparse._SubParsersAction) -> None:
+    """Subcommands registered by other roles (``synth``, ``train``) as entry points.
+
+    Each entry point of the group :data:`COMMAND_GROUP` is a function taking the subparsers
+    object; the core names no role, so it imports none.
+    """
+    for ep in sorted(entry_points(group=COMMAND_GROUP), key=lambda e: e.name):
+        ep.load()(sub)
 
 
 def main(argv: Sequence[str] | None = None) -> int:

@@ -24,7 +24,7 @@ def add_parsers(sub: argparse._SubParsersAction) -> None:
 
 
 def _cmd_synth(args: argparse.Namespace) -> int:
-    from contactcal.infer.atomic import write_json
+    from contactcal.infer.files.atomic import write_json
     from contactcal.synth.dataset import (
         DatasetConfig,
         build_dataset,

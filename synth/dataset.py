@@ -22,14 +22,15 @@ from typing import Any
 import cv2
 import numpy as np
 
-from contactcal.infer.atomic import atomic_path, jsonable, write_json, write_text
+from contactcal.infer.files.atomic import atomic_path, write_json, write_text
+from contactcal.infer.files.jsonable import jsonable
 from contactcal.synth.randomize import SessionParams, sample_session
 from contactcal.synth.session import FrameOutput, RenderConfig, render_session
 
-INDEX_COLUMNS = (
-    "finger", "session", "frame", "mask", "pressure_kpa", "contact", "area_px", "area_mm2",
-    "area_mm2_projected", "mm_per_px", "onset_kpa", "width", "height", "hard",
-)  # fmt: skip
+INDEX_COLUMNS = tuple(
+    "finger session frame mask pressure_kpa contact area_px area_mm2 area_mm2_projected"
+    " mm_per_px onset_kpa width height hard".split()
+)
 
 
 @dataclass(frozen=True)
@@ -78,14 +79,21 @@ def _truth(out: FrameOutput, finger: int, session: str, hard: bool) -> dict[str,
     area_px = int(out.mask.sum())
     h, w = out.mask.shape
     return {
-        "finger": finger, "session": session,
-        "frame": f"{session}/frames/{name}.png", "mask": f"{session}/masks/{name}.png",
-        "pressure_kpa": out.pressure_kpa, "contact": int(area_px > 0), "area_px": area_px,
+        "finger": finger,
+        "session": session,
+        "frame": f"{session}/frames/{name}.png",
+        "mask": f"{session}/masks/{name}.png",
+        "pressure_kpa": out.pressure_kpa,
+        "contact": int(area_px > 0),
+        "area_px": area_px,
         "area_mm2": round(out.state.area_mm2, 6),
         "area_mm2_projected": round(area_px * out.mm_per_px**2, 6),
-        "mm_per_px": round(out.mm_per_px, 8), "onset_kpa": round(out.state.onset_kpa, 6),
-        "width": w, "height": h, "hard": int(hard),
-    }  # fmt: skip
+        "mm_per_px": round(out.mm_per_px, 8),
+        "onset_kpa": round(out.state.onset_kpa, 6),
+        "width": w,
+        "height": h,
+        "hard": int(hard),
+    }
 
 
 def render_finger(out_dir: str, config: DatasetConfig, finger: int) -> int:
@@ -117,8 +125,8 @@ def render_finger(out_dir: str, config: DatasetConfig, finger: int) -> int:
     write_text(folder / "manifest.csv", manifest)
     # Scale at the contact plane: the median plateau height's pixel size over contact frames.
     scales = [r["mm_per_px"] for r in rows if r["contact"]] or [r["mm_per_px"] for r in rows]
-    write_json(folder / "rig.json", {"mm_per_px": float(np.median(scales)),
-                                     "image_width_px": config.render.width})  # fmt: skip
+    rig = {"mm_per_px": float(np.median(scales)), "image_width_px": config.render.width}
+    write_json(folder / "rig.json", rig)
     write_json(folder / "session.json", jsonable(asdict(params)))
     return made
 

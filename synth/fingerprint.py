@@ -1,4 +1,4 @@
-"""Procedural fingerprint ridge textures in millimetre space (pure numpy, deterministic).
+"""Procedural fingerprint ridge textures in millimetre space (numpy + OpenCV, deterministic).
 
 Pipeline of :func:`make_fingerprint`: an orientation field from the zero-pole (Sherlock-Monro)
 model of singular points plus smooth noise, ridges grown from white noise by iterated oriented
@@ -12,11 +12,13 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass, field
 
+import cv2
 import numpy as np
 
 PATTERNS = ("arch", "loop", "whorl")
 LOOP_ROUND_BETA = 0.85  # 0 = plain zero-pole loop (needle-like tip), <1 = rounder recurve
 LOOP_ROUND_MM = 3.0  # extent of that correction around the core (mm)
+_REMAP_WIDTH = 4096  # points per row of the cv2.remap maps
 
 
 @dataclass(frozen=True)
@@ -64,10 +66,10 @@ _NON_NEGATIVE = "period_variation orientation_noise_rad pore_density_per_mm2 mar
 _NON_NEGATIVE += "pore_diameter_mm break_density break_size_mm".split()
 
 
-def _require(ok: bool, msg: str, where: str = "FingerprintConfig") -> None:
-    """Raise ``ValueError`` naming this file unless ``ok``."""
+def _require(ok: bool, msg: str) -> None:
+    """Raise ``ValueError`` naming the config and this file unless ``ok``."""
     if not ok:
-        raise ValueError(f"{where} (synth/fingerprint.py): {msg}")
+        raise ValueError(f"FingerprintConfig (synth/fingerprint.py): {msg}")
 
 
 DEFAULT_CONFIG = FingerprintConfig()
@@ -116,16 +118,23 @@ class Fingerprint:
 
 
 def _bilinear(img: np.ndarray, rows: np.ndarray, cols: np.ndarray) -> np.ndarray:
-    """Bilinear lookup of ``(H, W)`` ``img`` at fractional pixel ``rows, cols``, edge-clamped."""
+    """Bilinear lookup of ``(H, W)`` ``img`` at fractional pixel ``rows, cols``, edge-clamped.
+
+    ``cv2.remap`` with ``BORDER_REPLICATE``; coordinates are clamped first (NaN -> 0: callers mask
+    them) and cast to float32 (OpenCV's map type: ~1e-5 px rounding). Returns a flat float32 array.
+    """
     h, w = img.shape
-    r = np.clip(np.nan_to_num(np.ravel(rows)), 0, h - 1)  # NaN -> 0: callers mask them
-    c = np.clip(np.nan_to_num(np.ravel(cols)), 0, w - 1)
-    r0 = np.minimum(r.astype(np.intp), h - 2)
-    c0 = np.minimum(c.astype(np.intp), w - 2)
-    fr, fc = (r - r0).astype(np.float32), (c - c0).astype(np.float32)
-    top = img[r0, c0] * (1 - fc) + img[r0, c0 + 1] * fc
-    bot = img[r0 + 1, c0] * (1 - fc) + img[r0 + 1, c0 + 1] * fc
-    return top * (1 - fr) + bot * fr
+    r = np.clip(np.nan_to_num(np.ravel(rows)), 0, h - 1).astype(np.float32)
+    c = np.clip(np.nan_to_num(np.ravel(cols)), 0, w - 1).astype(np.float32)
+    n = r.size
+    if n == 0:
+        return np.zeros(0, np.float32)
+    width = min(n, _REMAP_WIDTH)  # remap needs map sides < 32767: wrap the points into rows
+    pad = -n % width
+    maps = [np.pad(v, (0, pad), mode="edge").reshape(-1, width) for v in (c, r)]
+    src = np.ascontiguousarray(img, dtype=np.float32)
+    out = cv2.remap(src, maps[0], maps[1], cv2.INTER_LINEAR, borderMode=cv2.BORDER_REPLICATE)
+    return out.ravel()[:n]
 
 
 def _freqs(shape: tuple[int, int]) -> tuple[np.ndarray, np.ndarray]:
@@ -276,62 +285,3 @@ def make_fingerprint(
     ridges = np.clip(ridges, 0.0, 1.0).astype(np.float32)
     ridges.setflags(write=False)
     return Fingerprint(ridges, period_mm, pattern, float(ppm), n / ppm)
-
-
-def ridge_period_px(
-    image: np.ndarray,
-    min_period_px: float = 2.5,
-    max_period_px: float | None = None,
-    mask: np.ndarray | None = None,
-) -> float:
-    """Dominant ridge period of a 2D patch from its radially averaged power spectrum.
-
-    The patch is de-trended (best-fit plane removed over ``mask``, so the mean and lighting
-    gradients go), weighted by a Hann window (times ``mask``), zero-padded (finer frequency
-    sampling) and Fourier transformed; the peak of the radially averaged power between
-    ``min_period_px`` and ``max_period_px`` is located and the frequency is taken as the centroid
-    of that peak's lobe above 30 % of its height (robust to lumpy spectra of curved ridges).
-
-    Args:
-        image: ``(H, W)`` real array, any dtype; ``H, W >= 8``.
-        min_period_px: shortest period considered (px).
-        max_period_px: longest period considered (px); default ``min(H, W) / 2``.
-        mask: optional ``(H, W)`` bool/float weights, e.g. the contact region of a render.
-
-    Returns:
-        Period in pixels (float).
-
-    Raises:
-        ValueError: not a finite 2D patch of at least 8x8 px (or a mask of another shape), an
-            empty band, or no texture in the band.
-    """
-    where = "ridge_period_px"
-    a = np.asarray(image, dtype=np.float64)
-    ok = a.ndim == 2 and min(a.shape) >= 8 and bool(np.isfinite(a).all())
-    _require(ok, f"expected a finite 2D patch >= 8x8 px, got shape {a.shape}", where)
-    h, w = a.shape
-    wt = np.ones((h, w)) if mask is None else np.asarray(mask, dtype=np.float64)
-    _require(wt.shape == (h, w) and wt.sum() > 0, f"mask must be a non-empty {(h, w)}", where)
-    hi = min(h, w) / 2 if max_period_px is None else max_period_px
-    _require(0 < min_period_px < hi, f"need 0 < min < max period, got {min_period_px}, {hi}", where)
-    yy, xx = np.mgrid[0:h, 0:w]
-    design = np.stack([np.ones(h * w), xx.ravel(), yy.ravel()], axis=1)
-    sw = np.sqrt(wt.ravel())
-    coef = np.linalg.lstsq(design * sw[:, None], a.ravel() * sw, rcond=None)[0]
-    a = (a - (design @ coef).reshape(h, w)) * wt * np.outer(np.hanning(h), np.hanning(w))
-    size = 1 << max(9, math.ceil(math.log2(2 * max(h, w))))
-    power = np.abs(np.fft.rfft2(a, s=(size, size))) ** 2
-    fy, fx = _freqs((size, size))
-    radius = np.rint(np.hypot(fx, fy) * size).astype(np.intp).ravel()
-    prof = np.bincount(radius, power.ravel()) / np.maximum(np.bincount(radius), 1)
-    k_lo, k_hi = max(1, math.ceil(size / hi)), min(len(prof) - 2, int(size / min_period_px))
-    ok = k_hi > k_lo and prof[k_lo : k_hi + 1].max() > 1e-12 * power.sum()
-    _require(bool(ok), "patch has no periodic texture in the period band", where)
-    k = k_lo + int(np.argmax(prof[k_lo : k_hi + 1]))
-    thr, i0, i1 = 0.3 * prof[k], k, k  # centroid of the peak's lobe above 30 % of its height
-    while i0 > k_lo and prof[i0 - 1] >= thr:
-        i0 -= 1
-    while i1 < k_hi and prof[i1 + 1] >= thr:
-        i1 += 1
-    wts = prof[i0 : i1 + 1] - thr
-    return float(size * wts.sum() / (np.arange(i0, i1 + 1) * wts).sum())

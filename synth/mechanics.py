@@ -35,10 +35,18 @@ Model (one call to `solve_contact` per pressure):
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import replace
 
 import numpy as np
 
+from contactcal.synth.mechanics_params import (
+    TILT_EGG_GAIN,
+    FingerParams,
+    MembraneParams,
+    _finite,
+    _positive,
+    _require,
+)
 from contactcal.synth.membrane_shape import (
     AREA_POLYGON_POINTS,
     ContactState,
@@ -61,100 +69,16 @@ __all__ = [
     "tension_for_onset",
 ]
 
-TILT_EGG_GAIN = 0.25  # eps_1 per sin(tilt): 0.3 rad tilt -> 7 % egg asymmetry
 CLAMP_MARGIN_FRACTION = 0.08  # patch kept within (1 - this) a, leaving room for the annulus
 MAX_INDENTATION_MM = 3.0  # finger pulp indentation saturates near this (soft clip); the
 #   uncoupled height law alone would push a soft membrane (large gap, low tension) 5+ mm in
 CENTRE_MAX_FRACTION = 0.5  # |patch centre| <= this * a; beyond, the finger is off the membrane
+Semi = tuple[float, float]  # (long, short) semi-axes, mm
 
 
 def _soft_clip(x: float) -> float:
     """Saturating map ``x / (1 + x⁴)^(1/4)``: slope 1 at 0, limit 1; sharper knee than tanh."""
     return x / (1.0 + x**4) ** 0.25
-
-
-def _require(ok: bool, what: str, expected: str, got: object) -> None:
-    if not ok:
-        raise ValueError(f"contactcal.synth.mechanics: {what}: expected {expected}, got {got!r}")
-
-
-def _finite(x: object) -> bool:
-    try:
-        return math.isfinite(float(x))  # type: ignore[arg-type]
-    except (TypeError, ValueError):
-        return False
-
-
-def _positive(name: str, x: object) -> None:
-    _require(_finite(x) and float(x) > 0.0, name, "a finite number > 0", x)  # type: ignore[arg-type]
-
-
-@dataclass(frozen=True)
-class FingerParams:
-    """Fingertip pad, Hertz parameters and pose over the membrane."""
-
-    width_mm: float  # mm, pad width W (13-18); smaller -> patch width saturates earlier
-    length_mm: float  # mm, pad length L (20-26), >= width; caps the long semi-axis at L/2
-    radius_mm: float  # mm, Hertz sphere radius R (7-10); larger -> larger area at equal force
-    e0_mpa: float  # MPa, small-load modulus E0 (0.01-0.02); stiffer -> smaller area
-    beta_per_n: float  # 1/N, load stiffening beta (0.5-0.9); larger -> earlier area saturation
-    aspect: float  # long/short axis ratio (1.2-1.5), >= 1; long axis along the finger
-    offset_mm: tuple[float, float]  # mm, finger's lowest point (x, y) over the membrane centre
-    yaw_rad: float  # rad, finger direction about +z (world x = 0)
-    tilt_rad: float  # rad, pitch change; shifts patch R sin(tilt) along finger, egg-shapes it
-    harmonics: tuple[tuple[float, float], ...] = ()  # (eps_n, phase_n rad) for n = 2, 3, ...
-
-    def __post_init__(self) -> None:
-        for name in ("width_mm", "length_mm", "radius_mm", "e0_mpa"):
-            _positive(f"FingerParams.{name}", getattr(self, name))
-        _require(
-            self.length_mm >= self.width_mm,
-            "FingerParams.length_mm",
-            ">= width_mm",
-            (self.length_mm, self.width_mm),
-        )
-        b = self.beta_per_n
-        _require(_finite(b) and b >= 0.0, "FingerParams.beta_per_n", "finite >= 0", b)
-        _require(
-            _finite(self.aspect) and self.aspect >= 1.0,
-            "FingerParams.aspect",
-            "finite >= 1 (long/short)",
-            self.aspect,
-        )
-        off = self.offset_mm
-        _require(
-            isinstance(off, tuple) and len(off) == 2 and all(_finite(v) for v in off),
-            "FingerParams.offset_mm",
-            "a tuple of 2 finite floats (mm)",
-            off,
-        )
-        _require(_finite(self.yaw_rad), "FingerParams.yaw_rad", "a finite angle", self.yaw_rad)
-        t = self.tilt_rad
-        _require(_finite(t) and abs(t) < 0.5 * math.pi, "FingerParams.tilt_rad", "|tilt| < pi/2", t)
-        h = self.harmonics
-        ok = isinstance(h, tuple) and all(
-            isinstance(e, tuple) and len(e) == 2 and all(_finite(v) for v in e) for e in h
-        )
-        _require(ok, "FingerParams.harmonics", "a tuple of (eps, phase) float pairs", h)
-        total = sum(abs(e[0]) for e in h) + TILT_EGG_GAIN * abs(math.sin(t))
-        _require(total < 0.5, "FingerParams.harmonics", "sum |eps_n| (+ tilt egg) < 0.5", total)
-
-
-@dataclass(frozen=True)
-class MembraneParams:
-    """Clamped, pre-tensioned membrane and its gap to the finger."""
-
-    clamp_radius_mm: float  # mm, clamp circle radius a (11.5-13.5); larger -> softer, earlier onset
-    tension_n_per_mm: float  # N/mm, effective tension T (0.05-0.12); larger -> later onset
-    gap_mm: float  # mm, flat membrane to finger's lowest point (1-2), >= 0; larger -> later onset
-    onset_ramp_kpa: float  # kPa, ramp tau (0.5-1); smaller -> area jumps faster after onset
-
-    def __post_init__(self) -> None:
-        _positive("MembraneParams.clamp_radius_mm", self.clamp_radius_mm)
-        _positive("MembraneParams.tension_n_per_mm", self.tension_n_per_mm)
-        _positive("MembraneParams.onset_ramp_kpa", self.onset_ramp_kpa)
-        g = self.gap_mm
-        _require(_finite(g) and g >= 0.0, "MembraneParams.gap_mm", "finite >= 0 (mm)", g)
 
 
 def onset_pressure_kpa(membrane: MembraneParams) -> float:
@@ -215,10 +139,75 @@ def _fit_scale(centre: np.ndarray, rb: np.ndarray, ang: np.ndarray, rmax: float)
     return float(min(1.0, s.min()))
 
 
+def _patch_semi_axes(pressure_kpa: float, p_on: float, finger: FingerParams, tau: float) -> Semi:
+    """(long, short) semi-axes (mm) of the ramped Hertz area, softly saturated by the pad."""
+    ramp = -math.expm1(-(pressure_kpa - p_on) / tau)
+    area = equilibrium_area_mm2(pressure_kpa, finger) * ramp
+    b = math.sqrt(area / (math.pi * finger.aspect))
+    hw, hl = 0.5 * finger.width_mm, 0.5 * finger.length_mm
+    return (hl * _soft_clip(finger.aspect * b / hl), hw * _soft_clip(b / hw))
+
+
+def _patch_centre(finger: FingerParams, a: float) -> np.ndarray:
+    """Patch centre (mm): offset + R sin(tilt) along the finger, within CENTRE_MAX_FRACTION a."""
+    yaw = float(finger.yaw_rad)
+    u = np.array([math.cos(yaw), math.sin(yaw)])
+    offset = np.asarray(finger.offset_mm, dtype=np.float64)
+    centre = offset + finger.radius_mm * math.sin(finger.tilt_rad) * u
+    cmax = CENTRE_MAX_FRACTION * a
+    if np.hypot(*centre) > cmax:
+        centre *= cmax / np.hypot(*centre)
+    return centre
+
+
+def _patch_harmonics(finger: FingerParams) -> tuple[tuple[int, float, float], ...]:
+    """(n, eps_n, phase_n): the tilt's egg shape (n = 1) then the user's harmonics (n >= 2)."""
+    harm: tuple[tuple[int, float, float], ...] = ()
+    if finger.tilt_rad != 0.0:
+        harm = ((1, TILT_EGG_GAIN * math.sin(finger.tilt_rad), 0.0),)
+    return harm + tuple(
+        (n, float(e), float(ph)) for n, (e, ph) in enumerate(finger.harmonics, start=2)
+    )
+
+
+def _plateau_height(pressure_kpa: float, area_mm2: float, membrane: MembraneParams) -> float:
+    """Plateau height z_top (mm): annulus formula, at least the gap, indentation softly capped."""
+    a, t, g = membrane.clamp_radius_mm, membrane.tension_n_per_mm, membrane.gap_mm
+    p = pressure_kpa / 1000.0
+    rm2 = area_mm2 / math.pi
+    if rm2 > 0:
+        z_formula = p / (4.0 * t) * ((a * a - rm2) - rm2 * math.log(a * a / rm2))
+    else:
+        z_formula = p * a * a / (4.0 * t)  # the free cap's apex
+    return g + MAX_INDENTATION_MM * _soft_clip(max(0.0, z_formula - g) / MAX_INDENTATION_MM)
+
+
+def _free_cap(
+    pressure_kpa: float, p_on: float, finger: FingerParams, a: float, t: float
+) -> ContactState:
+    """State without contact: the paraboloid cap of apex p a² / (4 T)."""
+    p = pressure_kpa / 1000.0
+    return ContactState(
+        pressure_kpa=pressure_kpa,
+        onset_kpa=p_on,
+        in_contact=False,
+        centre_mm=(float(finger.offset_mm[0]), float(finger.offset_mm[1])),
+        semi_axes_mm=(0.0, 0.0),
+        yaw_rad=float(finger.yaw_rad),
+        area_mm2=0.0,
+        plateau_z_mm=p * a * a / (4.0 * t),
+        indentation_mm=0.0,
+        clamp_radius_mm=float(a),
+    )
+
+
 def solve_contact(
     pressure_kpa: float, finger: FingerParams, membrane: MembraneParams
 ) -> ContactState:
     """Solve the reduced membrane/finger contact at one pressure.
+
+    Steps 3-6 of the module docstring: area and semi-axes, centre, harmonics, fit in the clamp,
+    boundary area, plateau height.
 
     Args:
         pressure_kpa: inflation pressure (kPa), finite and >= 0.
@@ -237,73 +226,32 @@ def solve_contact(
         isinstance(membrane, MembraneParams), "membrane", "MembraneParams", type(membrane).__name__
     )
     pressure_kpa = float(pressure_kpa)
-    a, t, g = membrane.clamp_radius_mm, membrane.tension_n_per_mm, membrane.gap_mm
+    a = membrane.clamp_radius_mm
     p_on = onset_pressure_kpa(membrane)
-    p = pressure_kpa / 1000.0
-    cap = p * a * a / (4.0 * t)
     if pressure_kpa <= p_on:
-        off = (float(finger.offset_mm[0]), float(finger.offset_mm[1]))
-        return ContactState(
-            pressure_kpa,
-            p_on,
-            False,
-            off,
-            (0.0, 0.0),
-            float(finger.yaw_rad),
-            0.0,
-            cap,
-            0.0,
-            float(a),
-        )
-    ramp = -math.expm1(-(pressure_kpa - p_on) / membrane.onset_ramp_kpa)
-    area = equilibrium_area_mm2(pressure_kpa, finger) * ramp
-    b = math.sqrt(area / (math.pi * finger.aspect))
-    hw, hl = 0.5 * finger.width_mm, 0.5 * finger.length_mm
-    semi = (hl * _soft_clip(finger.aspect * b / hl), hw * _soft_clip(b / hw))
+        return _free_cap(pressure_kpa, p_on, finger, a, membrane.tension_n_per_mm)
+    semi = _patch_semi_axes(pressure_kpa, p_on, finger, membrane.onset_ramp_kpa)
+    centre = _patch_centre(finger, a)
+    harm = _patch_harmonics(finger)
     yaw = float(finger.yaw_rad)
-    u = np.array([math.cos(yaw), math.sin(yaw)])
-    centre = (
-        np.asarray(finger.offset_mm, dtype=np.float64)
-        + finger.radius_mm * math.sin(finger.tilt_rad) * u
-    )
-    cmax = CENTRE_MAX_FRACTION * a
-    if np.hypot(*centre) > cmax:
-        centre *= cmax / np.hypot(*centre)
-    harm: tuple[tuple[int, float, float], ...] = ()
-    if finger.tilt_rad != 0.0:
-        harm = ((1, TILT_EGG_GAIN * math.sin(finger.tilt_rad), 0.0),)
-    harm += tuple((n, float(e), float(ph)) for n, (e, ph) in enumerate(finger.harmonics, start=2))
     phi = np.linspace(0.0, 2.0 * np.pi, AREA_POLYGON_POINTS, endpoint=False)
     rb = boundary_radius(np.cos(phi), np.sin(phi), semi, harm)
     scale = _fit_scale(centre, rb, phi + yaw, (1.0 - CLAMP_MARGIN_FRACTION) * a)
-    semi = (semi[0] * scale, semi[1] * scale)
-    state = ContactState(
-        pressure_kpa,
-        p_on,
-        True,
-        (float(centre[0]), float(centre[1])),
-        semi,
-        yaw,
-        0.0,
-        0.0,
-        0.0,
-        float(a),
-        harm,
+    patch = ContactState(
+        pressure_kpa=pressure_kpa,
+        onset_kpa=p_on,
+        in_contact=True,
+        centre_mm=(float(centre[0]), float(centre[1])),
+        semi_axes_mm=(semi[0] * scale, semi[1] * scale),
+        yaw_rad=yaw,
+        area_mm2=0.0,  # filled in below from the boundary polygon
+        plateau_z_mm=0.0,
+        indentation_mm=0.0,
+        clamp_radius_mm=float(a),
+        harmonics=harm,
     )
-    area_b = polygon_area_mm2(state.boundary_polygon(AREA_POLYGON_POINTS))
-    rm2 = area_b / math.pi
-    z_formula = p / (4.0 * t) * ((a * a - rm2) - rm2 * math.log(a * a / rm2)) if rm2 > 0 else cap
-    z_top = g + MAX_INDENTATION_MM * _soft_clip(max(0.0, z_formula - g) / MAX_INDENTATION_MM)
-    return ContactState(
-        pressure_kpa,
-        p_on,
-        True,
-        state.centre_mm,
-        semi,
-        yaw,
-        area_b,
-        z_top,
-        z_top - g,
-        float(a),
-        harm,
+    area_b = polygon_area_mm2(patch.boundary_polygon(AREA_POLYGON_POINTS))
+    z_top = _plateau_height(pressure_kpa, area_b, membrane)
+    return replace(
+        patch, area_mm2=area_b, plateau_z_mm=z_top, indentation_mm=z_top - membrane.gap_mm
     )

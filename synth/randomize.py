@@ -10,12 +10,14 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, replace
+from typing import Any
 
 import numpy as np
 
 from contactcal.synth.camera import CameraEffects
 from contactcal.synth.coating import MembraneOptics
-from contactcal.synth.mechanics import FingerParams, MembraneParams, tension_for_onset
+from contactcal.synth.mechanics import tension_for_onset
+from contactcal.synth.mechanics_params import FingerParams, MembraneParams
 from contactcal.synth.rig import RigGeometry
 
 LED_COUNT = 16  # LEDs feeding the light guide plate (sets the azimuthal non-uniformity's scale)
@@ -41,101 +43,218 @@ class SessionParams:
     hard: bool  # drawn from the hard-case distribution
 
 
-def _lognormal(rng: np.random.Generator, sd: float) -> float:
-    return float(math.exp(rng.normal(0.0, sd)))
+@dataclass(frozen=True)
+class Draw:
+    """One scalar (or ``size``-vector) random draw of a session.
+
+    ``kind`` and the meaning of ``nominal`` / ``hard`` (the latter used when ``hard=True``;
+    None = same as nominal): ``"uniform"`` (lo, hi); ``"normal"`` (mean, sd); ``"lognormal"``
+    (0, sd) -> ``exp(N(0, sd))``; ``"loguniform"`` (lo, hi) -> ``exp(U(log lo, log hi))``;
+    ``"seed"`` -> an int in [0, 2³¹) (no parameters).
+    """
+
+    name: str
+    kind: str
+    nominal: tuple[float, float] = (0.0, 0.0)
+    hard: tuple[float, float] | None = None
+    size: int | None = None
+
+    def sample(self, rng: np.random.Generator, hard: bool) -> Any:
+        """Draw the value (exactly one generator call)."""
+        lo, hi = self.hard if hard and self.hard is not None else self.nominal
+        if self.kind == "uniform":
+            return rng.uniform(lo, hi, self.size)
+        if self.kind == "normal":
+            return rng.normal(lo, hi, self.size)
+        if self.kind == "lognormal":
+            return float(math.exp(rng.normal(lo, hi)))
+        if self.kind == "loguniform":
+            return float(math.exp(rng.uniform(math.log(lo), math.log(hi))))
+        if self.kind == "seed":
+            return int(rng.integers(2**31))
+        raise ValueError(f"synth/randomize.py: unknown Draw kind {self.kind!r}")
+
+
+def _uniform(name: str, lo: float, hi: float, hard: tuple[float, float] | None = None) -> Draw:
+    return Draw(name, "uniform", (lo, hi), hard)
+
+
+def _normal(name: str, mean: float, sd: float, hard_sd: float | None = None) -> Draw:
+    return Draw(name, "normal", (mean, sd), None if hard_sd is None else (mean, hard_sd))
+
+
+# The draws in generator order (changing the order changes every session of a seed). Ranges
+# follow ``shared/reference``: pad width 13-18 mm, aspect 1.2-1.5, onset 2-4 kPa, finger
+# stiffness of the three measured users and around them.
+BODY_DRAWS = (  # finger, membrane, rig, LED profile
+    _uniform("width_mm", 13.0, 18.0),
+    *(
+        d
+        for n in (2, 3, 4)  # shape harmonics n = 2, 3, 4: (eps_n, phase_n)
+        for d in (_uniform(f"eps_{n}", 0.0, 0.025), _uniform(f"phase_{n}", 0.0, 2 * math.pi))
+    ),
+    _uniform("length_per_width", 1.35, 1.6),
+    _uniform("radius_mm", 7.0, 10.0),
+    _uniform("e0_mpa", 0.011, 0.022),
+    _uniform("beta_per_n", 0.4, 1.0),
+    _uniform("aspect", 1.2, 1.5),
+    _normal("offset_x_mm", 0.0, 1.0, hard_sd=2.5),
+    _normal("offset_y_mm", 0.0, 1.0, hard_sd=2.5),
+    _normal("yaw_rad", math.pi / 2, 0.35),  # finger enters along the image's y axis
+    _normal("tilt_rad", 0.0, 0.15),
+    _uniform("clamp_radius_mm", 11.5, 13.5),
+    # Several mm: the inner ring (LGP seen in the concave membrane) only comes back and shrinks
+    # for inflations of ~4.5-7 mm (docs/renderer.md), and the paper shows it shrinking before
+    # contact. A 70 µm silicone membrane's low tension makes such gaps consistent with onset.
+    _uniform("gap_mm", 3.5, 6.0),
+    _uniform("onset_kpa", 2.0, 4.0),
+    _uniform("onset_ramp_kpa", 0.5, 1.0),
+    _uniform("chamber_depth_mm", 2.5, 4.0),
+    _uniform("lgp_gap_mm", 7.0, 12.0),
+    _uniform("fov_y_deg", 28.0, 30.5),
+    _normal("camera_offset_x_mm", 0.0, 0.3),
+    _normal("camera_offset_y_mm", 0.0, 0.3),
+    Draw("led_deviation", "normal", (0.0, 0.08), (0.0, 0.25), size=LED_COUNT),
+)
+# (hard only: a dim LED sector is drawn here, see _dim_sector)
+EXPOSURE_DRAWS = (
+    Draw("exposure_gain", "lognormal", (0.0, 0.25), (0.0, 0.6)),
+    _uniform("defocus_sigma_px", 0.0, 1.0, hard=(0.0, 2.2)),
+    Draw("full_well", "loguniform", (300.0, 5000.0)),
+    _uniform("read_noise", 0.002, 0.012),
+    _uniform("gamma", 1.8, 2.4),
+)
+# (the JPEG quality is drawn here: lossless or 60-95, half and half)
+LOOK_DRAWS = (  # camera pose, skin, coating, seeds, LGP brightness
+    _normal("camera_tilt_x_deg", 0.0, 0.6),
+    _normal("camera_tilt_y_deg", 0.0, 0.6),
+    _normal("shift_x_px", 0.0, 1.5),
+    _normal("shift_y_px", 0.0, 1.5),
+    Draw("skin_gain", "uniform", (0.6, 1.3), size=3),
+    _uniform("coating_reflectance", 0.35, 0.75),
+    _uniform("particle_density_per_mm2", 250.0, 1200.0),
+    _uniform("particle_tilt_deg", 1.0, 4.0),
+    _uniform("sparkle_fraction", 0.03, 0.2),
+    _uniform("sparkle_tilt_deg", 10.0, 30.0),
+    _uniform("roughness_alpha", 0.03, 0.12),
+    _uniform("blue_per_red_reflectance", 0.9, 1.05),
+    _uniform("coating_diffuse", 0.0, 0.08),
+    Draw("fingerprint_seed", "seed"),
+    _uniform("ridge_contrast", 0.35, 1.0, hard=(0.12, 0.4)),  # faint ridges when hard
+    Draw("particle_seed", "seed"),
+    _uniform("lgp_radiance", 0.7, 1.4),
+)
+DIM_SECTOR_PROBABILITY = 0.3  # hard only: share of sessions with a dim LED sector
+JPEG_PROBABILITY = 0.5  # share of sessions saved as JPEG (else lossless)
+
+
+def _draw(rng: np.random.Generator, table: tuple[Draw, ...], hard: bool) -> dict[str, Any]:
+    return {d.name: d.sample(rng, hard) for d in table}
+
+
+def _dim_sector(rng: np.random.Generator, profile: np.ndarray) -> None:
+    """Dim 2-4 consecutive LEDs to 15 % in place ("ring partly missing")."""
+    start = rng.integers(LED_COUNT)
+    for k in range(int(rng.integers(2, 5))):
+        profile[(start + k) % LED_COUNT] *= 0.15
+
+
+def _finger(v: dict[str, Any]) -> FingerParams:
+    return FingerParams(
+        width_mm=v["width_mm"],
+        length_mm=v["width_mm"] * v["length_per_width"],
+        radius_mm=v["radius_mm"],
+        e0_mpa=v["e0_mpa"],
+        beta_per_n=v["beta_per_n"],
+        aspect=v["aspect"],
+        offset_mm=(float(v["offset_x_mm"]), float(v["offset_y_mm"])),
+        yaw_rad=float(v["yaw_rad"]),
+        tilt_rad=float(v["tilt_rad"]),
+        harmonics=tuple((float(v[f"eps_{n}"]), float(v[f"phase_{n}"])) for n in (2, 3, 4)),
+    )
+
+
+def _membrane_and_rig(v: dict[str, Any]) -> tuple[MembraneParams, RigGeometry]:
+    a, gap = v["clamp_radius_mm"], v["gap_mm"]
+    membrane = MembraneParams(
+        clamp_radius_mm=a,
+        tension_n_per_mm=tension_for_onset(v["onset_kpa"], gap, a),
+        gap_mm=gap,
+        onset_ramp_kpa=v["onset_ramp_kpa"],
+    )
+    rig = RigGeometry(
+        chamber_depth_mm=float(v["chamber_depth_mm"]),
+        clamp_radius_mm=float(a),
+        lgp_gap_mm=float(v["lgp_gap_mm"]),
+        fov_y_deg=float(v["fov_y_deg"]),
+        camera_offset_mm=(float(v["camera_offset_x_mm"]), float(v["camera_offset_y_mm"])),
+    )
+    return membrane, rig
+
+
+def _camera(v: dict[str, Any], jpeg_quality: int) -> CameraEffects:
+    return CameraEffects(
+        exposure=BASE_EXPOSURE * v["exposure_gain"],
+        defocus_sigma_px=float(v["defocus_sigma_px"]),
+        full_well=v["full_well"],
+        read_noise=float(v["read_noise"]),
+        gamma=float(v["gamma"]),
+        jpeg_quality=jpeg_quality,
+        tilt_deg=(float(v["camera_tilt_x_deg"]), float(v["camera_tilt_y_deg"])),
+        shift_px=(float(v["shift_x_px"]), float(v["shift_y_px"])),
+    )
+
+
+def _optics(v: dict[str, Any]) -> MembraneOptics:
+    skin = np.clip(np.array([0.62, 0.42, 0.36]) * v["skin_gain"] ** 0.3, 0.0, 1.0)
+    refl = float(v["coating_reflectance"])
+    return MembraneOptics(
+        particle_density_per_mm2=float(v["particle_density_per_mm2"]),
+        particle_tilt_deg=float(v["particle_tilt_deg"]),
+        sparkle_fraction=float(v["sparkle_fraction"]),
+        sparkle_tilt_deg=float(v["sparkle_tilt_deg"]),
+        roughness_alpha=float(v["roughness_alpha"]),
+        coating_reflectance=(refl, refl, refl * float(v["blue_per_red_reflectance"])),
+        coating_diffuse=float(v["coating_diffuse"]),
+        skin_rgb=(float(skin[0]), float(skin[1]), float(skin[2])),
+    )
 
 
 def sample_session(rng: np.random.Generator, hard: bool = False) -> SessionParams:
-    """Draw one session's parameters.
+    """Draw one session's parameters (the tables above, in order, plus two conditional draws).
 
     Args:
         rng: the session's generator (e.g. ``default_rng([seed, finger_index])``).
         hard: draw from the hard-case distribution.
 
     Returns:
-        The session parameters; ranges follow ``shared/reference`` (pad width 13-18 mm, aspect
-        1.2-1.5, onset 2-4 kPa, finger stiffness of the three measured users and around them).
+        The session parameters.
     """
-    width = rng.uniform(13.0, 18.0)
-    offset_sd = 2.5 if hard else 1.0
-    harmonics = tuple(
-        (float(rng.uniform(0.0, 0.025)), float(rng.uniform(0, 2 * math.pi))) for _ in range(3)
-    )
-    finger = FingerParams(
-        width_mm=width,
-        length_mm=width * rng.uniform(1.35, 1.6),
-        radius_mm=rng.uniform(7.0, 10.0),
-        e0_mpa=rng.uniform(0.011, 0.022),
-        beta_per_n=rng.uniform(0.4, 1.0),
-        aspect=rng.uniform(1.2, 1.5),
-        offset_mm=(float(rng.normal(0, offset_sd)), float(rng.normal(0, offset_sd))),
-        yaw_rad=float(rng.normal(math.pi / 2, 0.35)),  # finger enters along the image's y axis
-        tilt_rad=float(rng.normal(0.0, 0.15)),
-        harmonics=harmonics,
-    )
-    a = rng.uniform(11.5, 13.5)
-    # Several mm: the inner ring (LGP seen in the concave membrane) only comes back and shrinks
-    # for inflations of ~4.5-7 mm (docs/renderer.md), and the paper shows it shrinking before
-    # contact. A 70 µm silicone membrane's low tension makes such gaps consistent with onset.
-    gap = rng.uniform(3.5, 6.0)
-    onset = rng.uniform(2.0, 4.0)
-    membrane = MembraneParams(
-        clamp_radius_mm=a,
-        tension_n_per_mm=tension_for_onset(onset, gap, a),
-        gap_mm=gap,
-        onset_ramp_kpa=rng.uniform(0.5, 1.0),
-    )
-    rig = RigGeometry(
-        chamber_depth_mm=float(rng.uniform(2.5, 4.0)),
-        clamp_radius_mm=float(a),
-        lgp_gap_mm=float(rng.uniform(7.0, 12.0)),
-        fov_y_deg=float(rng.uniform(28.0, 30.5)),
-        camera_offset_mm=(float(rng.normal(0, 0.3)), float(rng.normal(0, 0.3))),
-    )
-    profile = 1.0 + rng.normal(0.0, 0.25 if hard else 0.08, LED_COUNT)
-    if hard and rng.random() < 0.3:  # a dim sector: "ring partly missing"
-        start = rng.integers(LED_COUNT)
-        for k in range(int(rng.integers(2, 5))):
-            profile[(start + k) % LED_COUNT] *= 0.15
-    exposure_sd = 0.6 if hard else 0.25
-    camera = CameraEffects(
-        exposure=BASE_EXPOSURE * _lognormal(rng, exposure_sd),
-        defocus_sigma_px=float(rng.uniform(0.0, 2.2 if hard else 1.0)),
-        full_well=float(math.exp(rng.uniform(math.log(300), math.log(5000)))),
-        read_noise=float(rng.uniform(0.002, 0.012)),
-        gamma=float(rng.uniform(1.8, 2.4)),
-        jpeg_quality=0 if rng.random() < 0.5 else int(rng.integers(60, 96)),
-        tilt_deg=(float(rng.normal(0, 0.6)), float(rng.normal(0, 0.6))),
-        shift_px=(float(rng.normal(0, 1.5)), float(rng.normal(0, 1.5))),
-    )
-    skin = np.clip(np.array([0.62, 0.42, 0.36]) * rng.uniform(0.6, 1.3, 3) ** 0.3, 0.0, 1.0)
-    refl = float(rng.uniform(0.35, 0.75))
-    optics = MembraneOptics(
-        particle_density_per_mm2=float(rng.uniform(250.0, 1200.0)),
-        particle_tilt_deg=float(rng.uniform(1.0, 4.0)),
-        sparkle_fraction=float(rng.uniform(0.03, 0.2)),
-        sparkle_tilt_deg=float(rng.uniform(10.0, 30.0)),
-        roughness_alpha=float(rng.uniform(0.03, 0.12)),
-        coating_reflectance=(refl, refl, refl * float(rng.uniform(0.9, 1.05))),
-        coating_diffuse=float(rng.uniform(0.0, 0.08)),
-        skin_rgb=(float(skin[0]), float(skin[1]), float(skin[2])),
-    )
+    v = _draw(rng, BODY_DRAWS, hard)
+    profile = 1.0 + v["led_deviation"]
+    if hard and rng.random() < DIM_SECTOR_PROBABILITY:
+        _dim_sector(rng, profile)
+    v |= _draw(rng, EXPOSURE_DRAWS, hard)
+    jpeg_quality = 0 if rng.random() < JPEG_PROBABILITY else int(rng.integers(60, 96))
+    v |= _draw(rng, LOOK_DRAWS, hard)
+    membrane, rig = _membrane_and_rig(v)
     return SessionParams(
-        finger=finger,
+        finger=_finger(v),
         membrane=membrane,
         rig=rig,
-        onset_kpa=float(onset),
-        fingerprint_seed=int(rng.integers(2**31)),
-        ridge_contrast=float(rng.uniform(0.12, 0.4) if hard else rng.uniform(0.35, 1.0)),
-        particle_seed=int(rng.integers(2**31)),
-        optics=optics,
-        lgp_radiance=float(rng.uniform(0.7, 1.4)),
-        lgp_profile=tuple(float(v) for v in np.clip(profile, 0.05, None)),
-        camera=camera,
+        onset_kpa=float(v["onset_kpa"]),
+        fingerprint_seed=v["fingerprint_seed"],
+        ridge_contrast=float(v["ridge_contrast"]),
+        particle_seed=v["particle_seed"],
+        optics=_optics(v),
+        lgp_radiance=float(v["lgp_radiance"]),
+        lgp_profile=tuple(float(x) for x in np.clip(profile, 0.05, None)),
+        camera=_camera(v, jpeg_quality),
         hard=hard,
     )
 
 
 def frame_camera(session: SessionParams, rng: np.random.Generator) -> CameraEffects:
     """The session camera with a small per-frame exposure jitter (auto-exposure, LED flicker)."""
-    return replace(session.camera, exposure=session.camera.exposure * _lognormal(rng, 0.04))
+    jitter = float(math.exp(rng.normal(0.0, 0.04)))
+    return replace(session.camera, exposure=session.camera.exposure * jitter)

@@ -4,7 +4,7 @@
 and then, per frame, writes the membrane vertices/normals, the contact-weight bitmap, the LGP
 radiance texture and (when the particle seed or optics change) the flake normal map through
 ``mi.traverse`` + ``params.update()``: reloading scenes in a loop leaks memory. The window is
-composited in closed form: ``frame = T(θ)² * mitsuba + window_reflection`` (``window.py``).
+composited in closed form: ``frame = T(θ)² * mitsuba + WindowReflection`` (``window.py``).
 
 Determinism: the same inputs and ``seed`` give a bit-identical frame (Mitsuba's independent
 sampler is seeded per call; the window and normal map are deterministic numpy).
@@ -17,13 +17,12 @@ from types import TracebackType
 
 import numpy as np
 
+from contactcal.synth.coating import MembraneOptics, particle_normal_map
 from contactcal.synth.rig import RigGeometry, mm_per_px_at, pixel_rays, project_to_pixels
 from contactcal.synth.scene import (
-    MembraneOptics,
     ZFn,
     lgp_profile_texture,
     membrane_vertices,
-    particle_normal_map,
     polar_disk_topology,
     scene_dict,
     set_buffer,
@@ -97,10 +96,21 @@ class RigRenderer:
             np.random.default_rng(0), normal_map_size, rig.clamp_radius_mm, self._optics
         )
         d = scene_dict(
-            rig, width, height, spp, _flat,
-            np.zeros((weight_size, weight_size), np.float32), 1.0, np.ones(_K_LGP), nm,
-            self._optics, 0, n_rings, n_sectors, with_cylinder,
-        )  # fmt: skip
+            rig,
+            width,
+            height,
+            spp,
+            z_fn=_flat,
+            contact_weight=np.zeros((weight_size, weight_size), np.float32),
+            lgp_radiance=1.0,
+            azimuthal_profile=np.ones(_K_LGP),
+            normal_map=nm,
+            optics=self._optics,
+            seed=0,
+            n_rings=n_rings,
+            n_sectors=n_sectors,
+            with_cylinder=with_cylinder,
+        )
         self.scene = mi.load_dict(d)
         self.params = mi.traverse(self.scene)
         self._transmission = window_transmission(rig, width, height)
@@ -122,10 +132,8 @@ class RigRenderer:
         p[key + "bsdf_1.reflectance.value"] = mi.Color3f(*optics.coating_diffuse_rgb)
         p["membrane.bsdf.bsdf_1.reflectance.value"] = mi.Color3f(*optics.skin_rgb)
         if particle_seed != self._particle_seed or _flakes_changed(optics, self._optics):
-            nm = particle_normal_map(
-                np.random.default_rng(particle_seed), self.normal_map_size,
-                self.rig.clamp_radius_mm, optics,
-            )  # fmt: skip
+            rng = np.random.default_rng(particle_seed)
+            nm = particle_normal_map(rng, self.normal_map_size, self.rig.clamp_radius_mm, optics)
             p[key + "bsdf_0.normalmap.data"] = mi.TensorXf(nm)
             self._particle_seed = particle_seed
         self._optics = optics

@@ -14,6 +14,7 @@ from __future__ import annotations
 import argparse
 import time
 from collections.abc import Callable
+from functools import partial
 from pathlib import Path
 
 import numpy as np
@@ -32,15 +33,17 @@ def tonemap(img: np.ndarray, exposure: float = 3.0, gamma: float = 2.2) -> np.nd
     return (x[..., ::-1] * 255.0 + 0.5).astype(np.uint8)
 
 
+def _cap(h: float, a: float) -> ZFn:
+    """Paraboloid cap of apex height ``h`` over the clamp radius ``a`` (mm)."""
+    return lambda x, y: h * np.clip(1.0 - (x * x + y * y) / a**2, 0.0, None)
+
+
 def demo_states(rig: RigGeometry, m: int) -> dict[str, tuple[ZFn, np.ndarray]]:
     """Demo ``(z_fn, contact_weight (m, m))`` per state name (see module docstring)."""
     a = rig.clamp_radius_mm
     c = (np.arange(m) + 0.5) * 2 * a / m - a
     xx, yy = np.meshgrid(c, c)  # row i -> y, column j -> x (the weight texture convention)
-
-    def cap(h: float) -> ZFn:
-        return lambda x, y: h * np.clip(1.0 - (x * x + y * y) / a**2, 0.0, None)
-
+    cap = partial(_cap, a=a)
     h_cap, z_top = 7.0, 4.5
     r_c = a * np.sqrt(1.0 - z_top / h_cap)  # plateau radius
     ell = (xx / (0.78 * r_c)) ** 2 + ((yy + 0.3) / (0.98 * r_c)) ** 2 <= 1.0
@@ -59,7 +62,7 @@ def demo_states(rig: RigGeometry, m: int) -> dict[str, tuple[ZFn, np.ndarray]]:
 def _save(path: Path, bgr: np.ndarray) -> None:
     import cv2
 
-    from contactcal.infer.atomic import atomic_path
+    from contactcal.infer.files.atomic import atomic_path
 
     with atomic_path(path) as tmp:
         if not cv2.imwrite(str(tmp), bgr):
@@ -102,11 +105,9 @@ def figures(out: Path, width: int = 648, height: int = 486, spp: int = 16) -> No
     with RigRenderer(rig, 256, 192, spp=spp, weight_size=256) as r:
         a = rig.clamp_radius_mm
         strip = []
+        no_contact = np.zeros((256, 256), np.float32)
         for h in (0.0, 1.0, 3.0, 5.0, 6.0, 7.0):
-            img = r.render(
-                lambda x, y, h=h: h * np.clip(1 - (x * x + y * y) / a**2, 0, None),
-                np.zeros((256, 256), np.float32), 1.0, PROFILE, seed=1,
-            )  # fmt: skip
+            img = r.render(_cap(h, a), no_contact, 1.0, PROFILE, seed=1)
             strip.append(_label(tonemap(img), f"h = {h:g} mm"))
         _save(out / "inflation_strip.png", np.vstack([np.hstack(strip[:3]), np.hstack(strip[3:])]))
 

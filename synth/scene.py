@@ -22,11 +22,7 @@ from collections.abc import Callable
 
 import numpy as np
 
-from contactcal.synth.coating import (
-    MembraneOptics,
-    membrane_bsdf_dict,
-    particle_normal_map,
-)
+from contactcal.synth.coating import MembraneOptics, membrane_bsdf_dict, particle_normal_map
 from contactcal.synth.rig import RigGeometry
 
 __all__ = [

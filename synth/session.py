@@ -11,14 +11,19 @@ from __future__ import annotations
 import math
 from collections.abc import Iterator, Sequence
 from dataclasses import dataclass, replace
+from typing import TYPE_CHECKING
 
 import numpy as np
 
 from contactcal.synth.camera import apply_camera
 from contactcal.synth.fingerprint import Fingerprint, make_fingerprint
-from contactcal.synth.mechanics import ContactState, solve_contact
+from contactcal.synth.mechanics import solve_contact
+from contactcal.synth.membrane_shape import ContactState
 from contactcal.synth.randomize import SessionParams, frame_camera
 from contactcal.synth.rig import RigGeometry, focal_px, mm_per_px_at
+
+if TYPE_CHECKING:
+    from contactcal.synth.render import RigRenderer
 
 
 @dataclass(frozen=True)
@@ -75,6 +80,23 @@ def contact_weight(
     return w.astype(np.float32)
 
 
+def _open_renderer(rig: RigGeometry, config: RenderConfig) -> RigRenderer:
+    """Load the rig's scene once for a session (Mitsuba is imported only here)."""
+    from contactcal.synth.render import RigRenderer
+
+    return RigRenderer(
+        rig,
+        config.width,
+        config.height,
+        spp=config.spp,
+        n_rings=config.n_rings,
+        n_sectors=config.n_sectors,
+        weight_size=config.weight_size,
+        normal_map_size=config.normal_map_size,
+        variant=config.variant,
+    )
+
+
 def render_session(
     session: SessionParams,
     pressures: Sequence[float],
@@ -97,18 +119,13 @@ def render_session(
     Yields:
         :class:`FrameOutput` per pressure (None for skipped frames).
     """
-    from contactcal.synth.render import RigRenderer
-
     rig = rig or session.rig
     if rig.clamp_radius_mm != session.membrane.clamp_radius_mm:
         rig = replace(rig, clamp_radius_mm=session.membrane.clamp_radius_mm)
     fp = make_fingerprint(np.random.default_rng(session.fingerprint_seed))
     skip = skip or [False] * len(pressures)
     focal = focal_px(rig, config.height)
-    with RigRenderer(
-        rig, config.width, config.height, config.spp, config.n_rings, config.n_sectors,
-        config.weight_size, config.normal_map_size, config.variant,
-    ) as renderer:  # fmt: skip
+    with _open_renderer(rig, config) as renderer:
         for k, (p, done) in enumerate(zip(pressures, skip, strict=True)):
             if done:
                 yield None
@@ -117,10 +134,14 @@ def render_session(
             state = solve_contact(float(p), session.finger, session.membrane)
             weight = contact_weight(state, fp, session, config.weight_size)
             linear = renderer.render(
-                state.membrane_z, weight, session.lgp_radiance, np.asarray(session.lgp_profile),
-                particle_seed=session.particle_seed, optics=session.optics,
+                state.membrane_z,
+                weight,
+                session.lgp_radiance,
+                np.asarray(session.lgp_profile),
+                particle_seed=session.particle_seed,
+                optics=session.optics,
                 seed=int(rng.integers(2**31)),
-            )  # fmt: skip
+            )
             hits = renderer.hit_points(state.membrane_z)
             ok = np.isfinite(hits[..., 0])
             mask = np.zeros(ok.shape, bool)

@@ -34,7 +34,6 @@ __all__ = [
     "WindowReflection",
     "fresnel_unpolarized",
     "sample_profile",
-    "window_reflection",
     "window_transmission",
 ]
 
@@ -57,11 +56,7 @@ def fresnel_unpolarized(cos_i: np.ndarray, n: float) -> np.ndarray:
 def sample_profile(profile: np.ndarray, phi: np.ndarray) -> np.ndarray:
     """Periodic linear interpolation of ``profile[k]`` given at φ_k = 2πk/K (radians)."""
     p = np.asarray(profile, np.float64).ravel()
-    k = p.size
-    t = np.mod(phi, 2 * np.pi) / (2 * np.pi) * k
-    i0 = np.floor(t).astype(np.int64) % k
-    f = t - np.floor(t)
-    return (1 - f) * p[i0] + f * p[(i0 + 1) % k]
+    return np.interp(phi, 2 * np.pi * np.arange(p.size) / p.size, p, period=2 * np.pi)
 
 
 def _slab(rig: RigGeometry, d: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -143,32 +138,6 @@ class WindowReflection:
         h, w = self.shape
         acc = np.bincount(self._pix, weights=vals, minlength=h * w).reshape(h, w)
         return (acc[..., None] * rad[None, None, :]).astype(np.float32)
-
-
-def window_reflection(
-    rig: RigGeometry,
-    width: int,
-    height: int,
-    lgp_radiance: np.ndarray | float,
-    azimuthal_profile: np.ndarray,
-    ss: int = 4,
-) -> np.ndarray:
-    """Radiance of the LGP reflected by the 2 mm window, per pixel.
-
-    Args:
-        rig: geometry.
-        width: image width (px).
-        height: image height (px).
-        lgp_radiance: LGP radiance, scalar or ``(3,)`` RGB (same units as the render).
-        azimuthal_profile: ``(K,)`` relative LGP radiance at φ_k = 2πk/K (see ``scene.lgp_dict``).
-        ss: sub-pixel rays per axis (``ss²`` per pixel) for anti-aliasing.
-
-    Returns:
-        ``(H, W, 3)`` float32 linear radiance. For many frames build a ``WindowReflection``
-        once (this function rebuilds it each call).
-    """
-    prof = np.asarray(azimuthal_profile, np.float64).ravel()
-    return WindowReflection(rig, width, height, max(prof.size, 1), ss)(lgp_radiance, prof)
 
 
 def window_transmission(rig: RigGeometry, width: int, height: int) -> np.ndarray:

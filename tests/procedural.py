@@ -6,8 +6,10 @@ contact patch, and an ellipse filled with a ridge texture. The exact contact are
 
 from __future__ import annotations
 
+import csv
 import math
 from dataclasses import dataclass
+from pathlib import Path
 
 import cv2
 import numpy as np
@@ -64,3 +66,45 @@ def write_png(path: str, image: np.ndarray) -> None:
     """Write an image (format from the suffix; JPEG at quality 90), failing loudly."""
     if not cv2.imwrite(path, image, [cv2.IMWRITE_JPEG_QUALITY, 90]):
         raise OSError(f"could not write {path}")
+
+
+#: Contact ellipse semi-axes (px at 64×48) per pressure, kPa; None = below the onset.
+AXES = {0.0: None, 2.0: None, 4.0: (5.0, 4.0), 8.0: (8.0, 6.0), 14.0: (11.0, 8.0)}
+
+
+def write_dataset(root: Path, fingers: int = 4, seed: int = 0, w: int = 64, h: int = 48) -> Path:
+    """A tiny dataset in the ``contactcal synth`` layout, drawn procedurally."""
+    rng = np.random.default_rng(seed)
+    root.mkdir(parents=True, exist_ok=True)
+    rows = []
+    for f in range(fingers):
+        session = f"finger_{f:04d}"
+        (root / session / "frames").mkdir(parents=True)
+        (root / session / "masks").mkdir()
+        angle = float(rng.uniform(0, 180))
+        for p, axes in AXES.items():
+            d = draw_frame(rng, w, h, axes, angle, ridge_period_px=3.0, noise_sd=2.0)
+            name = f"p{p:04.1f}kpa.png"
+            write_png(str(root / session / "frames" / name), np.repeat(d.image[:, :, None], 3, 2))
+            write_png(str(root / session / "masks" / name), d.mask.astype(np.uint8) * 255)
+            rows.append(
+                {
+                    "finger": f,
+                    "session": session,
+                    "frame": f"{session}/frames/{name}",
+                    "mask": f"{session}/masks/{name}",
+                    "pressure_kpa": p,
+                    "contact": int(axes is not None),
+                    "area_px": int(d.mask.sum()),
+                    "mm_per_px": 0.1,
+                    "onset_kpa": 3.0,
+                    "hard": int(f % 2 == 1),
+                    "width": w,
+                    "height": h,
+                }
+            )
+    with open(root / "index.csv", "w", newline="") as fh:
+        writer = csv.DictWriter(fh, fieldnames=list(rows[0]))
+        writer.writeheader()
+        writer.writerows(rows)
+    return root

@@ -1,4 +1,4 @@
-"""Tests of contactcal.infer.calibration_io."""
+"""Tests of contactcal.infer.calibration.record (calibration outputs) and .table."""
 
 from __future__ import annotations
 
@@ -10,24 +10,21 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from contactcal.infer import calibration_io
-from contactcal.infer.calibration_io import (
-    FrameResult,
-    format_table,
-    load_curve,
-    write_calibration,
-)
-from contactcal.infer.curve import fit_monotone
+from contactcal.infer.calibration import record as calibration_io
+from contactcal.infer.calibration.fit import fit_monotone
+from contactcal.infer.calibration.points import CalibrationPoint
+from contactcal.infer.calibration.record import load_curve, write_calibration
+from contactcal.infer.calibration.table import format_table
 
 P = np.arange(0.0, 11.0, 2.0)
 
 
-def _results(mm2: bool = True) -> list[FrameResult]:
+def _results(mm2: bool = True) -> list[CalibrationPoint]:
     out = []
     for p in P[::-1]:  # any order
         area_px = 0.0 if p < 3 else 500.0 * (p - 3)
         out.append(
-            FrameResult(
+            CalibrationPoint(
                 file=f"p{p:04.1f}.png",
                 pressure_kpa=float(p),
                 contact=area_px > 0,
@@ -39,7 +36,7 @@ def _results(mm2: bool = True) -> list[FrameResult]:
     return out
 
 
-def _curve(results: list[FrameResult], unit: str = "mm²"):
+def _curve(results: list[CalibrationPoint], unit: str = "mm²"):
     areas = [r.area_mm2 if unit != "px" else r.area_px for r in results]
     return fit_monotone(
         [r.pressure_kpa for r in results], areas, [r.contact for r in results], area_unit=unit
@@ -101,7 +98,7 @@ def test_px_curve_without_mm2_and_without_contact(tmp_path: Path) -> None:
     assert data["area_unit"] == "px" and all(pt["area_mm2"] is None for pt in data["points"])
     assert ",," in paths["csv"].read_text(encoding="utf-8")  # empty area_mm2 cells
 
-    flat = [FrameResult(r.file, r.pressure_kpa, False, 0.0, None) for r in results]
+    flat = [CalibrationPoint(r.file, r.pressure_kpa, False, 0.0, None) for r in results]
     paths = write_calibration(tmp_path / "none", flat, _curve(flat, "px"), "classical", {})
     data = json.loads(paths["json"].read_text(encoding="utf-8"))
     assert data["onset_kpa"] is None and data["inverse"] is None
@@ -127,7 +124,7 @@ def test_failed_write_keeps_previous_run(tmp_path: Path, monkeypatch: pytest.Mon
     def boom(path, text):
         raise OSError("disk full")
 
-    monkeypatch.setattr(calibration_io, "_write_synced", boom)
+    monkeypatch.setattr(calibration_io, "write_synced", boom)
     with pytest.raises(OSError, match="disk full"):
         write_calibration(tmp_path, results, _curve(results), "other", {})
     assert {k: p.read_bytes() for k, p in paths.items()} == before

@@ -6,8 +6,8 @@ import numpy as np
 import pytest
 from procedural import draw_frame
 
-from contactcal.infer.classical import ClassicalConfig, find_roi, measure_classical
-from contactcal.infer.io import ImageError
+from contactcal.infer.image.gray import ImageError
+from contactcal.infer.methods.classical import ClassicalConfig, find_roi, measure_classical
 
 
 def test_clean_patch_area_within_a_few_percent(rng: np.random.Generator) -> None:

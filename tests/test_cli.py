@@ -2,13 +2,16 @@
 
 from __future__ import annotations
 
+import csv
 import json
 import shutil
 from pathlib import Path
 
+import cv2
 import pytest
 
 from contactcal.infer.cli import main
+from contactcal.infer.methods.registry import METHODS
 
 EXAMPLE = Path(__file__).resolve().parents[1] / "examples" / "session"
 
@@ -16,8 +19,20 @@ EXAMPLE = Path(__file__).resolve().parents[1] / "examples" / "session"
 def test_measure_contract(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
     out = tmp_path / "r.json"
     frames = [str(EXAMPLE / "p00.0kpa.jpg"), str(EXAMPLE / "p12.0kpa.jpg")]
-    code = main(["measure", "--method", "classical", "--reference", frames[0],
-                 "--rig", str(EXAMPLE / "rig.json"), "--out", str(out), *frames])  # fmt: skip
+    code = main(
+        [
+            "measure",
+            "--method",
+            "classical",
+            "--reference",
+            frames[0],
+            "--rig",
+            str(EXAMPLE / "rig.json"),
+            "--out",
+            str(out),
+            *frames,
+        ]
+    )
     assert code == 0
     rows = json.loads(out.read_text())
     assert [Path(r["file"]).name for r in rows] == ["p00.0kpa.jpg", "p12.0kpa.jpg"]
@@ -35,8 +50,16 @@ def test_default_method_is_unet(tmp_path: Path) -> None:
 
 
 def test_calibrate_and_overlays(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
-    code = main(["calibrate", str(EXAMPLE / "manifest.csv"), "--out", str(tmp_path / "cal"),
-                 "--overlay", str(tmp_path / "ov")])  # fmt: skip
+    code = main(
+        [
+            "calibrate",
+            str(EXAMPLE / "manifest.csv"),
+            "--out",
+            str(tmp_path / "cal"),
+            "--overlay",
+            str(tmp_path / "ov"),
+        ]
+    )
     assert code == 0
     cal = json.loads((tmp_path / "cal" / "calibration.json").read_text())
     assert cal["method"] == "unet" and cal["onset_kpa"] is not None
@@ -62,8 +85,19 @@ def test_bad_inputs_exit_2_and_write_nothing(
     assert main(["calibrate", str(manifest), "--out", str(tmp_path / "cal")]) == 2
     assert "m.csv" in capsys.readouterr().err
     assert not (tmp_path / "cal").exists()
-    assert main(["measure", "--model", str(tmp_path / "none.onnx"), "--out", str(out),
-                 str(EXAMPLE / "p12.0kpa.jpg")]) == 2  # fmt: skip
+    assert (
+        main(
+            [
+                "measure",
+                "--model",
+                str(tmp_path / "none.onnx"),
+                "--out",
+                str(out),
+                str(EXAMPLE / "p12.0kpa.jpg"),
+            ]
+        )
+        == 2
+    )
     assert "none.onnx" in capsys.readouterr().err
 
 
@@ -78,6 +112,18 @@ def test_no_contact_session_exits_1(tmp_path: Path, capsys: pytest.CaptureFixtur
 
 def test_demo(tmp_path: Path) -> None:
     assert main(["demo", "--out", str(tmp_path)]) == 0
-    for method in ("unet", "classical"):
-        assert (tmp_path / method / "calibration.json").is_file()
-    assert (tmp_path / "overlay_montage.png").is_file()
+    with open(EXAMPLE / "truth.csv", newline="") as fh:
+        truth = {float(r["pressure_kpa"]): float(r["area_mm2"]) for r in csv.DictReader(fh)}
+    records = {m: json.loads((tmp_path / m / "calibration.json").read_text()) for m in METHODS}
+    for method, rec in records.items():
+        assert rec["method"] == method and rec["area_unit"] == "mm²"
+        assert [p["pressure_kpa"] for p in rec["points"]] == sorted(truth)
+        assert (tmp_path / method / "curve.png").stat().st_size > 0
+    unet = {p["pressure_kpa"]: p for p in records["unet"]["points"]}
+    errors = [abs(unet[p]["area_mm2"] / a - 1) for p, a in truth.items() if p >= 5]
+    assert max(errors) < 0.1, f"U-Net relative area errors on the example: {errors}"
+    assert not any(unet[p]["contact"] for p, a in truth.items() if a == 0)
+    montage = cv2.imread(str(tmp_path / "overlay_montage.png"))
+    assert montage is not None and montage.shape[1] == 3 * 400  # 3 columns of 400 px tiles
+    summary = (tmp_path / "summary.txt").read_text()
+    assert all(f"== {m}" in summary for m in METHODS)

@@ -1,4 +1,4 @@
-"""Tests of contactcal.infer.curve (isotonic fit, robust monotone fit, onset, inverse)."""
+"""Tests of the calibration fit and curve (isotonic fit, robust monotone fit, onset, inverse)."""
 
 from __future__ import annotations
 
@@ -9,14 +9,9 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from contactcal.infer.curve import (
-    Curve,
-    CurveConfig,
-    despike,
-    estimate_onset,
-    fit_monotone,
-    isotonic_fit,
-)
+from contactcal.infer.calibration.curve import Curve
+from contactcal.infer.calibration.fit import CurveConfig, estimate_onset, fit_monotone
+from contactcal.infer.calibration.isotonic import despike, isotonic_fit
 
 P = np.arange(0.0, 11.0)  # 1 kPa steps
 

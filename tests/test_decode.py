@@ -8,9 +8,12 @@ import cv2
 import numpy as np
 import pytest
 
-from contactcal.infer.io import ImageError, jpeg_size, load_image
-from contactcal.infer.methods import ClassicalMethod, UnetMethod
-from contactcal.infer.session import decode_reduction, measure_files
+from contactcal.infer.image.gray import ImageError
+from contactcal.infer.image.jpeg import jpeg_size
+from contactcal.infer.image.read import load_image
+from contactcal.infer.methods.classical import ClassicalMethod
+from contactcal.infer.methods.unet.method import UnetMethod
+from contactcal.infer.pipeline.measure import measure_files
 
 EXAMPLE = Path(__file__).resolve().parents[1] / "examples" / "session"
 
@@ -24,17 +27,17 @@ def _upscaled(tmp_path: Path, kpa: int, size: tuple[int, int], ext: str = ".jpg"
 
 def test_jpeg_size(tmp_path: Path) -> None:
     assert jpeg_size(_upscaled(tmp_path, 0, (1600, 1200))) == (1200, 1600)
-    with pytest.raises(ImageError, match="no JPEG frame header"):
+    with pytest.raises(ImageError, match="expected a JPEG file, got PNG"):
         jpeg_size(_upscaled(tmp_path, 0, (64, 48), ".png"))
 
 
 def test_reduced_decoding_agrees_with_full(tmp_path: Path) -> None:
     ref, frame = _upscaled(tmp_path, 0, (1600, 1200)), _upscaled(tmp_path, 12, (1600, 1200))
     unet = UnetMethod()
-    k = decode_reduction(unet, [frame], ref)
+    k = unet.start([frame], ref)
     assert k == 4  # crop ≈ 1050 px: 1/4 keeps >= 192 px, 1/8 would not
     fast = measure_files([frame], unet, ref)[0]
-    unet.prepare(load_image(ref))
+    unet.set_reference(load_image(ref))
     full = unet.measure(load_image(frame))
     assert (fast.width, fast.height) == (1600, 1200)
     assert fast.result.area_px == pytest.approx(full.area_px, rel=0.03)
@@ -43,10 +46,10 @@ def test_reduced_decoding_agrees_with_full(tmp_path: Path) -> None:
 def test_reduction_not_used_when_unsafe(tmp_path: Path) -> None:
     unet = UnetMethod()
     small = _upscaled(tmp_path, 12, (400, 300))
-    assert decode_reduction(unet, [small], None) == 1  # crop already near the input size
+    assert unet.start([small], None) == 1  # crop already near the input size
     odd = _upscaled(tmp_path, 12, (1601, 1201))
-    assert decode_reduction(unet, [odd], None) == 1  # not divisible: areas would not scale exactly
+    assert unet.start([odd], None) == 1  # not divisible: areas would not scale exactly
     png = _upscaled(tmp_path, 12, (1600, 1200), ".png")
-    assert decode_reduction(unet, [png], None) == 1
-    assert decode_reduction(ClassicalMethod(), [_upscaled(tmp_path, 5, (1600, 1200))], None) == 1
+    assert unet.start([png], None) == 1
+    assert ClassicalMethod().start([_upscaled(tmp_path, 5, (1600, 1200))], None) == 1
     assert np.isfinite(measure_files([odd], unet)[0].result.area_px)

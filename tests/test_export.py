@@ -1,4 +1,5 @@
-"""ONNX export: checker, torch/onnxruntime parity at a new shape, metadata, errors."""
+"""ONNX export: checker, torch/onnxruntime parity at a new shape, metadata read back by
+deployment's ``read_spec``, errors."""
 
 from __future__ import annotations
 
@@ -12,11 +13,14 @@ torch = pytest.importorskip("torch")
 onnx = pytest.importorskip("onnx")
 ort = pytest.importorskip("onnxruntime")
 
-from test_train import tiny_config, write_dataset  # noqa: E402
+from procedural import write_dataset  # noqa: E402
+from test_train import tiny_config  # noqa: E402
 
-from contactcal.infer.preprocess import PreprocessConfig  # noqa: E402
+from contactcal.infer.methods.unet.config import PreprocessConfig  # noqa: E402
+from contactcal.infer.methods.unet.runner import OnnxSegmenter  # noqa: E402
+from contactcal.infer.methods.unet.spec import PROVENANCE_KEYS, SPEC_KEYS, read_spec  # noqa: E402
 from contactcal.train.data import dataset_digest  # noqa: E402
-from contactcal.train.export import PARITY_ATOL, export_onnx  # noqa: E402
+from contactcal.train.export import PARITY_ATOL, PARITY_RTOL, export_onnx, load_run, self_check  # noqa: E402
 from contactcal.train.loop import train  # noqa: E402
 
 
@@ -36,16 +40,18 @@ def test_export_metadata_and_parity(run_dir: Path, tmp_path: Path) -> None:
     model = onnx.load(str(out))
     onnx.checker.check_model(model, full_check=True)
     meta = {p.key: p.value for p in model.metadata_props}
-    assert meta["input_size"] == "64" and meta["channels"] == "2" and meta["reference"] == "true"
+    assert sorted(meta) == sorted((*SPEC_KEYS, *PROVENANCE_KEYS))  # no input_size, no reference
+    assert meta["channels"] == "2"
     assert PreprocessConfig(**json.loads(meta["preprocess"])) == PreprocessConfig(input_size=64)
     assert float(meta["threshold"]) == 0.5 and float(meta["min_contact_area_px"]) == 4.0
     assert meta["data_digest"] == dataset_digest([run_dir.parent / "data"])
     assert meta["contactcal_version"] and meta["created"] and meta["output"] == "logits"
+    # deployment reads exactly the run's spec
+    cfg, _, ckpt = load_run(run_dir)
+    assert read_spec(meta, out) == cfg.spec() == OnnxSegmenter(out).spec
     # dynamic batch/H/W: run at a size other than the export's and compare with torch
-    from contactcal.train.export import load_run
     from contactcal.train.model import UNet
 
-    cfg, _, ckpt = load_run(run_dir)
     net = UNet(cfg.model).eval()
     net.load_state_dict(ckpt["model"])
     x = torch.randn((3, 2, 80, 96), generator=torch.Generator().manual_seed(1))
@@ -54,7 +60,26 @@ def test_export_metadata_and_parity(run_dir: Path, tmp_path: Path) -> None:
     sess = ort.InferenceSession(str(out), providers=["CPUExecutionProvider"])
     got = sess.run(None, {"input": x.numpy()})[0]
     assert got.shape == (3, 1, 80, 96)
-    np.testing.assert_allclose(got, ref, atol=PARITY_ATOL, rtol=1e-4)
+    np.testing.assert_allclose(got, ref, atol=PARITY_ATOL, rtol=PARITY_RTOL)
+
+
+def test_self_check_rejects_foreign_metadata(tmp_path: Path) -> None:
+    from contactcal.infer.methods.unet.spec import ModelSpec
+
+    spec = ModelSpec(1, PreprocessConfig(input_size=32), 0.5, 4.0)
+    graph = onnx.helper.make_graph(
+        [onnx.helper.make_node("Identity", ["input"], ["logits"])],
+        "g",
+        [onnx.helper.make_tensor_value_info("input", onnx.TensorProto.FLOAT, [1])],
+        [onnx.helper.make_tensor_value_info("logits", onnx.TensorProto.FLOAT, [1])],
+    )
+    proto = onnx.helper.make_model(graph)
+    provenance = {k: "x" for k in PROVENANCE_KEYS}
+    onnx.helper.set_model_props(proto, {**spec.to_metadata(), **provenance})
+    self_check(proto.SerializeToString(), spec, tmp_path / "m.onnx")  # accepted
+    onnx.helper.set_model_props(proto, {**spec.to_metadata(), **provenance, "input_size": "32"})
+    with pytest.raises(RuntimeError, match="input_size"):
+        self_check(proto.SerializeToString(), spec, tmp_path / "m.onnx")
 
 
 @pytest.mark.slow

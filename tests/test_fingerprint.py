@@ -5,13 +5,8 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from contactcal.synth.fingerprint import (
-    PATTERNS,
-    Fingerprint,
-    FingerprintConfig,
-    make_fingerprint,
-    ridge_period_px,
-)
+from contactcal.synth.fingerprint import PATTERNS, Fingerprint, FingerprintConfig, make_fingerprint
+from contactcal.synth.ridge_period import ridge_period_px
 
 # Small textures keep the suite fast: 10 mm at 16 px/mm = 160 px.
 SMALL = FingerprintConfig(size_mm=10.0, px_per_mm=16.0)
@@ -110,6 +105,23 @@ def test_sample_matches_pixels_and_fill() -> None:
     assert out.dtype == np.float32 and out.shape == (2,) and out[1] == 0.5
     mid = fp.sample(np.array(x + 0.5 / fp.px_per_mm), np.array(y))  # halfway to the next pixel
     assert mid == pytest.approx(0.5 * (fp.ridges[i, j] + fp.ridges[i, j + 1]), abs=1e-5)
+
+
+def test_sample_is_edge_clamped_bilinear() -> None:
+    """cv2.remap lookup == textbook bilinear with clamped coordinates (float32 map rounding)."""
+    fp = make_fingerprint(np.random.default_rng(4), SMALL)
+    img = fp.ridges.astype(np.float64)
+    n = img.shape[0]
+    rng = np.random.default_rng(0)
+    x, y = rng.uniform(-5.2, 5.2, (2, 50_001))  # > one remap row, some beyond the pixel centres
+    r = np.clip((y + fp.size_mm / 2) * fp.px_per_mm - 0.5, 0, n - 1)
+    c = np.clip((x + fp.size_mm / 2) * fp.px_per_mm - 0.5, 0, n - 1)
+    r0, c0 = np.minimum(r.astype(int), n - 2), np.minimum(c.astype(int), n - 2)
+    fr, fc = r - r0, c - c0
+    top = img[r0, c0] * (1 - fc) + img[r0, c0 + 1] * fc
+    bot = img[r0 + 1, c0] * (1 - fc) + img[r0 + 1, c0 + 1] * fc
+    expected = np.where((np.abs(x) <= 5) & (np.abs(y) <= 5), top * (1 - fr) + bot * fr, 0.5)
+    np.testing.assert_allclose(fp.sample(x, y), expected, atol=1e-4)
 
 
 @pytest.mark.parametrize(

@@ -12,9 +12,11 @@ import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
-from contactcal.infer.io import ImageError, load_image, to_gray_u8
-from contactcal.infer.methods import ClassicalMethod, UnetMethod
-from contactcal.infer.segmenter import DEFAULT_MODEL
+from contactcal.infer.image.gray import ImageError, to_gray_u8
+from contactcal.infer.image.read import load_image
+from contactcal.infer.methods.classical import ClassicalMethod
+from contactcal.infer.methods.unet.method import UnetMethod
+from contactcal.infer.methods.unet.runner import DEFAULT_MODEL
 
 EXAMPLE = Path(__file__).resolve().parents[1] / "examples" / "session"
 
@@ -57,7 +59,7 @@ def unet() -> UnetMethod:
 
 def _bound(method: object, gray: np.ndarray) -> float:
     """Largest area a method may report: the image, and for the U-Net also its crop."""
-    box = method.segmenter._box if isinstance(method, UnetMethod) else None
+    box = method.reference.box if isinstance(method, UnetMethod) else None
     return float(gray.size if box is None else min(gray.size, box.side**2))
 
 
@@ -67,7 +69,7 @@ def test_hard_cases_are_finite_and_bounded(unet: UnetMethod, case: str, kpa: int
     for method in (unet, ClassicalMethod()):
         gray = CASES[case](_frame(kpa))
         ref = CASES[case](_frame(0))
-        method.prepare(ref)
+        method.set_reference(ref)
         res = method.measure(gray)
         assert np.isfinite(res.area_px) and 0.0 <= res.area_px <= _bound(method, gray), (
             f"{type(method).__name__} on '{case}' at {kpa} kPa: area {res.area_px}"
@@ -77,7 +79,7 @@ def test_hard_cases_are_finite_and_bounded(unet: UnetMethod, case: str, kpa: int
 
 @pytest.mark.parametrize("case", ["as rendered", "heavy noise", "all black", "all white"])
 def test_no_contact_frame_is_no_contact(unet: UnetMethod, case: str) -> None:
-    unet.prepare(CASES[case](_frame(0)))
+    unet.set_reference(CASES[case](_frame(0)))
     res = unet.measure(CASES[case](_frame(0)))
     assert not res.contact and res.area_px == 0.0, f"'{case}' 0 kPa: {res}"
 
@@ -85,7 +87,7 @@ def test_no_contact_frame_is_no_contact(unet: UnetMethod, case: str) -> None:
 def test_shipped_model_sane_on_example_session(unet: UnetMethod) -> None:
     with open(EXAMPLE / "truth.csv", newline="") as fh:
         truth = {r["file"]: r for r in csv.DictReader(fh)}
-    unet.prepare(_frame(0))
+    unet.set_reference(_frame(0))
     errors = []
     for kpa in (8, 14, 20):
         t = truth[f"p{kpa:04.1f}kpa.jpg"]
@@ -105,7 +107,7 @@ def test_16bit_and_gray_inputs_agree(unet: UnetMethod, tmp_path: Path) -> None:
     g = _frame(12)
     cv2.imwrite(str(tmp_path / "g16.png"), g.astype(np.uint16) * 257)
     cv2.imwrite(str(tmp_path / "g8.png"), g)
-    unet.prepare(_frame(0))
+    unet.set_reference(_frame(0))
     a = unet.measure(load_image(tmp_path / "g16.png")).area_px
     b = unet.measure(load_image(tmp_path / "g8.png")).area_px
     assert a == b > 0
@@ -140,6 +142,6 @@ def test_random_images_no_undocumented_exception(
         arr = rng.integers(0, np.iinfo(dtype).max, shape, endpoint=True).astype(dtype)
     gray = to_gray_u8(arr)
     for method in (unet, ClassicalMethod()):
-        method.prepare(None)
+        method.set_reference(None)
         res = method.measure(gray)
         assert np.isfinite(res.area_px) and 0.0 <= res.area_px <= max(_bound(method, gray), 1.0)

@@ -8,7 +8,8 @@ import cv2
 import numpy as np
 import pytest
 
-from contactcal.infer.io import ImageError, load_image, to_gray_u8
+from contactcal.infer.image.gray import ImageError, to_gray_u8
+from contactcal.infer.image.read import load_image
 
 
 def _write(path: Path, img: np.ndarray) -> Path:

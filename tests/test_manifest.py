@@ -6,7 +6,7 @@ from pathlib import Path
 
 import pytest
 
-from contactcal.infer.manifest import Frame, ManifestError, read_manifest
+from contactcal.infer.pipeline.manifest import Frame, ManifestError, read_manifest
 
 
 def _session(tmp_path: Path, text: str, images: tuple[str, ...] = ("a.png", "b.png", "c.png")):

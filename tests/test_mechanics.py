@@ -11,14 +11,13 @@ import pytest
 
 from contactcal.synth.mechanics import (
     CLAMP_MARGIN_FRACTION,
-    FingerParams,
-    MembraneParams,
     equilibrium_area_mm2,
     hertz_area_mm2,
     onset_pressure_kpa,
     solve_contact,
     tension_for_onset,
 )
+from contactcal.synth.mechanics_params import FingerParams, MembraneParams
 
 # Fitted fingertip parameters (R mm, E0 MPa, beta 1/N) from the header of
 # shared/reference/fingertip_contact_area.csv (SORI, PNAS 2024).
@@ -28,11 +27,10 @@ REFERENCE_CSV = Path(__file__).resolve().parents[2] / "shared/reference/fingerti
 
 def finger(user: str = "user1", **kw: object) -> FingerParams:
     r, e0, beta = USERS[user]
-    args: dict[str, object] = dict(
-        width_mm=16.0, length_mm=23.0, radius_mm=r, e0_mpa=e0, beta_per_n=beta, aspect=1.35,
-        offset_mm=(0.0, 0.0), yaw_rad=0.0, tilt_rad=0.0,
-    )  # fmt: skip
-    args.update(kw)
+    pad: dict[str, object] = {"width_mm": 16.0, "length_mm": 23.0, "aspect": 1.35}
+    hertz: dict[str, object] = {"radius_mm": r, "e0_mpa": e0, "beta_per_n": beta}
+    pose: dict[str, object] = {"offset_mm": (0.0, 0.0), "yaw_rad": 0.0, "tilt_rad": 0.0}
+    args = pad | hertz | pose | kw
     return FingerParams(**args)  # type: ignore[arg-type]
 
 
@@ -40,8 +38,8 @@ def membrane(onset_kpa: float = 3.0, gap_mm: float = 1.5, a: float = 12.5) -> Me
     return MembraneParams(a, tension_for_onset(onset_kpa, gap_mm, a), gap_mm, 0.75)
 
 
-PERTURBED = dict(offset_mm=(1.0, -0.5), yaw_rad=0.4, tilt_rad=0.2,
-                 harmonics=((0.03, 0.3), (0.02, 1.0), (0.01, 2.0)))  # fmt: skip
+HARMONICS = ((0.03, 0.3), (0.02, 1.0), (0.01, 2.0))
+PERTURBED = dict(offset_mm=(1.0, -0.5), yaw_rad=0.4, tilt_rad=0.2, harmonics=HARMONICS)
 GRID = np.arange(-13.5, 13.5, 0.02) + 0.01  # 0.02 mm pixel centres over the clamp disc
 
 
@@ -125,8 +123,9 @@ def test_reference_users_table() -> None:
         f = finger(user)
         areas = [solve_contact(p, f, m).area_mm2 for p in (5.0, 10.0, 20.0)]
         eq = [equilibrium_area_mm2(p, f) for p in (5.0, 10.0, 20.0)]
-        print(f"{user}  {onset_pressure_kpa(m):8.2f}  " + "  ".join(f"{v:5.1f}" for v in areas)
-              + "   [" + " ".join(f"{v:5.1f}" for v in eq) + "]")  # fmt: skip
+        cols = "  ".join(f"{v:5.1f}" for v in areas)
+        fixed = " ".join(f"{v:5.1f}" for v in eq)
+        print(f"{user}  {onset_pressure_kpa(m):8.2f}  {cols}   [{fixed}]")
         assert all(30.0 <= v <= 300.0 for v in areas), (user, areas)
         assert all(60.0 <= v <= 300.0 for v in areas[1:]), (user, areas)
     # README: the fixed point is about 100, 140, 190 mm² for user1.

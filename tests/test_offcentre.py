@@ -10,8 +10,8 @@ import pytest
 
 pytest.importorskip("mitsuba")
 
-from contactcal.infer.io import to_gray_u8
-from contactcal.infer.methods import UnetMethod
+from contactcal.infer.image.gray import to_gray_u8
+from contactcal.infer.methods.unet.method import UnetMethod
 from contactcal.synth.randomize import sample_session
 from contactcal.synth.session import RenderConfig, render_session
 
@@ -28,7 +28,7 @@ def test_off_centre_finger() -> None:
     ys, xs = np.nonzero(frame.mask)
     assert abs(xs.mean() - 199.5) + abs(ys.mean() - 149.5) > 15, "patch should be off-centre"
     unet = UnetMethod(outline=True)
-    unet.prepare(to_gray_u8(ref.frame))
+    unet.set_reference(to_gray_u8(ref.frame))
     res = unet.measure(to_gray_u8(frame.frame))
     assert res.contact and res.contour is not None
     pred = np.zeros(frame.mask.shape, np.uint8)

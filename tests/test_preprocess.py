@@ -7,19 +7,19 @@ import numpy as np
 import pytest
 from procedural import draw_frame
 
-from contactcal.infer.preprocess import (
+from contactcal.infer.methods.unet.config import PreprocessConfig
+from contactcal.infer.methods.unet.prepare import (
     CropBox,
-    PreprocessConfig,
-    RingFit,
     crop_box,
     crop_resize,
     from_network,
-    locate_ring,
     network_to_unit,
     prepare,
+    session_reference,
     to_network,
     unit_to_network,
 )
+from contactcal.infer.methods.unet.ring import RingFit, locate_ring
 
 W, H = 324, 243  # half the procedural default: fast, ring radius 0.42·H ≈ 102 px
 
@@ -31,8 +31,8 @@ def _frame(rng: np.random.Generator, **kw: object) -> np.ndarray:
 def test_prepare_shapes(rng: np.random.Generator) -> None:
     cfg = PreprocessConfig(input_size=64)
     img = _frame(rng)
-    one = prepare(img, None, cfg)
-    two = prepare(img, _frame(rng), cfg)
+    one = prepare(img, session_reference(None, cfg), cfg, channels=1)
+    two = prepare(img, session_reference(_frame(rng), cfg), cfg, channels=2)
     assert one.x.shape == (1, 64, 64) and one.x.dtype == np.float32
     assert two.x.shape == (2, 64, 64) and two.x.dtype == np.float32
     assert np.all(np.isfinite(two.x))
@@ -63,7 +63,7 @@ def test_no_ring_falls_back(rng: np.random.Generator) -> None:
         ring = locate_ring(img)
         assert not ring.found
         assert ring.cx == pytest.approx((W - 1) / 2) and ring.radius == pytest.approx(0.45 * H)
-        assert prepare(img).x.shape == (1, 256, 256)
+        assert prepare(img, session_reference(None), PreprocessConfig(), 1).x.shape == (1, 256, 256)
 
 
 def test_blob_only_is_not_a_ring(rng: np.random.Generator) -> None:
@@ -118,13 +118,14 @@ def test_unit_mapping_inverts() -> None:
 def test_bad_input_raises(rng: np.random.Generator) -> None:
     nan = np.full((H, W), np.nan, np.float32)
     with pytest.raises(ValueError, match="NaN"):
-        prepare(nan)
+        prepare(nan, session_reference(None), PreprocessConfig(), 1)
     with pytest.raises(ValueError, match="expected"):
-        prepare(np.zeros((2, 3, 4, 5), np.uint8))
+        prepare(np.zeros((2, 3, 4, 5), np.uint8), session_reference(None), PreprocessConfig(), 1)
     with pytest.raises(ValueError, match="expected"):
         locate_ring(np.zeros(10, np.uint8))
     with pytest.raises(ValueError, match="reference"):
-        prepare(_frame(rng), np.zeros((10, 10), np.uint8))
+        bad_ref = session_reference(np.zeros((10, 10), np.uint8))
+        prepare(_frame(rng), bad_ref, PreprocessConfig(), 2)
     with pytest.raises(ValueError, match="square"):
         from_network(np.zeros((4, 5), np.float32), CropBox(0, 0, 4), (4, 4))
     with pytest.raises(ValueError, match="input_size"):

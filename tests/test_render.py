@@ -8,16 +8,12 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from contactcal.synth.rig import (
-    RigGeometry,
-    mm_per_px_at,
-    pixel_rays,
-    project_to_pixels,
-)
+from contactcal.synth.rig import RigGeometry, mm_per_px_at, pixel_rays, project_to_pixels
 from contactcal.synth.variant import VARIANTS, choose_variant
 from contactcal.synth.window import (
+    WindowReflection,
     fresnel_unpolarized,
-    window_reflection,
+    sample_profile,
     window_transmission,
 )
 
@@ -65,9 +61,19 @@ def test_projection_inverts_pixel_rays() -> None:
     assert mm_per_px_at(RIG, 0.0, W, H) == pytest.approx(2 * 60 * np.tan(np.radians(14.5)) / H)
 
 
+def test_sample_profile_is_periodic_linear() -> None:
+    p = np.array([1.0, 3.0, 2.0, 0.0])
+    nodes = 2 * np.pi * np.arange(4) / 4
+    np.testing.assert_allclose(sample_profile(p, nodes), p, atol=1e-12)
+    np.testing.assert_allclose(sample_profile(p, nodes - 2 * np.pi), p, atol=1e-12)
+    mids = sample_profile(p, nodes + np.pi / 4)
+    np.testing.assert_allclose(mids, 0.5 * (p + np.roll(p, -1)), atol=1e-12)  # 0 -> p[0] wraps
+    assert sample_profile(np.array([0.7]), np.array([0.0, 1.0, 6.0])) == pytest.approx(0.7)
+
+
 def test_window_closed_form() -> None:
     assert fresnel_unpolarized(np.array([1.0]), 1.49)[0] == pytest.approx(0.0387, abs=2e-4)
-    refl = window_reflection(RIG, W, H, 1.0, np.ones(8))
+    refl = WindowReflection(RIG, W, H, n_profile=8)(1.0, np.ones(8))
     t2 = window_transmission(RIG, W, H)
     assert refl.shape == (H, W, 3) and refl.dtype == np.float32
     r0 = 0.0387
@@ -93,8 +99,7 @@ def renderer():
     pytest.importorskip("mitsuba")
     from contactcal.synth.render import RigRenderer
 
-    r = RigRenderer(RIG, W, H, spp=4, n_rings=48, n_sectors=128, weight_size=M,
-                    normal_map_size=256)  # fmt: skip
+    r = RigRenderer(RIG, W, H, spp=4, n_rings=48, n_sectors=128, weight_size=M, normal_map_size=256)
     yield r
     r.close()
 
@@ -126,7 +131,7 @@ def test_deterministic(renderer) -> None:
 @pytest.mark.slow
 def test_inner_ring_shrinks_and_outer_ring_stays(renderer) -> None:
     w = np.zeros((M, M), np.float32)
-    refl = window_reflection(RIG, W, H, 1.0, np.ones(8))
+    refl = WindowReflection(RIG, W, H, n_profile=8)(1.0, np.ones(8))
     r_outer = int(np.argmax(_radial_profile(refl)))
     assert r_outer > 0.6 * H / 2  # the window's ring is peripheral
     radii = []

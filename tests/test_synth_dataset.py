@@ -25,8 +25,9 @@ from contactcal.synth.session import RenderConfig
 
 pytestmark = pytest.mark.slow
 
-TINY = RenderConfig(width=48, height=36, spp=1, n_rings=24, n_sectors=48, weight_size=128,
-                    normal_map_size=128)  # fmt: skip
+TINY = RenderConfig(
+    width=48, height=36, spp=1, n_rings=24, n_sectors=48, weight_size=128, normal_map_size=128
+)
 CONFIG = DatasetConfig(fingers=2, pressures_kpa=(0.0, 6.0, 14.0), seed=5, render=TINY)
 
 
@@ -97,8 +98,10 @@ def test_shards_cover_exactly_once(tmp_path: Path) -> None:
 
 
 def test_calibrate_reads_a_session_as_is(dataset: Path, tmp_path: Path) -> None:
-    code = main(["calibrate", str(dataset / "finger_0000" / "manifest.csv"),
-                 "--method", "classical", "--out", str(tmp_path / "cal")])  # fmt: skip
+    manifest = dataset / "finger_0000" / "manifest.csv"
+    code = main(
+        ["calibrate", str(manifest), "--method", "classical", "--out", str(tmp_path / "cal")]
+    )
     assert code in (0, 1)  # 48 px frames may show no contact to the classical routine
 
 

@@ -11,8 +11,9 @@ import pytest
 pytest.importorskip("mitsuba")
 
 from contactcal.synth.camera import CameraEffects
-from contactcal.synth.fingerprint import make_fingerprint, ridge_period_px
+from contactcal.synth.fingerprint import make_fingerprint
 from contactcal.synth.randomize import sample_session
+from contactcal.synth.ridge_period import ridge_period_px
 from contactcal.synth.session import RenderConfig, render_session
 
 pytestmark = pytest.mark.slow

@@ -3,68 +3,31 @@
 from __future__ import annotations
 
 import argparse
-import csv
 import subprocess
 import sys
 from pathlib import Path
 
-import numpy as np
 import pytest
-from procedural import draw_frame, write_png
+from procedural import write_dataset
 
 torch = pytest.importorskip("torch")
 pytest.importorskip("kornia")
 
-from contactcal.infer.preprocess import (  # noqa: E402
-    PreprocessConfig,
-    network_to_unit,
-    unit_to_network,
-)
+import numpy as np  # noqa: E402
+
+from contactcal.infer.bench.dataset import IndexRow, read_datasets  # noqa: E402
+from contactcal.infer.cli import main  # noqa: E402
+from contactcal.infer.methods.unet.config import PreprocessConfig  # noqa: E402
+from contactcal.infer.methods.unet.prepare import CropBox, network_to_unit, unit_to_network  # noqa: E402
+from contactcal.infer.methods.unet.spec import ModelSpec  # noqa: E402
 from contactcal.train.augment import AugmentConfig, Augmenter  # noqa: E402
 from contactcal.train.checkpoint import config_diff, config_from_dict, config_to_dict  # noqa: E402
 from contactcal.train.commands import add_parsers, build_config  # noqa: E402
-from contactcal.train.data import build_cache, load_records, split_by_finger  # noqa: E402
-from contactcal.train.loop import TrainConfig, train  # noqa: E402
-from contactcal.train.metrics import segmentation_loss  # noqa: E402
+from contactcal.train.config import TrainConfig  # noqa: E402
+from contactcal.train.data import build_cache, split_by_finger  # noqa: E402
+from contactcal.train.loop import train  # noqa: E402
+from contactcal.train.metrics import score_frame, segmentation_loss, summarise  # noqa: E402
 from contactcal.train.model import UNet, UNetConfig, count_parameters  # noqa: E402
-
-#: Contact ellipse semi-axes (px at 64×48) per pressure, kPa; None = below the onset.
-AXES = {0.0: None, 2.0: None, 4.0: (5.0, 4.0), 8.0: (8.0, 6.0), 14.0: (11.0, 8.0)}
-
-
-def write_dataset(root: Path, fingers: int = 4, seed: int = 0, w: int = 64, h: int = 48) -> Path:
-    """A tiny dataset in the ``contactcal synth`` layout, drawn procedurally."""
-    rng = np.random.default_rng(seed)
-    root.mkdir(parents=True, exist_ok=True)
-    rows = []
-    for f in range(fingers):
-        session = f"finger_{f:04d}"
-        (root / session / "frames").mkdir(parents=True)
-        (root / session / "masks").mkdir()
-        angle = float(rng.uniform(0, 180))
-        for p, axes in AXES.items():
-            d = draw_frame(rng, w, h, axes, angle, ridge_period_px=3.0, noise_sd=2.0)
-            name = f"p{p:04.1f}kpa.png"
-            write_png(str(root / session / "frames" / name), np.repeat(d.image[:, :, None], 3, 2))
-            write_png(str(root / session / "masks" / name), d.mask.astype(np.uint8) * 255)
-            rows.append(
-                {
-                    "finger": f,
-                    "session": session,
-                    "frame": f"{session}/frames/{name}",
-                    "mask": f"{session}/masks/{name}",
-                    "pressure_kpa": p,
-                    "contact": int(axes is not None),
-                    "area_px": int(d.mask.sum()),
-                    "width": w,
-                    "height": h,
-                }
-            )
-    with open(root / "index.csv", "w", newline="") as fh:
-        writer = csv.DictWriter(fh, fieldnames=list(rows[0]))
-        writer.writeheader()
-        writer.writerows(rows)
-    return root
 
 
 def tiny_config(**kw: object) -> TrainConfig:
@@ -115,9 +78,8 @@ def test_augment_keeps_mask_aligned() -> None:
     geometric = AugmentConfig(
         brightness=0.0, contrast=0.0, gamma=(1.0, 1.0), blur_p=0.0, noise_p=0.0, affine_p=1.0
     )
-    aug = Augmenter(geometric, PreprocessConfig())
+    aug = Augmenter(geometric, PreprocessConfig(), seed=3)
     x, m = _aug_batch()
-    torch.manual_seed(3)
     xa, ma = aug(x, m)
     bright = network_to_unit(xa[:, :1], PreprocessConfig()) > 0.55
     assert set(ma.unique().tolist()) <= {0.0, 1.0}
@@ -126,20 +88,27 @@ def test_augment_keeps_mask_aligned() -> None:
 
 
 def test_augment_deterministic_per_seed() -> None:
-    aug = Augmenter(AugmentConfig(), PreprocessConfig())
     x, m = _aug_batch()
-    torch.manual_seed(7)
-    a = aug(x, m)
-    torch.manual_seed(7)
-    b = aug(x, m)
-    torch.manual_seed(8)
-    c = aug(x, m)
+    before = torch.get_rng_state()
+    a = Augmenter(AugmentConfig(), PreprocessConfig(), seed=7)(x, m)
+    assert torch.equal(torch.get_rng_state(), before)  # the global generator is not used
+    torch.manual_seed(123)  # nor read
+    b = Augmenter(AugmentConfig(), PreprocessConfig(), seed=7)(x, m)
+    c = Augmenter(AugmentConfig(), PreprocessConfig(), seed=8)(x, m)
     assert torch.equal(a[0], b[0]) and torch.equal(a[1], b[1])
     assert not torch.equal(a[0], c[0])
+    # the generator advances, and its state resumes the stream exactly
+    aug = Augmenter(AugmentConfig(), PreprocessConfig(), seed=7)
+    first = aug(x, m)[0]
+    state = aug.generator.get_state()
+    second = aug(x, m)[0]
+    aug.generator.set_state(state)
+    assert torch.equal(first, a[0]) and not torch.equal(first, second)
+    assert torch.equal(aug(x, m)[0], second)
 
 
 def test_split_is_by_finger(tmp_path: Path) -> None:
-    records = load_records([write_dataset(tmp_path / "d", fingers=5)])
+    records = read_datasets([write_dataset(tmp_path / "d", fingers=5)])
     tr, va = split_by_finger(records, 0.4, seed=1)
     assert {r.finger_key for r in tr}.isdisjoint({r.finger_key for r in va})
     assert len({r.finger_key for r in va}) == 2 and len(tr) + len(va) == len(records)
@@ -147,20 +116,20 @@ def test_split_is_by_finger(tmp_path: Path) -> None:
 
 
 def test_bad_dataset_paths(tmp_path: Path) -> None:
-    with pytest.raises(ValueError, match="does not exist"):
-        load_records([tmp_path / "nope"])
+    with pytest.raises(ValueError, match="expected a dataset folder"):
+        train([tmp_path / "nope"], tmp_path / "run", tiny_config(), progress=False)
     (tmp_path / "empty").mkdir()
     with pytest.raises(ValueError, match="missing index.csv"):
-        load_records([tmp_path / "empty"])
+        read_datasets([tmp_path / "empty"])
     d = write_dataset(tmp_path / "d", fingers=1)
     text = (d / "index.csv").read_text()
     (d / "index.csv").write_text(text.replace("pressure_kpa", "p"))
     with pytest.raises(ValueError, match="missing column"):
-        load_records([d])
+        read_datasets([d])
     (d / "index.csv").write_text(text)
     (d / "finger_0000" / "frames" / "p04.0kpa.png").unlink()
     with pytest.raises(ValueError, match=r"missing file .*p04\.0kpa\.png"):
-        load_records([d])
+        read_datasets([d])
 
 
 def test_config_round_trip() -> None:
@@ -175,8 +144,10 @@ def test_config_round_trip() -> None:
 @pytest.mark.slow
 def test_steps_decrease_loss(tmp_path: Path) -> None:
     cfg = tiny_config().resolved()
-    data = build_cache(load_records([write_dataset(tmp_path / "d")]), cfg.preprocess, True)
+    rows = read_datasets([write_dataset(tmp_path / "d")])
+    data = build_cache(rows, cfg.preprocess, cfg.model.in_channels)
     assert data.x.shape == (20, 2, 32, 32) and int(data.y.sum()) > 0
+    assert data.rows == rows and len(data.boxes) == len(data.shapes) == 20
     torch.manual_seed(0)
     model = UNet(cfg.model)
     opt = torch.optim.AdamW(model.parameters(), lr=1e-2)
@@ -202,7 +173,8 @@ def test_train_outputs(tmp_path: Path) -> None:
     lines = (tmp_path / "run" / "metrics.csv").read_text().splitlines()
     assert lines[0].startswith("epoch,train_loss,val_loss") and len(lines) == 3
     bins = (tmp_path / "run" / "val_bins.csv").read_text()
-    assert bins.startswith("bin_kpa,") and "nan" not in bins.lower()
+    assert bins.startswith("method,bin_kpa,frames,") and "nan" not in bins.lower()
+    assert summary["val"]["val_iou"] is not None
     with pytest.raises(ValueError, match="already holds a run"):
         train([d], tmp_path / "run", cfg, progress=False)
     with pytest.raises(ValueError, match="different config"):
@@ -224,8 +196,8 @@ def test_resume_is_exact(tmp_path: Path) -> None:
 
     original = loop.plot_curves
 
-    def stop_after_first(path: object, history: list) -> None:
-        original(path, history)
+    def stop_after_first(*args: object) -> None:
+        original(*args)  # type: ignore[arg-type]
         raise Stop
 
     loop.plot_curves = stop_after_first  # type: ignore[assignment]
@@ -257,11 +229,16 @@ def test_cli_parsers(tmp_path: Path) -> None:
             "--no-reference",
             "--input-size",
             "64",
+            "--threads",
+            "2",
         ]
     )
     cfg = build_config(args)
     assert args.data == [Path("a"), Path("b")] and cfg.epochs == 3 and not cfg.use_reference
     assert cfg.input_size == 64 and cfg.batch_size == TrainConfig().batch_size
+    assert cfg.num_threads == 2
+    args = parser.parse_args(["train", "--data", "a", "--out", "r"])
+    assert build_config(args).num_threads == TrainConfig().num_threads
     args = parser.parse_args(["train", "--data", str(tmp_path / "missing"), "--out", "r"])
     with pytest.raises(ValueError, match="missing"):
         args.func(args)
@@ -273,3 +250,40 @@ def test_commands_import_is_light() -> None:
     code = "import sys, contactcal.train.commands; print('torch' in sys.modules)"
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
     assert out.stdout.strip() == "False"
+
+
+@pytest.mark.slow
+def test_cli_train_without_threads(tmp_path: Path) -> None:
+    """Regression: `contactcal train` without --threads died with a TypeError in cli.main."""
+    d = write_dataset(tmp_path / "d", fingers=3)
+    argv = ["train", "--data", str(d), "--out", str(tmp_path / "run"), "--epochs", "1"]
+    argv += ["--input-size", "32", "--batch-size", "4", "--base", "4", "--levels", "2"]
+    assert main([*argv, "--device", "cpu", "--quiet"]) == 0
+    assert (tmp_path / "run" / "best.pt").is_file()
+
+
+def _row(pressure_kpa: float) -> IndexRow:
+    d = Path("data")
+    return IndexRow(d, 0, "s", d / "f.png", d / "m.png", pressure_kpa, True, 1.0, 0.1, 3.0, False)
+
+
+def test_validation_uses_the_deployed_decision() -> None:
+    spec = ModelSpec(2, PreprocessConfig(input_size=32), 0.5, 20.0)
+    box = CropBox(0, 0, 64)  # 2 input px per network px: areas × 4
+    big = np.zeros((32, 32), np.float32)
+    big[22:28, 4:10] = 0.9  # 36 network px
+    small = np.zeros((32, 32), np.float32)
+    small[4:7, 20:23] = 0.9  # 9 network px < min area
+    prob = np.maximum(big, small)
+    target = (big > 0).astype(np.uint8)
+    f = score_frame(prob, target, box, (64, 64), _row(8.0), 144.0, spec)
+    assert f.contact and f.area_px == 36 * 4 and f.iou == 1.0  # only the largest region counts
+    assert f.method == "unet" and f.session == "data#s" and f.rel_error == 0.0
+    f = score_frame(small, target * 0, box, (64, 64), _row(1.0), 0.0, spec)
+    assert not f.contact and f.area_px == 0.0  # below the minimum area: no contact
+    # rows 22-27 lie outside a 40 px high image: masked, so only the small blob remains
+    f = score_frame(prob, target, box, (40, 64), _row(8.0), 144.0, spec)
+    assert not f.contact and f.area_px == 0.0 and f.iou == 0.0
+    s = summarise([score_frame(prob, target, box, (64, 64), _row(8.0), 144.0, spec), f])
+    assert s["contact_recall"] == 0.5 and s["rel_area_err_ge5"] == 0.5
+    assert s["no_contact_acc"] is None and s["val_iou"] == 0.5

@@ -1,21 +1,29 @@
 """Batch augmentation with kornia: image and mask transformed together.
 
-The cached network inputs are normalised (``contactcal.infer.preprocess``); augmentation maps
-them back to ``[0, 1]`` intensities with the same constants (``network_to_unit``), so that
-photometric operations (gamma, contrast, clipping) and zero padding mean what they do on a
-camera image, and then re-applies ``unit_to_network``. Randomness comes from torch's global
-generator (kornia's), so a run seeded with ``torch.manual_seed`` is reproducible and its
-generator state is what a checkpoint saves.
+The cached network inputs are normalised (``contactcal.infer.methods.unet.prepare``);
+augmentation maps them back to ``[0, 1]`` intensities with the same constants
+(``network_to_unit``), so that photometric operations (gamma, contrast, clipping) and zero padding
+mean what they do on a camera image, and then re-applies ``unit_to_network``.
+
+Randomness: the :class:`Augmenter` owns an explicit, seeded ``torch.Generator`` (its
+``generator``). kornia draws from torch's global generators, so each batch draws one seed from the
+Augmenter's generator and runs kornia inside ``torch.random.fork_rng`` with the global CPU (and
+the batch's CUDA device) generator seeded from it: the augmentations depend only on the
+Augmenter's seed and the number of batches seen, the global generators are left untouched, and
+the Augmenter's generator state is all a checkpoint needs to resume bit-exactly.
 """
 
 from __future__ import annotations
 
+from collections.abc import Iterator
+from contextlib import contextmanager
 from dataclasses import dataclass
 
 import kornia.augmentation as K
 import torch
 
-from contactcal.infer.preprocess import PreprocessConfig, network_to_unit, unit_to_network
+from contactcal.infer.methods.unet.config import PreprocessConfig
+from contactcal.infer.methods.unet.prepare import network_to_unit, unit_to_network
 
 
 @dataclass(frozen=True)
@@ -31,10 +39,8 @@ class AugmentConfig:
     translate: float = 0.03  # fraction of the side; ring-fit error of the crop
     scale: tuple[float, float] = (0.92, 1.08)  # zoom range; ring radius/finger size variation
     affine_p: float = 0.8  # probability of the rotation/translation/scale
-    blur_sigma: tuple[float, float] = (
-        0.1,
-        1.2,
-    )  # px at input size; defocus (too much erases ridges)
+    blur_sigma: tuple[float, float] = (0.1, 1.2)  # px at input size; defocus (too much erases
+    #   ridges)
     blur_p: float = 0.3  # probability of a blur
     noise_std: float = 0.02  # in [0, 1] units; sensor noise
     noise_p: float = 0.5  # probability of added noise
@@ -50,12 +56,20 @@ class AugmentConfig:
 
 
 class Augmenter(torch.nn.Module):
-    """Random geometric + photometric transform of ``(x, mask)`` batches."""
+    """Random geometric + photometric transform of ``(x, mask)`` batches.
 
-    def __init__(self, config: AugmentConfig, preprocess: PreprocessConfig) -> None:
+    Args:
+        config: augmentation ranges.
+        preprocess: the normalisation constants of the cached inputs.
+        seed: seed of the Augmenter's own generator (``self.generator``, CPU); save and restore
+            its ``get_state()`` / ``set_state()`` to resume.
+    """
+
+    def __init__(self, config: AugmentConfig, preprocess: PreprocessConfig, seed: int = 0) -> None:
         super().__init__()
         self.config = config
         self.preprocess = preprocess
+        self.generator = torch.Generator().manual_seed(seed)
         c = config
         ops = [
             K.RandomHorizontalFlip(p=c.flip_p),
@@ -89,6 +103,21 @@ class Augmenter(torch.nn.Module):
         if not self.config.enabled:
             return x, mask
         u = network_to_unit(x, self.preprocess).clamp(0.0, 1.0)
-        u, m = self.seq(u, mask)
+        with self._seeded(x.device):
+            u, m = self.seq(u, mask)
         u = u.clamp(0.0, 1.0)
         return unit_to_network(u, self.preprocess), (m > 0.5).to(mask.dtype)
+
+    @contextmanager
+    def _seeded(self, device: torch.device) -> Iterator[None]:
+        """Run kornia on global generators seeded from ``self.generator``, then restore them."""
+        seed = int(torch.randint(0, 2**62, (), generator=self.generator))
+        devices: list[int] = []
+        if device.type == "cuda":
+            devices = [torch.cuda.current_device() if device.index is None else device.index]
+        with torch.random.fork_rng(devices=devices):
+            torch.random.default_generator.manual_seed(seed)
+            for d in devices:
+                with torch.cuda.device(d):
+                    torch.cuda.manual_seed(seed)
+            yield

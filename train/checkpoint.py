@@ -10,7 +10,7 @@ from typing import Any, TypeVar
 
 import torch
 
-from contactcal.infer.atomic import atomic_path
+from contactcal.infer.files.atomic import atomic_path
 
 C = TypeVar("C")
 
@@ -72,7 +72,7 @@ def config_diff(a: Any, b: Any) -> list[str]:
 
 
 def rng_state() -> dict[str, Any]:
-    """torch's global CPU (and CUDA) generator states (kornia draws from these)."""
+    """torch's global CPU (and CUDA) generator states (weight init; augmentation has its own)."""
     state: dict[str, Any] = {"torch": torch.get_rng_state()}
     if torch.cuda.is_available():
         state["cuda"] = torch.cuda.get_rng_state_all()

@@ -42,7 +42,15 @@ def add_parsers(sub: Any) -> None:
     )
     t.add_argument("--seed", type=int, help="split/init/shuffle/augmentation seed (default 0)")
     t.add_argument("--batch-size", type=int, metavar="B", help="frames per step (default 16)")
-    t.add_argument("--threads", type=int, metavar="T", help="torch CPU threads (default: torch's)")
+    # dest differs from the deployment commands' --threads (onnxruntime threads, an int >= 1
+    # checked by contactcal.infer.cli.main); here 0 or absent means torch's default.
+    t.add_argument(
+        "--threads",
+        dest="torch_threads",
+        type=int,
+        metavar="T",
+        help="torch CPU threads (default: torch's)",
+    )
     t.add_argument("--base", type=int, help="U-Net channels at the first level (default 8)")
     t.add_argument("--levels", type=int, help="U-Net resolution levels (default 3)")
     t.add_argument("--quiet", action="store_true", help="no progress bars")
@@ -80,7 +88,7 @@ def build_config(args: argparse.Namespace) -> Any:
     import dataclasses
 
     from contactcal.train.checkpoint import config_from_dict
-    from contactcal.train.loop import TrainConfig
+    from contactcal.train.config import TrainConfig
 
     base = TrainConfig()
     saved = args.out / "config.json"
@@ -97,7 +105,7 @@ def build_config(args: argparse.Namespace) -> Any:
         "use_reference": args.reference,
         "seed": args.seed,
         "batch_size": args.batch_size,
-        "num_threads": args.threads,
+        "num_threads": args.torch_threads,
     }
     cfg = dataclasses.replace(base, **{k: v for k, v in given.items() if v is not None})
     arch = {"base": args.base, "levels": args.levels}

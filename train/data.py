@@ -1,14 +1,16 @@
-"""Dataset folders (``index.csv`` layout, docs/CONVENTIONS.md) → validated records → cached tensors.
+"""Dataset folders (``index.csv``, read by :mod:`contactcal.infer.bench.dataset`) → cached tensors.
 
-Every frame is preprocessed with :func:`contactcal.infer.preprocess.prepare` (the deployment
-code path) using its session's lowest-pressure frame as the reference; its mask is cropped with
+Every frame goes through :func:`contactcal.infer.methods.unet.prepare.prepare`, the deployment
+code path: its session's lowest-pressure frame (the first row of
+:func:`~contactcal.infer.bench.dataset.sessions_of`) is the session reference, computed once with
+:func:`~contactcal.infer.methods.unet.prepare.session_reference`; it fixes the crop (and, for a
+2-channel model, the reference channel) of all of the session's frames. The mask is cropped with
 the same box (area resize, threshold 0.5). Train/validation split is by finger, never by frame:
 frames of one finger share its fingerprint texture and would leak.
 """
 
 from __future__ import annotations
 
-import csv
 import hashlib
 import os
 from collections.abc import Sequence
@@ -19,130 +21,57 @@ import numpy as np
 import torch
 from tqdm import tqdm
 
-from contactcal.infer.io import load_image
-from contactcal.infer.preprocess import CropBox, PreprocessConfig, crop_resize, prepare
-
-#: Columns of index.csv that training needs.
-REQUIRED_COLUMNS = ("finger", "session", "frame", "mask", "pressure_kpa", "contact")
-
-
-@dataclass(frozen=True)
-class FrameRecord:
-    """One frame of a dataset (paths resolved)."""
-
-    finger_key: str  # "<dataset folder>#<finger>": unique across datasets
-    session: str  # "<dataset folder>#<session folder>"
-    frame: Path
-    mask: Path
-    pressure_kpa: float  # kPa
-    contact: bool
+from contactcal.infer.bench.dataset import IndexRow, sessions_of
+from contactcal.infer.image.read import load_image
+from contactcal.infer.methods.unet.config import PreprocessConfig
+from contactcal.infer.methods.unet.prepare import (
+    CropBox,
+    SessionReference,
+    crop_resize,
+    prepare,
+    session_reference,
+)
 
 
 @dataclass
 class CachedSet:
-    """Preprocessed frames in memory (one row per frame)."""
+    """Preprocessed frames in memory (one entry per frame, in the order of ``rows``)."""
 
-    x: torch.Tensor  # (N, C, S, S) float16 network inputs
+    x: torch.Tensor  # (N, C, S, S) float32 network inputs, exactly as deployment feeds them
     y: torch.Tensor  # (N, 1, S, S) uint8 masks in network pixels (0/1)
-    pressure_kpa: torch.Tensor  # (N,) float32, kPa
-    contact: torch.Tensor  # (N,) bool, index.csv's contact flag
-    area_px: torch.Tensor  # (N,) float32, true mask area in INPUT pixels
-    boxes: list[CropBox]  # crop of each frame
+    area_px: torch.Tensor  # (N,) float32, true mask area in INPUT pixels (mask pixel count)
+    boxes: list[CropBox]  # crop of each frame (network → input pixels)
     shapes: list[tuple[int, int]]  # input (H, W) of each frame
-    fingers: list[str]  # finger_key of each frame
+    rows: list[IndexRow]  # the index row of each frame (session, pressure, mm/px, onset, ...)
 
     def __len__(self) -> int:
         return int(self.x.shape[0])
 
 
-def _read_index(folder: Path) -> list[dict[str, str]]:
-    if not folder.exists():
-        raise ValueError(f"{folder}: dataset folder does not exist")
-    if not folder.is_dir():
-        raise ValueError(f"{folder}: expected a dataset folder, got a file")
-    index = folder / "index.csv"
-    if not index.is_file():
-        raise ValueError(f"{index}: missing index.csv (is {folder} a `contactcal synth` output?)")
-    with open(index, newline="", encoding="utf-8") as fh:
-        reader = csv.DictReader(fh)
-        missing = [c for c in REQUIRED_COLUMNS if c not in (reader.fieldnames or [])]
-        if missing:
-            raise ValueError(
-                f"{index}: missing column(s) {', '.join(missing)}; "
-                f"expected at least {', '.join(REQUIRED_COLUMNS)}"
-            )
-        rows = list(reader)
-    if not rows:
-        raise ValueError(f"{index}: no frames listed")
-    return rows
-
-
-def load_records(data_dirs: Sequence[str | os.PathLike[str]]) -> list[FrameRecord]:
-    """Read and validate the index of every dataset folder.
-
-    Args:
-        data_dirs: one or more dataset folders.
-
-    Returns:
-        All frames, in index order.
-
-    Raises:
-        ValueError: a missing folder, index.csv, column or file, or an unparsable value; the
-            message names the path.
-    """
-    if not data_dirs:
-        raise ValueError("no dataset folder given")
-    records: list[FrameRecord] = []
-    for d in data_dirs:
-        folder = Path(d)
-        for line, row in enumerate(_read_index(folder), start=2):
-            where = f"{folder / 'index.csv'} line {line}"
-            try:
-                pressure = float(row["pressure_kpa"])
-                contact = bool(int(float(row["contact"])))
-                finger = int(float(row["finger"]))
-            except ValueError as exc:
-                raise ValueError(f"{where}: unparsable value ({exc})") from exc
-            rec = FrameRecord(
-                finger_key=f"{folder}#{finger}",
-                session=f"{folder}#{row['session']}",
-                frame=folder / row["frame"],
-                mask=folder / row["mask"],
-                pressure_kpa=pressure,
-                contact=contact,
-            )
-            for p in (rec.frame, rec.mask):
-                if not p.is_file():
-                    raise ValueError(f"{where}: missing file {p}")
-            records.append(rec)
-    return records
-
-
 def split_by_finger(
-    records: Sequence[FrameRecord], val_fraction: float, seed: int
-) -> tuple[list[FrameRecord], list[FrameRecord]]:
-    """Deterministic train/validation split by finger.
+    rows: Sequence[IndexRow], val_fraction: float, seed: int
+) -> tuple[list[IndexRow], list[IndexRow]]:
+    """Deterministic train/validation split by finger (:attr:`IndexRow.finger_key`).
 
     Args:
-        records: all frames.
+        rows: all frames.
         val_fraction: fraction of FINGERS held out (at least one when there are >= 2 fingers
             and the fraction is > 0).
         seed: split seed (numpy Generator).
 
     Returns:
-        ``(train, val)`` records; no finger appears in both.
+        ``(train, val)`` rows, each in the input order; no finger appears in both.
     """
     if not 0.0 <= val_fraction < 1.0:
         raise ValueError(f"val_fraction must be in [0, 1), got {val_fraction}")
-    fingers = sorted({r.finger_key for r in records})
+    fingers = sorted({r.finger_key for r in rows})
     n_val = round(val_fraction * len(fingers))
     if val_fraction > 0 and len(fingers) >= 2:
         n_val = min(max(n_val, 1), len(fingers) - 1)
     order = np.random.default_rng(seed).permutation(len(fingers))
     held = {fingers[i] for i in order[:n_val]}
-    return [r for r in records if r.finger_key not in held], [
-        r for r in records if r.finger_key in held
-    ]
+    train = [r for r in rows if r.finger_key not in held]
+    return train, [r for r in rows if r.finger_key in held]
 
 
 def dataset_digest(data_dirs: Sequence[str | os.PathLike[str]]) -> str:
@@ -153,42 +82,44 @@ def dataset_digest(data_dirs: Sequence[str | os.PathLike[str]]) -> str:
     return h.hexdigest()
 
 
+def session_references(
+    rows: Sequence[IndexRow], config: PreprocessConfig
+) -> dict[str, SessionReference]:
+    """Each session's reference: its lowest-pressure frame, preprocessed once."""
+    return {
+        key: session_reference(load_image(frames[0].frame), config)
+        for key, frames in sessions_of(rows).items()
+    }
+
+
 def build_cache(
-    records: Sequence[FrameRecord],
+    rows: Sequence[IndexRow],
     config: PreprocessConfig,
-    use_reference: bool,
+    channels: int,
     progress: bool = False,
 ) -> CachedSet:
-    """Preprocess frames and masks into memory.
+    """Preprocess frames and masks into memory, exactly as deployment prepares frames.
 
     Args:
-        records: frames (whole sessions, so that each has its reference).
+        rows: frames (whole sessions: each session's lowest-pressure frame is its reference).
         config: preprocessing (``input_size`` = S).
-        use_reference: add the session's lowest-pressure frame as a second channel.
+        channels: network input channels, 1 (frame) or 2 (frame, session reference).
         progress: show a tqdm bar.
 
     Returns:
-        The cached set (empty tensors when ``records`` is empty).
+        The cached set (empty tensors when ``rows`` is empty).
+
+    Raises:
+        ValueError: unreadable image, or a mask or frame of another size than its reference.
     """
     s = config.input_size
-    reference_of: dict[str, FrameRecord] = {}
-    for r in records:
-        cur = reference_of.get(r.session)
-        if cur is None or r.pressure_kpa < cur.pressure_kpa:
-            reference_of[r.session] = r
-    ref_images: dict[str, np.ndarray] = {}
-    c = 2 if use_reference else 1
-    xs = torch.empty((len(records), c, s, s), dtype=torch.float16)
-    ys = torch.empty((len(records), 1, s, s), dtype=torch.uint8)
+    refs = session_references(rows, config)
+    xs = torch.empty((len(rows), channels, s, s), dtype=torch.float32)
+    ys = torch.empty((len(rows), 1, s, s), dtype=torch.uint8)
     areas, boxes, shapes = [], [], []
-    for i, r in enumerate(tqdm(records, desc="preprocess", disable=not progress, leave=False)):
+    for i, r in enumerate(tqdm(rows, desc="preprocess", disable=not progress, leave=False)):
         gray = load_image(r.frame)
-        ref = None
-        if use_reference:
-            if r.session not in ref_images:
-                ref_images[r.session] = load_image(reference_of[r.session].frame)
-            ref = ref_images[r.session]
-        prep = prepare(gray, ref, config)
+        prep = prepare(gray, refs[r.session_key], config, channels)
         mask = load_image(r.mask) > 127
         if mask.shape != gray.shape:
             raise ValueError(f"{r.mask}: mask shape {mask.shape} differs from frame {gray.shape}")
@@ -201,10 +132,8 @@ def build_cache(
     return CachedSet(
         x=xs,
         y=ys,
-        pressure_kpa=torch.tensor([r.pressure_kpa for r in records], dtype=torch.float32),
-        contact=torch.tensor([r.contact for r in records], dtype=torch.bool),
         area_px=torch.tensor(areas, dtype=torch.float32),
         boxes=boxes,
         shapes=shapes,
-        fingers=[r.finger_key for r in records],
+        rows=list(rows),
     )

@@ -1,14 +1,20 @@
 """Export a trained run's ``best.pt`` to ONNX with its preprocessing metadata, and verify it.
 
 The graph takes ``input`` ``(N, C, H, W) float32`` (dynamic N, H, W) and returns ``logits``
-``(N, 1, H, W) float32``. Metadata (``metadata_props``, all strings):
+``(N, 1, H, W) float32``. Metadata (``metadata_props``, all strings) has exactly the keys
+deployment's :func:`contactcal.infer.methods.unet.spec.read_spec` accepts:
 
-* ``input_size`` (px), ``channels`` (1 or 2), ``reference`` ("true": channel 1 is the session's
-  zero-pressure frame preprocessed with the frame's box),
-* ``preprocess``: JSON of :class:`contactcal.infer.preprocess.PreprocessConfig`,
-* ``threshold`` (probability), ``min_contact_area_px`` (network pixels), ``output`` ("logits"),
-* ``data_digest`` (sha256 of the training index.csv files), ``contactcal_version``, ``created``
-  (UTC ISO 8601), ``train_config`` (JSON), ``best_epoch``, ``val_metrics`` (JSON).
+* the spec (:data:`~contactcal.infer.methods.unet.spec.SPEC_KEYS`, written by
+  :meth:`ModelSpec.to_metadata`): ``channels`` (1, or 2 = frame + the session's zero-pressure
+  frame), ``preprocess`` (JSON of :class:`~contactcal.infer.methods.unet.config.PreprocessConfig`,
+  incl. ``input_size``), ``threshold`` (probability), ``min_contact_area_px`` (network pixels),
+  ``output`` ("logits");
+* provenance (:data:`~contactcal.infer.methods.unet.spec.PROVENANCE_KEYS`): ``data_digest``
+  (sha256 of the training index.csv files), ``contactcal_version``, ``created`` (UTC ISO 8601),
+  ``train_config`` (JSON), ``best_epoch``, ``val_metrics`` (JSON).
+
+Before the file is written, the serialised model's metadata is read back through ``read_spec``
+(self-check: deployment accepts it and reads the run's spec).
 """
 
 from __future__ import annotations
@@ -27,9 +33,10 @@ import onnxruntime as ort
 import torch
 
 from contactcal.infer import __version__
-from contactcal.infer.atomic import atomic_open
+from contactcal.infer.files.atomic import atomic_open
+from contactcal.infer.methods.unet.spec import ModelSpec, read_spec
 from contactcal.train.checkpoint import config_from_dict, load_checkpoint
-from contactcal.train.loop import TrainConfig
+from contactcal.train.config import TrainConfig
 from contactcal.train.model import UNet
 
 #: torch vs onnxruntime tolerance on logits (float32; BN folding and kernel order differ).
@@ -60,16 +67,16 @@ def load_run(run_dir: str | os.PathLike[str]) -> tuple[TrainConfig, dict, dict]:
     return cfg, info, load_checkpoint(run / "best.pt")
 
 
-def _metadata(cfg: TrainConfig, info: dict, ckpt: dict) -> dict[str, str]:
+def metadata(spec: ModelSpec, info: dict, ckpt: dict) -> dict[str, str]:
+    """The model's ``metadata_props``: ``spec.to_metadata()`` + the ``PROVENANCE_KEYS``.
+
+    Args:
+        spec: the deployment spec (:meth:`TrainConfig.spec`).
+        info: the run's ``config.json``.
+        ckpt: the exported checkpoint (``epoch``, ``metrics``).
+    """
     metrics = {k: v for k, v in ckpt.get("metrics", {}).items() if v is not None}
-    return {
-        "input_size": str(cfg.input_size),
-        "channels": str(cfg.model.in_channels),
-        "reference": "true" if cfg.use_reference else "false",
-        "preprocess": json.dumps(dataclasses.asdict(cfg.preprocess)),
-        "threshold": repr(cfg.prob_threshold),
-        "min_contact_area_px": repr(cfg.min_contact_area_px),
-        "output": "logits",
+    provenance = {
         "data_digest": str(info.get("data_digest", "")),
         "contactcal_version": __version__,
         "created": dt.datetime.now(dt.timezone.utc).isoformat(timespec="seconds"),
@@ -77,6 +84,22 @@ def _metadata(cfg: TrainConfig, info: dict, ckpt: dict) -> dict[str, str]:
         "best_epoch": str(int(ckpt.get("epoch", -1)) + 1),
         "val_metrics": json.dumps(metrics),
     }
+    return {**spec.to_metadata(), **provenance}
+
+
+def self_check(data: bytes, spec: ModelSpec, out: Path) -> None:
+    """Load the serialised model's metadata back through deployment's ``read_spec``.
+
+    Raises:
+        RuntimeError: ``read_spec`` rejects it or reads another spec than the one exported.
+    """
+    meta = {p.key: p.value for p in onnx.load_from_string(data).metadata_props}
+    try:
+        back = read_spec(meta, out)
+    except ValueError as exc:
+        raise RuntimeError(f"exported metadata rejected by read_spec: {exc}") from exc
+    if back != spec:
+        raise RuntimeError(f"{out}: metadata reads back as {back}, expected {spec}")
 
 
 def check_parity(model: torch.nn.Module, onnx_bytes: bytes, channels: int, seed: int = 0) -> float:
@@ -125,7 +148,8 @@ def export_onnx(
 
     Raises:
         ValueError: bad run folder or output name.
-        RuntimeError: the exported model fails the checker or the parity test.
+        RuntimeError: the exported model fails the checker, the parity test or the metadata
+            self-check (nothing is written then).
     """
     out = Path(out_path)
     if out.suffix.lower() != ".onnx":
@@ -138,14 +162,30 @@ def export_onnx(
     model = UNet(cfg.model)
     model.load_state_dict(ckpt["model"])
     model.eval()
-    c, s = cfg.model.in_channels, cfg.input_size
+    proto = to_onnx(model, cfg.model.in_channels, cfg.input_size, opset)
+    spec = cfg.spec()
+    onnx.helper.set_model_props(proto, metadata(spec, info, ckpt))
+    try:
+        onnx.checker.check_model(proto, full_check=True)
+    except onnx.checker.ValidationError as exc:
+        raise RuntimeError(f"exported model fails onnx.checker: {exc}") from exc
+    data = proto.SerializeToString()
+    check_parity(model, data, cfg.model.in_channels)
+    self_check(data, spec, out)  # the bytes about to be written, read back as deployment does
+    with atomic_open(out, "wb") as fh:
+        fh.write(data)
+    return out
+
+
+def to_onnx(model: torch.nn.Module, channels: int, size: int, opset: int) -> onnx.ModelProto:
+    """TorchScript-based export with dynamic batch, height and width (no metadata yet)."""
     axes = {0: "batch", 2: "height", 3: "width"}
     buf = io.BytesIO()
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")  # the TorchScript exporter's deprecation notice
         torch.onnx.export(
             model,
-            (torch.zeros((1, c, s, s)),),
+            (torch.zeros((1, channels, size, size)),),
             buf,
             dynamo=False,
             input_names=["input"],
@@ -157,13 +197,4 @@ def export_onnx(
     proto = onnx.load_from_string(buf.getvalue())
     proto.producer_name = "contactcal"
     proto.producer_version = __version__
-    onnx.helper.set_model_props(proto, _metadata(cfg, info, ckpt))
-    try:
-        onnx.checker.check_model(proto, full_check=True)
-    except onnx.checker.ValidationError as exc:
-        raise RuntimeError(f"exported model fails onnx.checker: {exc}") from exc
-    data = proto.SerializeToString()
-    check_parity(model, data, c)
-    with atomic_open(out, "wb") as fh:
-        fh.write(data)
-    return out
+    return proto

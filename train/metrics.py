@@ -6,24 +6,40 @@ frame over the frames with contact, weights each frame's region as a whole regar
 size, so small contacts near the onset (a few % of the pixels) are not drowned by the
 background, and it tracks the overlap/area we are judged on.
 
-Areas are measured in INPUT pixels: the probability map is mapped back with
-:func:`contactcal.infer.preprocess.from_network` (as in deployment) and thresholded; IoU is
-computed in network pixels (the cached masks) to avoid keeping full-resolution masks in memory.
+Validation makes the DEPLOYED decision: every probability map goes through
+:func:`contactcal.infer.methods.unet.postprocess.postprocess` (pixels outside the image masked,
+largest connected region above the threshold, minimum area, area in input pixels = network
+pixels × the crop's scale²) and becomes a :class:`~contactcal.infer.bench.scoring.ScoredFrame`,
+the record ``contactcal bench`` scores; the per-bin table is
+:func:`~contactcal.infer.bench.scoring.bin_table`. So ``best.pt`` is selected on the numbers the
+benchmark reports. IoU is computed in network pixels (the kept region vs the cached mask), which
+avoids keeping full-resolution masks in memory.
 """
 
 from __future__ import annotations
 
 from collections.abc import Sequence
-from dataclasses import dataclass
 
 import numpy as np
 import torch
 import torch.nn.functional as F
 
-from contactcal.infer.preprocess import from_network
+from contactcal.infer.bench.dataset import IndexRow
+from contactcal.infer.bench.scoring import ScoredFrame, bin_row
+from contactcal.infer.methods.unet.postprocess import postprocess
+from contactcal.infer.methods.unet.prepare import CropBox
+from contactcal.infer.methods.unet.spec import ModelSpec
+from contactcal.train.data import CachedSet
 
-#: Pressure bins of the validation table, kPa, [lo, hi).
-PRESSURE_BINS: tuple[tuple[float, float], ...] = ((0, 3), (3, 5), (5, 10), (10, 20), (20, 1e9))
+#: Keys of :func:`summarise` (columns of metrics.csv); ``val_iou`` selects ``best.pt``.
+SUMMARY_KEYS = (
+    "val_iou",
+    "val_iou_contact",
+    "rel_area_err_ge5",
+    "rel_area_err_3to5",
+    "no_contact_acc",
+    "contact_recall",
+)
 
 
 def soft_dice_loss(logits: torch.Tensor, target: torch.Tensor, eps: float = 1.0) -> torch.Tensor:
@@ -59,113 +75,119 @@ def segmentation_loss(
     return bce_weight * bce + dice_weight * soft_dice_loss(logits, target)
 
 
-@dataclass(frozen=True)
-class FrameResult:
-    """One validation frame's outcome."""
-
-    pressure_kpa: float
-    contact_true: bool  # index.csv flag
-    contact_pred: bool  # predicted area >= min_contact_area_px (network px)
-    iou: float  # in network pixels; 1.0 when both prediction and truth are empty
-    area_pred_px: float  # input pixels (0.0 when no contact is predicted)
-    area_true_px: float  # input pixels
-
-
-def frame_results(
+def score_frame(
     prob: np.ndarray,
     target: np.ndarray,
-    boxes: Sequence,
-    shapes: Sequence[tuple[int, int]],
-    pressure_kpa: np.ndarray,
-    contact: np.ndarray,
-    area_true_px: np.ndarray,
-    prob_threshold: float,
-    min_contact_area_px: float,
-) -> list[FrameResult]:
-    """Per-frame metrics of a batch of predictions.
+    box: CropBox,
+    shape: tuple[int, int],
+    row: IndexRow,
+    true_area_px: float,
+    spec: ModelSpec,
+) -> ScoredFrame:
+    """One validation frame, decided by the deployed :func:`postprocess`.
 
     Args:
-        prob: ``(N, S, S) float32`` probabilities.
-        target: ``(N, S, S)`` {0, 1} masks in network pixels.
-        boxes, shapes: each frame's crop and input ``(H, W)``.
-        pressure_kpa, contact, area_true_px: ``(N,)`` truth.
-        prob_threshold: probability above which a pixel is contact.
-        min_contact_area_px: network pixels; a smaller predicted region means no contact.
+        prob: ``(S, S) float32`` probabilities in network pixels.
+        target: ``(S, S)`` {0, 1} true mask in network pixels (same crop).
+        box, shape: the frame's crop and input ``(H, W)``.
+        row: the frame's index row (session, pressure, mm/px, onset, hard).
+        true_area_px: true mask area, input pixels.
+        spec: threshold and minimum area (network pixels).
+
+    Returns:
+        The frame's record (method ``"unet"``); ``iou`` of the kept region vs ``target`` in
+        network pixels, 1.0 when both are empty.
     """
-    out = []
-    for i in range(prob.shape[0]):
-        pred = prob[i] > prob_threshold
-        t = target[i] > 0
-        union = int((pred | t).sum())
-        iou = 1.0 if union == 0 else float((pred & t).sum()) / union
-        is_contact = float(pred.sum()) >= min_contact_area_px
-        area = 0.0
-        if is_contact:
-            area = float((from_network(prob[i], boxes[i], shapes[i]) > prob_threshold).sum())
-        out.append(
-            FrameResult(
-                float(pressure_kpa[i]),
-                bool(contact[i]),
-                is_contact,
-                iou,
-                area,
-                float(area_true_px[i]),
-            )
+    seg = postprocess(prob.astype(np.float32), box, shape, spec)
+    t = target > 0
+    union = int((seg.mask_net | t).sum())
+    iou = 1.0 if union == 0 else float((seg.mask_net & t).sum()) / union
+    return ScoredFrame(
+        method="unet",
+        session=row.session_key,
+        frame=str(row.frame),
+        pressure_kpa=row.pressure_kpa,
+        true_area_px=float(true_area_px),
+        area_px=seg.area_px,
+        contact=seg.contact,
+        iou=iou,
+        mm_per_px=row.mm_per_px,
+        onset_kpa=row.onset_kpa,
+        hard=row.hard,
+    )
+
+
+def score_batch(
+    prob: np.ndarray, data: CachedSet, start: int, spec: ModelSpec
+) -> list[ScoredFrame]:
+    """:func:`score_frame` for ``prob`` ``(B, S, S)`` = frames ``start .. start + B - 1``."""
+    return [
+        score_frame(
+            p,
+            data.y[start + k, 0].numpy(),
+            data.boxes[start + k],
+            data.shapes[start + k],
+            data.rows[start + k],
+            float(data.area_px[start + k]),
+            spec,
         )
-    return out
+        for k, p in enumerate(prob)
+    ]
 
 
-def _median(values: list[float]) -> float | None:
-    return float(np.median(values)) if values else None
+@torch.no_grad()
+def evaluate(
+    model: torch.nn.Module,
+    data: CachedSet,
+    spec: ModelSpec,
+    loss_weights: tuple[float, float],
+    batch_size: int,
+    device: torch.device,
+) -> tuple[float | None, list[ScoredFrame]]:
+    """Validation loss (mean over frames) and scored frames; ``(None, [])`` when empty.
 
-
-def rel_area_error(r: FrameResult) -> float:
-    """``|pred - true| / true`` (frames with true contact area > 0 only)."""
-    return abs(r.area_pred_px - r.area_true_px) / r.area_true_px
-
-
-def summarise(results: Sequence[FrameResult]) -> dict[str, float | None]:
-    """Epoch summary; None where a quantity is undefined (no such frames).
-
-    Keys: ``val_iou`` (mean over all frames), ``val_iou_contact`` (mean over contact frames),
-    ``rel_area_err_ge5`` / ``rel_area_err_3to5`` (median over contact frames at >= 5 and
-    3-5 kPa), ``no_contact_acc`` (fraction of no-contact frames predicted as no contact),
-    ``contact_recall`` (fraction of contact frames predicted as contact).
+    Args:
+        loss_weights: ``(bce_weight, dice_weight)``.
     """
-    contact = [r for r in results if r.contact_true and r.area_true_px > 0]
-    free = [r for r in results if not r.contact_true]
+    if len(data) == 0:
+        return None, []
+    model.eval()
+    total, frames = 0.0, []
+    for i in range(0, len(data), batch_size):
+        x = data.x[i : i + batch_size].to(device).float()
+        y = data.y[i : i + batch_size].to(device).float()
+        logits = model(x)
+        total += float(segmentation_loss(logits, y, *loss_weights)) * len(x)
+        frames += score_batch(torch.sigmoid(logits)[:, 0].cpu().numpy(), data, i, spec)
+    return total / len(data), frames
+
+
+def summarise(frames: Sequence[ScoredFrame]) -> dict[str, float | None]:
+    """Epoch summary (:data:`SUMMARY_KEYS`); None where a quantity is undefined (no frames).
+
+    ``val_iou``: mean IoU over all frames (1.0 for a correctly empty prediction; selects
+    ``best.pt``); ``val_iou_contact``: mean over frames with true contact;
+    ``rel_area_err_ge5`` / ``rel_area_err_3to5``: median ``|area - true| / true`` of contact
+    frames at >= 5 and 3-5 kPa; ``no_contact_acc``: fraction of no-contact frames decided "no
+    contact"; ``contact_recall``: fraction of contact frames decided "contact". The medians and
+    fractions are :func:`contactcal.infer.bench.scoring.bin_row`'s.
+    """
+    ious = [f.iou for f in frames if f.iou is not None]
+    contact = [f.iou for f in frames if f.true_contact and f.iou is not None]
+    every = bin_row(frames)
     return {
-        "val_iou": float(np.mean([r.iou for r in results])) if results else None,
-        "val_iou_contact": float(np.mean([r.iou for r in contact])) if contact else None,
-        "rel_area_err_ge5": _median([rel_area_error(r) for r in contact if r.pressure_kpa >= 5]),
-        "rel_area_err_3to5": _median(
-            [rel_area_error(r) for r in contact if 3 <= r.pressure_kpa < 5]
-        ),
-        "no_contact_acc": float(np.mean([not r.contact_pred for r in free])) if free else None,
-        "contact_recall": float(np.mean([r.contact_pred for r in contact])) if contact else None,
+        "val_iou": float(np.mean(ious)) if ious else None,
+        "val_iou_contact": float(np.mean(contact)) if contact else None,
+        "rel_area_err_ge5": _err([f for f in frames if f.pressure_kpa >= 5.0]),
+        "rel_area_err_3to5": _err([f for f in frames if 3.0 <= f.pressure_kpa < 5.0]),
+        "no_contact_acc": _float(every["no_contact_accuracy"]),
+        "contact_recall": _float(every["contact_recall"]),
     }
 
 
-def bin_table(
-    results: Sequence[FrameResult], bins: Sequence[tuple[float, float]] = PRESSURE_BINS
-) -> list[dict[str, object]]:
-    """Per-pressure-bin validation table (rows for non-empty bins; "" where undefined)."""
-    rows: list[dict[str, object]] = []
-    for lo, hi in bins:
-        sel = [r for r in results if lo <= r.pressure_kpa < hi]
-        if not sel:
-            continue
-        s = summarise(sel)
-        contact = [r for r in sel if r.contact_true and r.area_true_px > 0]
-        rows.append(
-            {
-                "bin_kpa": f"{lo:g}-{hi:g}" if hi < 1e8 else f">={lo:g}",
-                "frames": len(sel),
-                "contact_frames": len(contact),
-                "iou_median": _median([r.iou for r in contact]),
-                "rel_area_err_median": _median([rel_area_error(r) for r in contact]),
-                "no_contact_acc": s["no_contact_acc"],
-                "contact_recall": s["contact_recall"],
-            }
-        )
-    return [{k: ("" if v is None else v) for k, v in row.items()} for row in rows]
+def _float(v: float | int | None) -> float | None:
+    return None if v is None else float(v)
+
+
+def _err(frames: Sequence[ScoredFrame]) -> float | None:
+    return _float(bin_row(frames)["median_abs_rel_error"])

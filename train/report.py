@@ -1,4 +1,8 @@
-"""Run outputs: ``metrics.csv``, ``val_bins.csv`` and the learning-curve plot ``curves.png``."""
+"""Run outputs: ``metrics.csv``, ``val_bins.csv`` and the learning-curve plot ``curves.png``.
+
+matplotlib is imported inside :func:`plot_curves` only, with its object API and the Agg canvas
+(``Figure`` + ``FigureCanvasAgg``; pyplot's global backend is never touched).
+"""
 
 from __future__ import annotations
 
@@ -7,22 +11,11 @@ import os
 from collections.abc import Sequence
 from typing import Any
 
-from contactcal.infer.atomic import atomic_open, atomic_path
+from contactcal.infer.files.atomic import atomic_open, atomic_path
+from contactcal.train.metrics import SUMMARY_KEYS
 
 #: Columns of metrics.csv (one row per epoch; "" where undefined).
-METRIC_COLUMNS = (
-    "epoch",
-    "train_loss",
-    "val_loss",
-    "lr",
-    "val_iou",
-    "val_iou_contact",
-    "rel_area_err_ge5",
-    "rel_area_err_3to5",
-    "no_contact_acc",
-    "contact_recall",
-    "seconds",
-)
+METRIC_COLUMNS = ("epoch", "train_loss", "val_loss", "lr", *SUMMARY_KEYS, "seconds")
 
 
 def write_csv(
@@ -39,27 +32,44 @@ def write_csv(
             )
 
 
-def plot_curves(path: str | os.PathLike[str], history: Sequence[dict[str, Any]]) -> None:
-    """Losses (left) and validation IoU / relative area error (right) against epoch."""
-    import matplotlib
+def _series(history: Sequence[dict[str, Any]], key: str) -> tuple[list[int], list[float]]:
+    """``(epochs, values)`` of one metrics column, skipping epochs where it is undefined."""
+    pts = [(int(r["epoch"]), float(r[key])) for r in history if r.get(key) is not None]
+    return [p[0] for p in pts], [p[1] for p in pts]
 
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
 
-    def series(key: str) -> tuple[list[int], list[float]]:
-        pts = [(int(r["epoch"]), float(r[key])) for r in history if r.get(key) is not None]
-        return [p[0] for p in pts], [p[1] for p in pts]
+def plot_curves(
+    path: str | os.PathLike[str], history: Sequence[dict[str, Any]], best_epoch: int = -1
+) -> None:
+    """Losses (left) and validation metrics (right) against epoch; ``best_epoch`` marked.
 
-    fig, (ax0, ax1) = plt.subplots(1, 2, figsize=(10, 4), constrained_layout=True)
+    Args:
+        path: PNG file (written atomically).
+        history: metrics.csv rows.
+        best_epoch: 1-based epoch of ``best.pt`` (a dashed line on both axes); < 1: none.
+    """
+    from matplotlib.backends.backend_agg import FigureCanvasAgg
+    from matplotlib.figure import Figure
+    from matplotlib.ticker import MaxNLocator
+
+    fig = Figure(figsize=(10, 4), dpi=100, layout="constrained")
+    FigureCanvasAgg(fig)
+    ax_loss, ax_val = fig.subplots(1, 2)
     for key in ("train_loss", "val_loss"):
-        ax0.plot(*series(key), marker=".", label=key)
-    ax0.set(xlabel="epoch", ylabel="BCE + Dice", title="loss", yscale="log")
+        ax_loss.plot(*_series(history, key), marker=".", label=key)
+    ax_loss.set(xlabel="epoch", ylabel="loss (BCE + soft Dice)", title="loss", yscale="log")
     for key in ("val_iou", "val_iou_contact", "rel_area_err_ge5", "rel_area_err_3to5"):
-        ax1.plot(*series(key), marker=".", label=key)
-    ax1.set(xlabel="epoch", title="validation", ylim=(0, 1.05))
-    for ax in (ax0, ax1):
+        ax_val.plot(*_series(history, key), marker=".", label=key)
+    ax_val.set(
+        xlabel="epoch", ylabel="IoU / relative area error", title="validation", ylim=(0, 1.05)
+    )
+    for ax in (ax_loss, ax_val):
+        if best_epoch >= 1:
+            ax.axvline(
+                best_epoch, color="black", ls="--", lw=1, label=f"best.pt (epoch {best_epoch})"
+            )
+        ax.xaxis.set_major_locator(MaxNLocator(integer=True))
         ax.grid(alpha=0.3)
         ax.legend(fontsize=8)
     with atomic_path(path) as tmp:
-        fig.savefig(tmp, dpi=100)
-    plt.close(fig)
+        fig.savefig(tmp, format="png")

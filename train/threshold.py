@@ -2,9 +2,11 @@
 
 The deployed contact decision keeps the largest connected region above the probability threshold
 and calls it contact if it covers at least ``min_contact_area_px`` network pixels
-(:func:`contactcal.infer.segmenter.postprocess`). The training default is a guess; this picks the
-value that minimises false contacts + missed contacts on the validation fingers (never on the
-benchmark), preferring the smallest such value so that small patches near onset still count.
+(:func:`contactcal.infer.methods.unet.postprocess.postprocess`, whose ``region_net_px`` this
+reads: the same function as validation and deployment). The training default is a guess; this
+picks the value that minimises false contacts + missed contacts on the validation fingers (never
+on the benchmark), preferring the smallest such value so that small patches near onset still
+count.
 """
 
 from __future__ import annotations
@@ -15,8 +17,9 @@ from typing import Any
 import numpy as np
 import torch
 
-from contactcal.infer.segmenter import ModelSpec, postprocess
-from contactcal.train.data import build_cache, load_records, split_by_finger
+from contactcal.infer.bench.dataset import read_datasets
+from contactcal.infer.methods.unet.postprocess import postprocess
+from contactcal.train.data import build_cache, split_by_finger
 from contactcal.train.export import load_run
 from contactcal.train.model import UNet
 
@@ -31,22 +34,21 @@ def largest_region_areas(run_dir: str | os.PathLike[str]) -> tuple[np.ndarray, n
         ValueError: the run has no validation fingers or its data folders are missing.
     """
     cfg, info, ckpt = load_run(run_dir)
-    records = load_records(info["data_dirs"])
-    _, val = split_by_finger(records, cfg.val_fraction, cfg.seed)
+    _, val = split_by_finger(read_datasets(info["data_dirs"]), cfg.val_fraction, cfg.seed)
     if not val:
         raise ValueError(f"{run_dir}: the run has no validation fingers to tune on")
-    cache = build_cache(val, cfg.preprocess, cfg.use_reference)
+    cache = build_cache(val, cfg.preprocess, cfg.model.in_channels)
     net = UNet(cfg.model)
     net.load_state_dict(ckpt["model"])
     net.eval()
-    spec = ModelSpec(cfg.model.in_channels, cfg.preprocess, cfg.prob_threshold, 0.0)
+    spec = cfg.spec()  # region_net_px is measured before the minimum-area test
     areas = []
     with torch.no_grad():
-        for i in range(0, len(cache.boxes), 16):
+        for i in range(0, len(cache), 16):
             prob = torch.sigmoid(net(cache.x[i : i + 16].float()))[:, 0].numpy()
             for k, p in enumerate(prob):
-                seg = postprocess(p.astype(np.float32), cache.boxes[i + k], spec)
-                areas.append(float(seg.mask_net.sum()))
+                seg = postprocess(p, cache.boxes[i + k], cache.shapes[i + k], spec)
+                areas.append(seg.region_net_px)
     return np.asarray(areas), cache.area_px.numpy() > 0
 
 
@@ -68,9 +70,13 @@ def tune_min_area(run_dir: str | os.PathLike[str]) -> tuple[float, dict[str, Any
     fp0, fn0 = errors(cfg.min_contact_area_px)
     fp1, fn1 = errors(best)
     summary = {
-        "frames": len(areas), "no_contact_frames": int((~contact).sum()),
-        "default_min_area_px": cfg.min_contact_area_px, "default_false_contacts": fp0,
-        "default_missed_contacts": fn0, "tuned_min_area_px": best,
-        "tuned_false_contacts": fp1, "tuned_missed_contacts": fn1,
-    }  # fmt: skip
+        "frames": len(areas),
+        "no_contact_frames": int((~contact).sum()),
+        "default_min_area_px": cfg.min_contact_area_px,
+        "default_false_contacts": fp0,
+        "default_missed_contacts": fn0,
+        "tuned_min_area_px": best,
+        "tuned_false_contacts": fp1,
+        "tuned_missed_contacts": fn1,
+    }
     return best, summary

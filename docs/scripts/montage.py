@@ -7,8 +7,9 @@ from pathlib import Path
 
 import cv2
 
-from contactcal.infer.io import load_image
-from contactcal.infer.overlay import draw_overlay, montage, write_image
+from contactcal.infer.image.read import load_image
+from contactcal.infer.image.write import write_image
+from contactcal.infer.pipeline.overlay import draw_overlay, montage
 
 ROOT = Path(__file__).resolve().parents[2]
 SESSION = ROOT / "examples" / "session"

@@ -1,0 +1,113 @@
+"""Accuracy of every method on every session of a dataset, and the contact onsets it implies.
+
+Accuracy is measured on the dataset's frames at their native size against the exact masks (areas
+in input-file pixels; mm² through the frame's true pixel scale). Rendered frames (e.g. 400×300)
+are already ~1/6 of the rig's 2592 px; the classical routine's kernels scale with the width, so its
+accuracy here *is* its reduced-resolution accuracy (the speed table times it at both).
+"""
+
+from __future__ import annotations
+
+import os
+from collections.abc import Mapping, Sequence
+from dataclasses import asdict, fields
+from typing import Any
+
+from contactcal.infer.bench.dataset import IndexRow
+from contactcal.infer.bench.scoring import ScoredFrame
+from contactcal.infer.calibration.fit import estimate_onset
+from contactcal.infer.image.read import load_image
+from contactcal.infer.methods.base import Method
+from contactcal.infer.methods.registry import METHODS, make_method
+
+#: Suffix of the rows that score the U-Net's probability mass instead of its pixel count.
+SOFT_SUFFIX = " (soft area)"
+
+
+def score_session(method: Method, name: str, rows: Sequence[IndexRow]) -> list[ScoredFrame]:
+    """Measure one session (``rows`` sorted by pressure; the first is its reference frame).
+
+    Returns:
+        One :class:`ScoredFrame` per frame, plus one ``"<name> (soft area)"`` frame per frame for
+        methods that report a probability-mass (sub-pixel) area.
+    """
+    k = method.start([r.frame for r in rows], rows[0].frame)
+    out: list[ScoredFrame] = []
+    for r in rows:
+        res = method.measure(load_image(r.frame, reduce=k))
+        scored = ScoredFrame(
+            method=name,
+            session=r.session_key,
+            frame=str(r.frame),
+            pressure_kpa=r.pressure_kpa,
+            true_area_px=r.area_px,
+            area_px=float(res.area_px),
+            contact=bool(res.contact),
+            mm_per_px=r.mm_per_px,
+            onset_kpa=r.onset_kpa,
+            hard=r.hard,
+        )
+        out.append(scored)
+        if res.soft_area_px is not None or name == "unet":
+            # The same prediction measured by its probability mass (0 without contact).
+            soft = float(res.soft_area_px) if res.soft_area_px is not None else 0.0
+            out.append(_renamed(scored, name + SOFT_SUFFIX, soft))
+    return out
+
+
+def _renamed(frame: ScoredFrame, method: str, area_px: float) -> ScoredFrame:
+    return ScoredFrame(**{**asdict(frame), "method": method, "area_px": area_px})
+
+
+def evaluate(
+    sessions: Mapping[str, Sequence[IndexRow]], model: str | os.PathLike[str] | None
+) -> list[ScoredFrame]:
+    """Measure every frame of every session with every method (``METHODS``), one thread."""
+    frames: list[ScoredFrame] = []
+    for name in METHODS:
+        method = make_method(name, model, threads=1)
+        for rows in sessions.values():
+            frames.extend(score_session(method, name, rows))
+    return frames
+
+
+def onset_errors(frames: Sequence[ScoredFrame]) -> list[dict[str, Any]]:
+    """Per (method, session): onset estimated from the method's frames vs the truth.
+
+    Returns:
+        Rows with ``method``, ``session``, ``onset_kpa`` (estimated, None when no contact range
+        was found), ``truth_masks_onset_kpa`` (the same rule on the exact masks),
+        ``mechanics_onset_kpa`` and ``error_kpa`` (estimated − mechanics, or None).
+    """
+    groups: dict[tuple[str, str], list[ScoredFrame]] = {}
+    for f in frames:
+        groups.setdefault((f.method, f.session), []).append(f)
+    out = []
+    for (method, session), fs in sorted(groups.items()):
+        p = [f.pressure_kpa for f in fs]
+        est = estimate_onset(p, [f.area_px for f in fs], [f.contact for f in fs])
+        truth = estimate_onset(p, [f.true_area_px for f in fs], [f.true_contact for f in fs])
+        mech = fs[0].onset_kpa
+        error = None if est is None or mech is None else est - mech
+        out.append(
+            {
+                "method": method,
+                "session": session,
+                "onset_kpa": est,
+                "truth_masks_onset_kpa": truth,
+                "mechanics_onset_kpa": mech,
+                "error_kpa": error,
+            }
+        )
+    return out
+
+
+def to_record(frame: ScoredFrame) -> dict[str, Any]:
+    """A frame as a ``results.json`` record: its fields plus ``true_contact``."""
+    return {**asdict(frame), "true_contact": frame.true_contact}
+
+
+def from_record(record: Mapping[str, Any]) -> ScoredFrame:
+    """The frame of a ``results.json`` record (derived keys such as ``true_contact`` ignored)."""
+    names = {f.name for f in fields(ScoredFrame)}
+    return ScoredFrame(**{k: v for k, v in record.items() if k in names})

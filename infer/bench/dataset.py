@@ -1,0 +1,121 @@
+"""Reading a rendered dataset folder (``index.csv``, docs/CONVENTIONS.md): the one reader used by
+``contactcal bench`` and by training.
+"""
+
+from __future__ import annotations
+
+import csv
+import os
+from collections.abc import Sequence
+from dataclasses import dataclass
+from pathlib import Path
+
+#: Columns every dataset row must have.
+REQUIRED_COLUMNS = (
+    "finger",
+    "session",
+    "frame",
+    "mask",
+    "pressure_kpa",
+    "contact",
+    "area_px",
+    "mm_per_px",
+    "onset_kpa",
+    "hard",
+)
+
+
+@dataclass(frozen=True)
+class IndexRow:
+    """One frame of a dataset, paths resolved."""
+
+    dataset: Path  # the dataset folder
+    finger: int  # finger number (one finger = one session, one fingerprint texture)
+    session: str  # session folder name
+    frame: Path  # (H, W, 3) uint8 RGB frame
+    mask: Path  # (H, W) uint8 exact contact mask, 255 = contact
+    pressure_kpa: float  # kPa
+    contact: bool  # truth: the mask is not empty
+    area_px: float  # px, truth (mask pixel count)
+    mm_per_px: float  # mm/px at the contact plane
+    onset_kpa: float  # kPa, the mechanics' contact onset
+    hard: bool  # drawn from the hard (extreme) ranges
+
+    @property
+    def finger_key(self) -> str:
+        """``"<dataset folder>#<finger>"``: unique across datasets (split key)."""
+        return f"{self.dataset}#{self.finger}"
+
+    @property
+    def session_key(self) -> str:
+        """``"<dataset folder>#<session folder>"``: unique across datasets."""
+        return f"{self.dataset}#{self.session}"
+
+
+def _parse(folder: Path, line: int, r: dict[str, str]) -> IndexRow:
+    where = f"{folder / 'index.csv'} line {line}"
+    try:
+        row = IndexRow(
+            dataset=folder,
+            finger=int(float(r["finger"])),
+            session=r["session"],
+            frame=folder / r["frame"],
+            mask=folder / r["mask"],
+            pressure_kpa=float(r["pressure_kpa"]),
+            contact=bool(int(float(r["contact"]))),
+            area_px=float(r["area_px"]),
+            mm_per_px=float(r["mm_per_px"]),
+            onset_kpa=float(r["onset_kpa"]),
+            hard=bool(int(float(r["hard"]))),
+        )
+    except ValueError as exc:
+        raise ValueError(f"{where}: unparsable value ({exc})") from exc
+    for p in (row.frame, row.mask):
+        if not p.is_file():
+            raise ValueError(f"{where}: missing file {p}")
+    return row
+
+
+def read_index(folder: str | os.PathLike[str]) -> list[IndexRow]:
+    """All rows of one dataset folder, in file order.
+
+    Raises:
+        ValueError: no folder, no ``index.csv``, missing columns, unparsable values or missing
+            files; the message names the file and line.
+    """
+    root = Path(folder)
+    if not root.is_dir():
+        raise ValueError(f"{root}: expected a dataset folder written by `contactcal synth`")
+    index = root / "index.csv"
+    if not index.is_file():
+        raise ValueError(f"{index}: missing index.csv (is {root} a `contactcal synth` output?)")
+    with open(index, newline="", encoding="utf-8") as fh:
+        reader = csv.DictReader(fh)
+        missing = [c for c in REQUIRED_COLUMNS if c not in (reader.fieldnames or [])]
+        if missing:
+            raise ValueError(
+                f"{index}: missing column(s) {', '.join(missing)}; "
+                f"expected at least {', '.join(REQUIRED_COLUMNS)}"
+            )
+        rows = [_parse(root, line, r) for line, r in enumerate(reader, start=2)]
+    if not rows:
+        raise ValueError(f"{index}: no frames listed")
+    return rows
+
+
+def read_datasets(folders: Sequence[str | os.PathLike[str]]) -> list[IndexRow]:
+    """Rows of several dataset folders, in order (see :func:`read_index`)."""
+    if not folders:
+        raise ValueError("no dataset folder given")
+    return [row for f in folders for row in read_index(f)]
+
+
+def sessions_of(rows: Sequence[IndexRow]) -> dict[str, list[IndexRow]]:
+    """Rows grouped by session key (sorted), each session sorted by pressure.
+
+    The first row of each session is its reference (lowest-pressure) frame.
+    """
+    out: dict[str, list[IndexRow]] = {}
+    for r in rows:
+        out.setdefault(r.session_key, []).append(r)
+    return {k: sorted(v, key=lambda r: r.pressure_kpa) for k, v in sorted(out.items())}

@@ -1,0 +1,141 @@
+"""Figures of ``contactcal bench``: error vs pressure and speed vs error (``pareto.png``).
+
+matplotlib is imported inside the functions only, with its object API and the Agg canvas (never
+pyplot's global backend); every figure is written atomically.
+"""
+
+from __future__ import annotations
+
+import os
+from collections.abc import Mapping, Sequence
+from typing import TYPE_CHECKING, Any
+
+import numpy as np
+
+from contactcal.infer.bench.scoring import ScoredFrame
+from contactcal.infer.files.atomic import atomic_path
+
+if TYPE_CHECKING:
+    from matplotlib.figure import Figure
+
+#: Smallest error drawn on the log axes (an exact area shows here instead of vanishing).
+FLOOR_PCT, FLOOR_MM2 = 0.01, 1e-3
+
+
+def _figure(width: float, height: float) -> Figure:
+    from matplotlib.backends.backend_agg import FigureCanvasAgg
+    from matplotlib.figure import Figure
+
+    fig = Figure(figsize=(width, height), dpi=110)
+    FigureCanvasAgg(fig)
+    return fig
+
+
+def _save(fig: Figure, path: str | os.PathLike[str]) -> None:
+    with atomic_path(path) as tmp:
+        fig.savefig(os.fspath(tmp), format="png")
+
+
+def error_quartiles(
+    frames: Sequence[ScoredFrame], method: str, mm2: bool
+) -> tuple[list[float], np.ndarray]:
+    """Per pressure (contact frames of one method): quartiles of |area error|.
+
+    Returns:
+        Pressures (kPa, ascending) and a ``(P, 3)`` array of the 25/50/75 % quantiles of the
+        absolute error, in % of the true area, or in mm² when ``mm2`` (frames with a pixel scale).
+    """
+    groups: dict[float, list[float]] = {}
+    for f in frames:
+        if f.method != method or not f.true_contact or (mm2 and not f.mm_per_px):
+            continue
+        err = abs(f.area_px - f.true_area_px) * f.mm_per_px**2 if mm2 else 100 * abs(f.rel_error)
+        groups.setdefault(round(f.pressure_kpa, 3), []).append(err)
+    ps = sorted(groups)
+    q = np.array([np.percentile(groups[p], (25, 50, 75)) for p in ps]).reshape(-1, 3)
+    return ps, q
+
+
+def plot_error_vs_pressure(path: str | os.PathLike[str], frames: Sequence[ScoredFrame]) -> None:
+    """|Relative| and |absolute| area error vs pressure per method: median and interquartile
+    band over the sessions, on log axes so that methods orders of magnitude apart both read."""
+    fig = _figure(11, 4.2)
+    axes = fig.subplots(1, 2)
+    panels = (
+        (False, FLOOR_PCT, "|relative area error| (%)"),
+        (True, FLOOR_MM2, "|area error| (mm²)"),
+    )
+    for i, method in enumerate(sorted({f.method for f in frames})):
+        colour = f"C{i}"
+        for ax, (mm2, floor, _) in zip(axes, panels, strict=True):
+            ps, q = error_quartiles(frames, method, mm2)
+            if not ps:
+                continue
+            q = np.maximum(q, floor)
+            ax.fill_between(ps, q[:, 0], q[:, 2], color=colour, alpha=0.2, lw=0)
+            ax.plot(ps, q[:, 1], color=colour, marker="o", ms=3, label=method)
+    for ax, (_, _, label) in zip(axes, panels, strict=True):
+        ax.set_yscale("log")
+        ax.set_xlabel("pressure (kPa)")
+        ax.set_ylabel(f"{label}: median, IQR band")
+        ax.grid(alpha=0.3, which="both")
+        if ax.get_legend_handles_labels()[0]:
+            ax.legend(fontsize=8)
+    axes[0].set_title(f"contact frames; exact areas drawn at {FLOOR_PCT:g} %", fontsize=9)
+    axes[1].set_title(f"exact areas drawn at {FLOOR_MM2:g} mm²", fontsize=9)
+    fig.tight_layout()
+    _save(fig, path)
+
+
+def pareto_points(
+    bins: Sequence[Mapping[str, Any]], timing: Sequence[Mapping[str, Any]]
+) -> list[tuple[str, float, float, float]]:
+    """``(label, ms decoded, ms incl. JPEG decode, error %)`` per timed configuration.
+
+    The error is the method's median |relative error| in the bin starting at 5 kPa; configurations
+    without it (or without an end-to-end time) are left out.
+    """
+    err = {b["method"]: b["median_abs_rel_error"] for b in bins if b["bin_kpa"].startswith("5-")}
+    out = []
+    for t in timing:
+        base = t["config"].split("+")[0].split("@")[0].split(" ")[0]
+        e = err.get(base)
+        if e is None or t.get("ms_end_to_end_jpg") is None:
+            continue
+        label = f"{t['config']}, {t['threads']} thread{'s' if t['threads'] > 1 else ''}"
+        out.append((label, t["ms_compute"], t["ms_end_to_end_jpg"], 100 * max(e, 1e-6)))
+    return out
+
+
+def plot_pareto(
+    path: str | os.PathLike[str],
+    bins: Sequence[Mapping[str, Any]],
+    timing: Sequence[Mapping[str, Any]],
+    size: tuple[int, int] = (2592, 1944),
+) -> None:
+    """Speed vs error: one colour per configuration (legend), circle = decoded frame, square =
+    including the JPEG decode, joined by a line; no in-plot text, so nothing overlaps."""
+    from matplotlib.lines import Line2D
+
+    fig = _figure(8.5, 4.5)
+    ax = fig.add_subplot()
+    points = pareto_points(bins, timing)
+    handles = []
+    for i, (label, ms, ms_jpg, err) in enumerate(points):
+        colour = f"C{i % 10}"
+        ax.plot([ms, ms_jpg], [err, err], color=colour, lw=1, alpha=0.6)
+        ax.scatter([ms], [err], marker="o", color=colour, zorder=3)
+        ax.scatter([ms_jpg], [err], marker="s", color=colour, zorder=3)
+        handles.append(Line2D([], [], color=colour, marker="o", lw=0, label=label))
+    handles += [
+        Line2D([], [], color="0.3", marker="o", lw=0, label="decoded frame"),
+        Line2D([], [], color="0.3", marker="s", lw=0, label="incl. JPEG decode"),
+    ]
+    ax.set_xscale("log")
+    ax.set_yscale("log")
+    ax.set_xlabel(f"median ms/frame at {size[0]}×{size[1]}")
+    ax.set_ylabel("median |relative area error| at 5-10 kPa (%)")
+    ax.grid(alpha=0.3, which="both")
+    ax.legend(handles=handles, fontsize=8, loc="upper left", bbox_to_anchor=(1.02, 1.0))
+    fig.tight_layout()
+    _save(fig, path)

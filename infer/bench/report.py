@@ -1,0 +1,173 @@
+"""Tables, ``results.json``, figures and ``report.md`` of ``contactcal bench``."""
+
+from __future__ import annotations
+
+import os
+from collections.abc import Mapping, Sequence
+from pathlib import Path
+from typing import Any
+
+from contactcal.infer.bench.plots import plot_error_vs_pressure, plot_pareto
+from contactcal.infer.bench.scoring import ScoredFrame, bin_table, median_or_none
+from contactcal.infer.files.atomic import write_json, write_text
+
+#: Markdown table columns: (key, header, shown as %).
+Columns = Sequence[tuple[str, str, bool]]
+
+BIN_COLUMNS: Columns = (
+    ("method", "method", False),
+    ("bin_kpa", "kPa", False),
+    ("contact_frames", "frames", False),
+    ("median_abs_rel_error", "median abs. rel. error", True),
+    ("mean_rel_error", "mean rel err", True),
+    ("sd_rel_error", "sd", True),
+    ("median_abs_error_mm2", "median abs. error mm²", False),
+    ("contact_recall", "contact recall", True),
+    ("no_contact_accuracy", "no-contact acc.", True),
+)
+TIMING_COLUMNS: Columns = (
+    ("config", "configuration", False),
+    ("threads", "threads", False),
+    ("ms_compute", "ms/frame (decoded)", False),
+    ("ms_end_to_end_jpg", "ms/frame incl. JPEG decode", False),
+    ("ms_end_to_end_png", "ms/frame incl. PNG decode", False),
+)
+ONSET_COLUMNS: Columns = (
+    ("method", "method", False),
+    ("median_abs", "median abs. error kPa", False),
+    ("max_abs", "max abs. error kPa", False),
+)
+HARD_COLUMNS: Columns = (
+    ("method", "method", False),
+    ("sessions", "sessions", False),
+    ("n", "n", False),
+    ("median_abs_rel_error_ge5", "median abs. rel. error ≥5 kPa", True),
+    ("median_abs_rel_error_3to5", "median abs. rel. error 3-5 kPa", True),
+    ("no_contact_accuracy", "no-contact acc.", True),
+    ("median_abs_onset_error_kpa", "median abs. onset error kPa", False),
+    ("onset_missing", "no onset found", False),
+)
+
+
+def _no_contact_accuracy(frames: Sequence[ScoredFrame]) -> float | None:
+    none = [f for f in frames if not f.true_contact]
+    return sum(not f.contact for f in none) / len(none) if none else None
+
+
+def hard_table(
+    frames: Sequence[ScoredFrame], onset: Sequence[Mapping[str, Any]]
+) -> list[dict[str, Any]]:
+    """Per method: normal vs hard sessions (exposure, off-centre, faint ridges, dim LEDs)."""
+    out = []
+    for method in sorted({f.method for f in frames}):
+        for hard in (False, True):
+            fs = [f for f in frames if f.method == method and f.hard == hard]
+            if not fs:
+                continue
+            cont = [f for f in fs if f.true_contact]
+            sess = {f.session for f in fs}
+            ons = [o for o in onset if o["method"] == method and o["session"] in sess]
+            out.append(
+                {
+                    "method": method,
+                    "sessions": "hard" if hard else "normal",
+                    "n": len(sess),
+                    "median_abs_rel_error_ge5": median_or_none(
+                        [abs(f.rel_error) for f in cont if f.pressure_kpa >= 5]
+                    ),
+                    "median_abs_rel_error_3to5": median_or_none(
+                        [abs(f.rel_error) for f in cont if 3 <= f.pressure_kpa < 5]
+                    ),
+                    "no_contact_accuracy": _no_contact_accuracy(fs),
+                    "median_abs_onset_error_kpa": median_or_none(
+                        [abs(o["error_kpa"]) for o in ons if o["error_kpa"] is not None]
+                    ),
+                    "onset_missing": sum(o["onset_kpa"] is None for o in ons),
+                }
+            )
+    return out
+
+
+def onset_table(onset: Sequence[Mapping[str, Any]]) -> list[dict[str, Any]]:
+    """Per method: median and max |onset error| (kPa) over the sessions where one was found."""
+    out = []
+    for method in sorted({o["method"] for o in onset}):
+        errs = [
+            abs(o["error_kpa"])
+            for o in onset
+            if o["method"] == method and o["error_kpa"] is not None
+        ]
+        out.append(
+            {
+                "method": method,
+                "median_abs": median_or_none(errs),
+                "max_abs": max(errs, default=None),
+            }
+        )
+    return out
+
+
+def _fmt(v: object, pct: bool = False) -> str:
+    if v is None:
+        return "–"
+    if isinstance(v, float):
+        return f"{100 * v:.1f} %" if pct else f"{v:.3g}"
+    return str(v)
+
+
+def md_table(rows: Sequence[Mapping[str, Any]], cols: Columns) -> str:
+    """A Markdown table of ``rows`` (missing keys show as "–")."""
+    head = "| " + " | ".join(c[1] for c in cols) + " |"
+    sep = "|" + "---|" * len(cols)
+    body = ["| " + " | ".join(_fmt(r.get(key), pct) for key, _, pct in cols) + " |" for r in rows]
+    return "\n".join([head, sep, *body])
+
+
+def report_text(results: Mapping[str, Any]) -> str:
+    """``report.md`` from the results (with their ``bins`` and ``hard`` tables)."""
+    cfg = results["config"]
+    w, h = cfg["full_size"]
+    sections = [
+        "# contactcal benchmark\n\n"
+        f"Data: `{results['data']}` — {results['sessions']} sessions, {results['frames']} frames.\n"
+        f"Model: `{results['model']}`. Areas are compared in input pixels with the exact masks; "
+        "relative\nerrors over frames with true contact. Timing: median of "
+        f"{cfg['repeats']} runs over\n{cfg['timing_frames']} frames upscaled to {w}×{h}, "
+        "in one process.",
+        "## Area error per pressure bin\n\n"
+        + md_table(results["bins"], BIN_COLUMNS)
+        + "\n\n![error vs pressure](error_vs_pressure.png)",
+        "## Speed\n\n"
+        + md_table(results["timing"], TIMING_COLUMNS)
+        + "\n\n![speed vs error](pareto.png)",
+        "## Contact onset (estimated from each method's frames vs the mechanics' onset)\n\n"
+        + md_table(onset_table(results["onset"]), ONSET_COLUMNS),
+        "## Hard cases\n\n" + md_table(results["hard"], HARD_COLUMNS),
+    ]
+    return "\n\n".join(sections) + "\n"
+
+
+def write_report(
+    out_dir: str | os.PathLike[str],
+    results: dict[str, Any],
+    frames: Sequence[ScoredFrame],
+    bins: Sequence[tuple[float, float]],
+) -> None:
+    """Add the ``bins`` and ``hard`` tables to ``results``; write ``results.json``, the figures
+    (``error_vs_pressure.png``, ``pareto.png``) and ``report.md`` into ``out_dir``, atomically.
+
+    Args:
+        out_dir: report folder (created if missing).
+        results: raw results of :func:`~contactcal.infer.bench.run.run_bench` (``records`` are
+            the ``frames`` as JSON, plus ``onset``, ``timing``, ``config`` and the header keys).
+        frames: the scored frames.
+        bins: pressure bins, kPa, ``[lo, hi)``.
+    """
+    out = Path(out_dir)
+    results["bins"] = bin_table(frames, bins)
+    results["hard"] = hard_table(frames, results["onset"])
+    write_json(out / "results.json", results)
+    plot_error_vs_pressure(out / "error_vs_pressure.png", frames)
+    size = tuple(results["config"]["full_size"])
+    plot_pareto(out / "pareto.png", results["bins"], results["timing"], (size[0], size[1]))
+    write_text(out / "report.md", report_text(results))

@@ -1,0 +1,105 @@
+"""Scoring a method against known truth, per frame and per pressure bin.
+
+One home for the per-frame record and the pressure-bin table used by ``contactcal bench`` and by
+validation during training (so a model is selected on the numbers the benchmark reports).
+"""
+
+from __future__ import annotations
+
+import statistics
+from collections.abc import Sequence
+from dataclasses import dataclass
+
+import numpy as np
+
+#: Pressure bins of every table, kPa, ``[lo, hi)``; the last bin includes 20 kPa.
+PRESSURE_BINS: tuple[tuple[float, float], ...] = (
+    (0.0, 3.0),
+    (3.0, 5.0),
+    (5.0, 10.0),
+    (10.0, 20.0001),
+)
+
+
+@dataclass(frozen=True)
+class ScoredFrame:
+    """A method's outcome on one frame whose truth is known. Areas in input pixels."""
+
+    method: str  # e.g. "unet", "classical", "unet (soft area)"
+    session: str  # session key (frames of one session share a reference)
+    frame: str  # frame file
+    pressure_kpa: float  # kPa
+    true_area_px: float  # px, exact mask area (0 without contact)
+    area_px: float  # px, the method's area (0.0 when it reports no contact)
+    contact: bool  # the method reports contact
+    iou: float | None = None  # against the mask, where computed
+    mm_per_px: float | None = None  # mm/px, for errors in mm²
+    onset_kpa: float | None = None  # kPa, the session's true onset
+    hard: bool = False  # the session was drawn from the hard ranges
+
+    @property
+    def true_contact(self) -> bool:
+        """Truth: the mask is not empty."""
+        return self.true_area_px > 0
+
+    @property
+    def rel_error(self) -> float:
+        """Signed relative area error ``(area - true) / true`` (contact frames only)."""
+        if not self.true_contact:
+            raise ValueError(f"{self.frame}: relative error is undefined without true contact")
+        return (self.area_px - self.true_area_px) / self.true_area_px
+
+
+def median_or_none(values: Sequence[float]) -> float | None:
+    """Median, or None for no values."""
+    return float(statistics.median(values)) if values else None
+
+
+def _fraction(flags: Sequence[bool]) -> float | None:
+    return sum(flags) / len(flags) if flags else None
+
+
+def bin_row(frames: Sequence[ScoredFrame]) -> dict[str, float | int | None]:
+    """Error summary of some frames (one method): None where a quantity has no frames.
+
+    Keys: ``frames``, ``contact_frames``, ``median_abs_rel_error``, ``mean_rel_error``,
+    ``sd_rel_error``, ``median_abs_error_mm2``, ``median_iou``, ``contact_recall``,
+    ``no_contact_frames``, ``no_contact_accuracy``.
+    """
+    cont = [f for f in frames if f.true_contact]
+    none = [f for f in frames if not f.true_contact]
+    rel = [f.rel_error for f in cont]
+    mm2 = [abs(f.area_px - f.true_area_px) * f.mm_per_px**2 for f in cont if f.mm_per_px]
+    ious = [f.iou for f in cont if f.iou is not None]
+    return {
+        "frames": len(frames),
+        "contact_frames": len(cont),
+        "median_abs_rel_error": median_or_none([abs(x) for x in rel]),
+        "mean_rel_error": float(np.mean(rel)) if rel else None,
+        "sd_rel_error": float(np.std(rel)) if rel else None,
+        "median_abs_error_mm2": median_or_none(mm2),
+        "median_iou": median_or_none(ious),
+        "contact_recall": _fraction([f.contact for f in cont]),
+        "no_contact_frames": len(none),
+        "no_contact_accuracy": _fraction([not f.contact for f in none]),
+    }
+
+
+def bin_label(lo: float, hi: float) -> str:
+    """``"5-10"`` for the bin ``[5, 10)`` kPa (20.0001 shows as 20)."""
+    return f"{lo:g}-{hi:.0f}"
+
+
+def bin_table(
+    frames: Sequence[ScoredFrame], bins: Sequence[tuple[float, float]] = PRESSURE_BINS
+) -> list[dict[str, object]]:
+    """Per method and pressure bin: :func:`bin_row` plus ``method`` and ``bin_kpa``.
+
+    Every (method, bin) pair gets a row, empty bins included (their values are None).
+    """
+    rows: list[dict[str, object]] = []
+    for method in sorted({f.method for f in frames}):
+        for lo, hi in bins:
+            sel = [f for f in frames if f.method == method and lo <= f.pressure_kpa < hi]
+            rows.append({"method": method, "bin_kpa": bin_label(lo, hi), **bin_row(sel)})
+    return rows

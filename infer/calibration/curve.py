@@ -1,0 +1,186 @@
+"""The calibration curve: fitted contact area vs pressure, evaluated and inverted (pure numpy).
+
+`Curve` evaluates the fit (`Curve.area_at`) and inverts it for the controller
+(`Curve.pressure_for_area`, `Curve.inverse_table`); :mod:`contactcal.infer.calibration.fit`
+makes it from a session's points.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+#: Area units of a curve: mm² with a pixel scale, else input pixels.
+MM2 = "mm²"
+PX = "px"
+AREA_UNITS = (MM2, PX)
+
+
+@dataclass(frozen=True, eq=False)
+class Curve:
+    """Fitted, non-decreasing contact area vs pressure.
+
+    Attributes:
+        pressures_kpa: ``(N,)`` float64, strictly increasing frame pressures, kPa.
+        fit_area: ``(N,)`` float64, non-decreasing fitted area at each pressure (area_unit).
+        onset_kpa: contact onset pressure, kPa (area is 0 below it), or None if no contact.
+        area_unit: ``"mm²"`` or ``"px"``.
+        table_step: default area step of `inverse_table` (area_unit), or None for automatic.
+        table_max_rows: row target of the automatic step.
+    """
+
+    pressures_kpa: np.ndarray
+    fit_area: np.ndarray
+    onset_kpa: float | None
+    area_unit: str = MM2
+    table_step: float | None = None
+    table_max_rows: int = 100
+
+    def __post_init__(self) -> None:
+        p = np.array(self.pressures_kpa, dtype=np.float64).reshape(-1)
+        f = np.array(self.fit_area, dtype=np.float64).reshape(-1)
+        if p.size != f.size or p.size == 0:
+            raise ValueError(f"Curve: expected equal, non-zero lengths, got {p.size} and {f.size}")
+        if not (np.all(np.isfinite(p)) and np.all(np.isfinite(f))):
+            raise ValueError("Curve: pressures and fitted areas must be finite")
+        if np.any(np.diff(p) <= 0):
+            raise ValueError("Curve: pressures_kpa must be strictly increasing")
+        if np.any(f < 0) or np.any(np.diff(f) < 0):
+            raise ValueError("Curve: fit_area must be >= 0 and non-decreasing")
+        if self.area_unit not in AREA_UNITS:
+            raise ValueError(
+                f"Curve: area_unit must be one of {AREA_UNITS}, got {self.area_unit!r}"
+            )
+        onset = self.onset_kpa
+        if onset is not None:
+            onset = float(onset)
+            if not math.isfinite(onset):
+                raise ValueError(f"Curve: onset_kpa must be finite or None, got {onset}")
+        p.setflags(write=False)
+        f.setflags(write=False)
+        object.__setattr__(self, "pressures_kpa", p)
+        object.__setattr__(self, "fit_area", f)
+        object.__setattr__(self, "onset_kpa", onset)
+
+    @property
+    def has_contact(self) -> bool:
+        """True when the curve can be inverted (an onset and a positive fitted area)."""
+        return self.onset_kpa is not None and float(self.fit_area[-1]) > 0
+
+    def knots(self) -> tuple[np.ndarray, np.ndarray]:
+        """Breakpoints ``(pressure kPa, area)`` of the piecewise-linear curve from the onset up.
+
+        Starts at ``(onset, 0)``, or at the first contact frame when the curve jumps there
+        (no frame without contact below it). Below the first knot the area is 0.
+        """
+        p, f = self.pressures_kpa, self.fit_area
+        if self.onset_kpa is None:
+            return p.copy(), f.copy()
+        on = self.onset_kpa
+        at = p == on
+        if np.any(at) and float(f[at][0]) > 0:
+            keep = p >= on
+            return p[keep], f[keep]
+        above = p > on
+        return np.concatenate([[on], p[above]]), np.concatenate([[0.0], f[above]])
+
+    def area_at(self, p_kpa: float) -> float:
+        """Fitted area (area_unit) at ``p_kpa``: 0 below the onset, linear between knots, held
+        at the last fitted value above the calibrated maximum pressure."""
+        q = float(p_kpa)
+        if not math.isfinite(q):
+            raise ValueError(f"area_at: expected a finite pressure in kPa, got {p_kpa}")
+        if self.onset_kpa is None:
+            return 0.0
+        x, y = self.knots()
+        if q < x[0]:
+            return 0.0
+        return float(np.interp(q, x, y))
+
+    def area_range(self) -> tuple[float, float]:
+        """``(min, max)`` invertible area (area_unit): ``min`` is 0 unless the curve jumps."""
+        _, y = self.knots()
+        return float(y[0]), float(y[-1])
+
+    def pressure_for_area(self, area: float) -> tuple[float, str | None]:
+        """Lowest pressure (kPa) at which the fit reaches ``area``, and a warning or None.
+
+        Linear interpolation on the fit; on a flat segment the lowest pressure of the segment
+        is returned. ``area == 0`` gives the onset. A target outside the calibrated range is
+        clamped to its end and the second element says so (e.g. ``"target 300 mm² above
+        calibrated maximum 250 mm² at 20 kPa; clamped"``).
+
+        Raises:
+            ValueError: non-finite or negative ``area``, or a curve without contact.
+        """
+        a = float(area)
+        if not math.isfinite(a) or a < 0:
+            raise ValueError(f"pressure_for_area: expected a finite area >= 0, got {area}")
+        if not self.has_contact:
+            raise ValueError("no contact in this calibration; cannot invert")
+        x, y = self.knots()
+        u = self.area_unit
+        if a > y[-1]:
+            k = int(np.searchsorted(y, y[-1], side="left"))
+            msg = (
+                f"target {a:.4g} {u} above calibrated maximum {y[-1]:.4g} {u} at "
+                f"{x[k]:.4g} kPa; clamped"
+            )
+            return float(x[k]), msg
+        if a <= y[0]:
+            if a < y[0]:
+                msg = (
+                    f"target {a:.4g} {u} below smallest calibrated area {y[0]:.4g} {u} at "
+                    f"{x[0]:.4g} kPa (no frame without contact below it); clamped"
+                )
+                return float(x[0]), msg
+            return float(x[0]), None
+        k = int(np.searchsorted(y, a, side="left"))  # y[k-1] < a <= y[k]
+        t = (a - y[k - 1]) / (y[k] - y[k - 1])
+        return float(x[k - 1] + t * (x[k] - x[k - 1])), None
+
+    def default_table_step(self) -> float:
+        """The inverse-table step used when none is given (area_unit)."""
+        if self.table_step is not None:
+            return float(self.table_step)
+        lo, hi = self.area_range()
+        return _nice_step((hi - lo) / self.table_max_rows)
+
+    def inverse_table(self, step: float | None = None) -> list[tuple[float, float]]:
+        """``[(area, pressure_kpa), ...]`` from the smallest to the largest calibrated area.
+
+        Rows at the smallest area, every multiple of ``step`` in between, and the largest area.
+
+        Args:
+            step: area step (area_unit) > 0; None uses `default_table_step`.
+
+        Raises:
+            ValueError: bad step, or a curve without contact.
+        """
+        if not self.has_contact:
+            raise ValueError("no contact in this calibration; cannot invert")
+        s = self.default_table_step() if step is None else float(step)
+        if not (math.isfinite(s) and s > 0):
+            raise ValueError(f"inverse_table: expected a finite step > 0, got {step}")
+        lo, hi = self.area_range()
+        first = math.floor(lo / s) + 1
+        last = math.ceil(hi / s) - 1
+        if last - first > 100_000:
+            raise ValueError(
+                f"inverse_table: step {s} gives more than 100000 rows; use a larger one"
+            )
+        areas = [lo, *(k * s for k in range(first, last + 1)), hi]
+        return [(float(a), self.pressure_for_area(a)[0]) for a in areas]
+
+
+def _nice_step(raw: float) -> float:
+    """Smallest 1-2-5 x 10^k number >= ``raw`` (1.0 for raw <= 0)."""
+    if not (raw > 0 and math.isfinite(raw)):
+        return 1.0
+    mag = 10.0 ** math.floor(math.log10(raw))
+    for m in (1.0, 2.0, 5.0, 10.0):
+        if m * mag >= raw * (1 - 1e-12):
+            return m * mag
+    return 10.0 * mag

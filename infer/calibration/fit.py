@@ -1,0 +1,132 @@
+"""Fitting a session's points: robust monotone fit and contact onset (pure numpy).
+
+Pipeline (`fit_monotone`): sort by pressure -> find the contact range from the per-frame contact
+flags (`estimate_onset` rule) -> isolated outliers among the contact frames' areas replaced by a
+running median (`despike`) -> isotonic (PAVA) fit -> area forced to 0 below the onset ->
+:class:`~contactcal.infer.calibration.curve.Curve`.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+from numpy.typing import ArrayLike
+
+from contactcal.infer.calibration.curve import MM2, Curve
+from contactcal.infer.calibration.isotonic import despike, isotonic_fit
+from contactcal.infer.calibration.onset import onset_index, refine_onset
+from contactcal.infer.calibration.points import prepare_points
+
+
+@dataclass(frozen=True)
+class CurveConfig:
+    """Settings of the area-vs-pressure fit."""
+
+    # frames, odd >= 1: running-median width before PAVA. 3 removes isolated outliers; 5 also
+    # pairs of them, but flattens genuine knees sharper than the window. 1 disables.
+    median_window: int = 3
+    # area unit (mm² or px) per inverse-table row; None = a 1-2-5 step giving <= table_max_rows
+    # rows. Finer only makes the table longer: the controller interpolates linearly anyway.
+    table_step: float | None = None
+    # rows: size target of the automatic inverse-table step (readability vs resolution).
+    table_max_rows: int = 100
+
+    def __post_init__(self) -> None:
+        if self.median_window < 1 or self.median_window % 2 == 0:
+            raise ValueError(
+                f"median_window: expected an odd integer >= 1, got {self.median_window}"
+            )
+        if self.table_step is not None and not (
+            math.isfinite(self.table_step) and self.table_step > 0
+        ):
+            raise ValueError(
+                f"table_step: expected a finite value > 0 or None, got {self.table_step}"
+            )
+        if self.table_max_rows < 2:
+            raise ValueError(f"table_max_rows: expected >= 2, got {self.table_max_rows}")
+
+
+def estimate_onset(
+    pressures_kpa: ArrayLike,
+    areas: ArrayLike,
+    contact: ArrayLike | None = None,
+    config: CurveConfig | None = None,
+) -> float | None:
+    """Contact onset pressure (kPa), or None when the frames show no contact.
+
+    Rule: the frames sorted by pressure are split at index ``s`` minimising (contact frames
+    below ``s``) + (no-contact frames at or above ``s``); ties go to the highest ``s`` below
+    ``N``. So frame ``s`` is in contact and frame ``s - 1`` is not; every run of frames
+    starting at ``s`` and ending below the top has a strict majority of contacts (at least
+    half over the whole range), so an isolated miss inside the contact range does not reset
+    it; every run ending at ``s - 1`` has at least as many misses as contacts, so an isolated
+    false contact at low pressure does not count (nor does a lone contact followed by a miss
+    just below the contact range). ``s == N`` (no contact range) gives None, also when the
+    only contact flags are such false positives.
+
+    Refinement: the line through the fitted areas of the first two contact frames of the
+    range is extrapolated to zero area, clamped to ``[pressure at s - 1, pressure at s]``.
+    With no frame below ``s`` the onset is the lowest pressure (not calibrated below it);
+    without a usable slope, the midpoint of the interval. On a convex start (area growing
+    faster than linearly) the extrapolation is biased towards the first contact frame: for
+    ``area ∝ (p - p0)²`` with ``p0`` on a frame it gives ``p0 + 2/3`` of a step.
+
+    Args:
+        pressures_kpa: ``(N,)`` frame pressures, kPa, any order, distinct.
+        areas: ``(N,)`` contact areas >= 0 (mm² or px).
+        contact: ``(N,)`` bool per frame; None means ``areas > 0``.
+        config: fit settings (the refinement uses the fitted curve).
+    """
+    return fit_monotone(pressures_kpa, areas, contact, config).onset_kpa
+
+
+def fit_monotone(
+    pressures_kpa: ArrayLike,
+    areas: ArrayLike,
+    contact: ArrayLike | None = None,
+    config: CurveConfig | None = None,
+    *,
+    area_unit: str = MM2,
+) -> Curve:
+    """Robust non-decreasing fit of contact area vs pressure.
+
+    Why a running median before PAVA: PAVA alone averages an outlier spike with the points
+    after it, lifting those neighbours (and a false dip drags earlier points down). The
+    median of three consecutive points is the identity on monotone data, so a genuine curve
+    is not biased, while an isolated spike or dip is replaced by a neighbour first (`despike`:
+    worst point first, so the spike's neighbours keep their values); PAVA then removes the
+    remaining small non-monotone noise in the least-squares sense.
+
+    Steps: sort by pressure; contact range by the `estimate_onset` rule; the contact frames in
+    that range are despiked (``config.median_window``) and fitted with PAVA; misses inside the
+    range are interpolated from the fit; areas below the onset are 0.
+
+    Args:
+        pressures_kpa: ``(N,)`` frame pressures, kPa, any order, distinct, N >= 2.
+        areas: ``(N,)`` measured areas >= 0, same order (mm² or px).
+        contact: ``(N,)`` bool per frame, same order; None means ``areas > 0``.
+        config: fit settings; None uses the defaults.
+        area_unit: unit of ``areas``, stored in the curve (``"mm²"`` or ``"px"``).
+
+    Returns:
+        The `Curve` (flat zero with ``onset_kpa=None`` if no frame is in contact: the caller
+        decides whether that is an error).
+
+    Raises:
+        ValueError: mismatched lengths, fewer than 2 frames, duplicate or non-finite
+            pressures, NaN/inf/negative areas.
+    """
+    cfg = config or CurveConfig()
+    p, a, c = prepare_points(pressures_kpa, areas, contact)
+    fit = np.zeros_like(a)
+    s = onset_index(c)
+    onset: float | None = None
+    if s is not None:
+        idx = np.flatnonzero(c[s:]) + s
+        smooth = despike(a[idx], cfg.median_window)
+        iso = isotonic_fit(p[idx], smooth)
+        fit[s:] = np.interp(p[s:], p[idx], iso)
+        onset = refine_onset(p, fit, idx)
+    return Curve(p, fit, onset, area_unit, cfg.table_step, cfg.table_max_rows)

@@ -1,0 +1,56 @@
+"""Any image array → the canonical ``(H, W) uint8`` grayscale form (the published routine's).
+
+Colour is converted with OpenCV's ITU-R BT.601 luma, alpha is dropped, 16-bit samples are scaled
+by 255/65535 with rounding, float arrays are taken as ``[0, 1]`` intensities.
+"""
+
+from __future__ import annotations
+
+import cv2
+import numpy as np
+
+
+class ImageError(ValueError):
+    """An image file or array that cannot be used; the message names the file."""
+
+
+def to_gray_u8(image: np.ndarray, name: str = "<array>", bgr: bool = False) -> np.ndarray:
+    """Convert an array to the canonical ``(H, W) uint8`` grayscale form.
+
+    Args:
+        image: ``(H, W)``, ``(H, W, 1)``, ``(H, W, 3)`` or ``(H, W, 4)`` array of dtype uint8,
+            uint16 (scaled to 8 bits), bool, or float (intensities in ``[0, 1]``, clipped;
+            NaN/inf rejected).
+        name: how to refer to the input in error messages (usually its file name).
+        bgr: channel order is OpenCV's BGR(A) (files) rather than RGB(A) (arrays).
+
+    Returns:
+        ``(H, W) uint8`` contiguous array.
+
+    Raises:
+        ImageError: wrong shape or dtype, empty, or non-finite values.
+    """
+    if not isinstance(image, np.ndarray):
+        raise ImageError(f"{name}: expected a numpy array, got {type(image).__name__}")
+    if image.ndim == 3 and image.shape[2] == 1:
+        image = image[:, :, 0]
+    if image.ndim not in (2, 3) or (image.ndim == 3 and image.shape[2] not in (3, 4)):
+        raise ImageError(f"{name}: expected (H, W), (H, W, 3) or (H, W, 4), got {image.shape}")
+    if image.shape[0] < 1 or image.shape[1] < 1:
+        raise ImageError(f"{name}: empty image of shape {image.shape}")
+    if image.dtype == np.bool_:
+        image = image.astype(np.uint8) * 255
+    elif image.dtype == np.uint16:
+        image = np.rint(image.astype(np.float32) * (255.0 / 65535.0)).astype(np.uint8)
+    elif np.issubdtype(image.dtype, np.floating):
+        if not np.all(np.isfinite(image)):
+            raise ImageError(f"{name}: float image contains NaN or inf; expected finite values")
+        image = np.rint(np.clip(image, 0.0, 1.0) * 255.0).astype(np.uint8)
+    elif image.dtype != np.uint8:
+        raise ImageError(f"{name}: expected uint8, uint16, bool or float, got {image.dtype}")
+    if image.ndim == 3:
+        if image.shape[2] == 4:
+            image = image[:, :, :3]
+        code = cv2.COLOR_BGR2GRAY if bgr else cv2.COLOR_RGB2GRAY
+        image = cv2.cvtColor(np.ascontiguousarray(image), code)
+    return np.ascontiguousarray(image)

@@ -1,0 +1,60 @@
+"""What every contact-area method provides, so the pipeline and the benchmark treat them alike.
+
+A method is started once per session (it reads the session's zero-pressure frame and says at
+which JPEG decode reduction the frames are to be loaded), then measures frames. Areas and
+outlines are always in pixels of the input FILE, whatever reduction the method chose.
+"""
+
+from __future__ import annotations
+
+import os
+from collections.abc import Sequence
+from dataclasses import dataclass, replace
+from pathlib import Path
+from typing import Protocol
+
+import numpy as np
+
+from contactcal.infer.image.read import load_image
+
+
+@dataclass(frozen=True)
+class AreaResult:
+    """One frame's outcome."""
+
+    contact: bool
+    area_px: float  # in pixels of the input file; 0.0 when no contact
+    note: str  # "" or why there is no contact
+    contour: np.ndarray | None  # (N, 1, 2) int32 outline in input pixels, for overlays
+    soft_area_px: float | None = None  # U-Net: sum of probabilities over the region (sub-pixel)
+
+    def upscaled(self, k: int) -> AreaResult:
+        """The same result for an image ``k`` times larger per side (areas × k²)."""
+        if k == 1:
+            return self
+        soft = None if self.soft_area_px is None else self.soft_area_px * k * k
+        contour = None if self.contour is None else self.contour * k
+        return replace(self, area_px=self.area_px * k * k, contour=contour, soft_area_px=soft)
+
+
+class Method(Protocol):
+    """What every contact-area method provides."""
+
+    name: str
+
+    def start(self, files: Sequence[Path], reference: Path | None) -> int:
+        """Begin a session of image files: read the reference, return the decode reduction k.
+
+        The frames are then to be loaded with ``load_image(path, reduce=k)``.
+        """
+
+    def set_reference(self, reference: np.ndarray | None, reduction: int = 1) -> None:
+        """Use the session's reference frame ``(H, W) uint8`` (or None), decoded at 1/reduction."""
+
+    def measure(self, image: np.ndarray) -> AreaResult:
+        """Measure one ``(H, W) uint8`` frame; areas in pixels of the undecimated file."""
+
+
+def load_reference(path: str | os.PathLike[str] | None, reduction: int = 1) -> np.ndarray | None:
+    """The session's reference frame decoded at 1/reduction, or None."""
+    return None if path is None else load_image(path, reduce=reduction)

@@ -1,0 +1,44 @@
+"""The U-Net's preprocessing configuration: ring search, crop, resize and normalisation."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+
+@dataclass(frozen=True)
+class PreprocessConfig:
+    """Crop, resize and normalisation of a frame into the network input."""
+
+    input_size: int = 256  # px, network input side; finer ridges vs ~quadratic time
+    crop_factor: float = 2.2  # × outer-ring radius = crop side; 2.0 is the ring's diameter,
+    #   the margin keeps the whole ring (context + scale cue) in view; larger wastes resolution
+    norm_percentile: float = 99.5  # %, brightness reference P; lower is less sparkle-sensitive
+    #   but saturates larger bright areas (big contacts)
+    norm_mean: float = 0.25  # fixed offset after dividing by P (typical mean of u); no effect
+    #   on the optimum, only on conditioning
+    norm_std: float = 0.25  # fixed scale after dividing by P (typical spread of u); idem
+    ring_threshold_fraction: float = 0.5  # of the ring search's bright percentile; lower merges
+    #   the ring with the background glow, higher breaks a dim ring into pieces
+    ring_percentile: float = 99.5  # %, bright level the ring threshold is relative to
+    ring_min_contrast: float = 2.0  # bright percentile / median needed to accept a ring;
+    #   lower accepts noise as a ring, higher rejects dim rigs
+    ring_min_radius_fraction: float = 0.2  # of min(H, W); smaller circles are not the ring
+    ring_max_residual_fraction: float = 0.08  # RMS circle-fit residual / radius; higher accepts
+    #   ellipses and blobs, lower rejects slightly broken rings
+    ring_work_px: int = 512  # px, longest side the ring search works at; smaller is faster, coarser
+    fallback_radius_fraction: float = 0.45  # of min(H, W), ring radius assumed when none is found
+
+    def __post_init__(self) -> None:
+        if self.input_size < 8:
+            raise ValueError(f"input_size must be >= 8 px, got {self.input_size}")
+        if not self.crop_factor > 0.0:
+            raise ValueError(f"crop_factor must be > 0, got {self.crop_factor}")
+        for name in ("norm_percentile", "ring_percentile"):
+            if not 0.0 < getattr(self, name) <= 100.0:
+                raise ValueError(f"{name} must be in (0, 100], got {getattr(self, name)}")
+        if not self.norm_std > 0.0:
+            raise ValueError(f"norm_std must be > 0, got {self.norm_std}")
+        if not 0.0 < self.ring_threshold_fraction < 1.0:
+            raise ValueError(
+                f"ring_threshold_fraction not in (0, 1): {self.ring_threshold_fraction}"
+            )

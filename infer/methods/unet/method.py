@@ -1,0 +1,93 @@
+"""The learned segmenter as a :class:`~contactcal.infer.methods.base.Method`.
+
+It chooses its own JPEG decode: the U-Net resizes a crop around the window ring to its input size
+anyway, so decoding at 1/k (libjpeg's DCT scaling, several times cheaper) changes nothing as long
+as the crop stays at least the network's input size.
+"""
+
+from __future__ import annotations
+
+import os
+from collections.abc import Sequence
+from pathlib import Path
+
+import cv2
+import numpy as np
+
+from contactcal.infer.image.jpeg import jpeg_size
+from contactcal.infer.image.read import load_image
+from contactcal.infer.methods.base import AreaResult, load_reference
+from contactcal.infer.methods.unet.postprocess import mask_in_input
+from contactcal.infer.methods.unet.prepare import session_reference
+from contactcal.infer.methods.unet.runner import OnnxSegmenter
+
+#: JPEG decode reductions tried, cheapest first.
+REDUCTIONS = (8, 4, 2)
+
+
+class UnetMethod:
+    """The ONNX U-Net (:class:`~contactcal.infer.methods.unet.runner.OnnxSegmenter`).
+
+    Args:
+        model: ONNX file (None → the shipped model).
+        threads: onnxruntime intra-op threads.
+        outline: map the mask back to input pixels for an outline (overlays; costs a full-size
+            warp per frame).
+    """
+
+    name = "unet"
+
+    def __init__(
+        self, model: str | os.PathLike[str] | None = None, threads: int = 1, outline: bool = False
+    ) -> None:
+        self.segmenter = OnnxSegmenter(model, threads=threads)
+        self.outline = outline
+        self.reference = session_reference(None)
+        self.reduction = 1
+
+    def start(self, files: Sequence[Path], reference: Path | None) -> int:
+        """Choose the decode reduction from the ring's size, then prepare the reference.
+
+        A reduction k > 1 is used only when every file is a JPEG of one size divisible by k (so
+        areas scale back exactly by k²) and the ring crop stays >= the network input at 1/k. The
+        ring is searched on the 1/8 decode; at k = 8 that search is the session's.
+        """
+        paths = [*files, *([reference] if reference is not None else [])]
+        if not paths or not all(p.suffix.lower() in (".jpg", ".jpeg") for p in paths):
+            self.set_reference(load_reference(reference))
+            return 1
+        sizes = {jpeg_size(p) for p in paths}
+        if len(sizes) != 1:
+            self.set_reference(load_reference(reference))
+            return 1
+        (h, w), cfg = sizes.pop(), self.segmenter.spec.preprocess
+        # paths[-1] is the reference when there is one.
+        coarse = session_reference(load_image(paths[-1], reduce=8), cfg)
+        k = 1
+        if coarse.box is not None:  # the ring was found
+            side = coarse.box.side * 8  # crop side in file pixels
+            fits = [k for k in REDUCTIONS if side / k >= cfg.input_size]
+            k = next((k for k in fits if h % k == 0 and w % k == 0), 1)
+        if k == 8 and reference is not None:
+            self.reference, self.reduction = coarse, 8
+        else:
+            self.set_reference(load_reference(reference, k), k)
+        return k
+
+    def set_reference(self, reference: np.ndarray | None, reduction: int = 1) -> None:
+        """Fix the crop and the reference channel from the session's zero-pressure frame."""
+        self.reference = session_reference(reference, self.segmenter.spec.preprocess)
+        self.reduction = reduction
+
+    def measure(self, image: np.ndarray) -> AreaResult:
+        """Segment; the contour is the kept region's outline in input pixels."""
+        seg = self.segmenter.segment(image, self.reference)
+        if not seg.contact:
+            return AreaResult(False, 0.0, "no contact", None)
+        contour = None
+        if self.outline:
+            mask = mask_in_input(seg, image.shape[:2]).astype(np.uint8)
+            contours, _ = cv2.findContours(mask, cv2.RETR_EXTERNAL, cv2.CHAIN_APPROX_SIMPLE)
+            contour = max(contours, key=cv2.contourArea) if contours else None
+        res = AreaResult(True, seg.area_px, "", contour, seg.soft_area_px)
+        return res.upscaled(self.reduction)

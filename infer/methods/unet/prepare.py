@@ -1,0 +1,255 @@
+"""Network preprocessing shared by training and deployment (numpy + OpenCV only).
+
+A frame is cropped to a square box centred on the bright outer (window/LGP) ring, resized to
+``input_size`` and normalised; the network's probabilities are mapped back to input pixels with
+the exact inverse of that crop/resize. Training (``contactcal.train.data``) and deployment use
+these same functions, so they cannot drift.
+
+Pixel convention: pixel ``(i, j)`` has its centre at ``x = j``, ``y = i`` (OpenCV's). The crop
+box covers input pixels ``x0 .. x0 + side - 1`` (columns) and ``y0 .. y0 + side - 1`` (rows);
+network pixel ``u`` has its centre at input ``x = x0 + (u + 0.5) · side / S - 0.5`` (the
+mapping ``cv2.resize`` uses).
+
+Normalisation: ``u = clip(crop / P, 0, 1)`` with ``P`` the ``norm_percentile``-th percentile of
+the crop's in-image pixels (exposure/gain invariance: the brightest structure, the outer ring,
+is in every crop), then ``x = (u - norm_mean) / norm_std`` with FIXED constants (not the
+image's own mean/std, which would depend on the contact size, i.e. on the signal).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import TypeVar
+
+import cv2
+import numpy as np
+
+from contactcal.infer.image.gray import to_gray_u8
+from contactcal.infer.methods.unet.config import PreprocessConfig
+from contactcal.infer.methods.unet.ring import RingFit, locate_ring
+
+T = TypeVar("T")
+
+
+@dataclass(frozen=True)
+class CropBox:
+    """Square crop in input pixels; may extend outside the image (padded with zeros)."""
+
+    x0: int  # px, first column
+    y0: int  # px, first row
+    side: int  # px
+
+    def scale(self, size: int) -> float:
+        """Input pixels per network pixel for a network input of ``size`` px."""
+        return self.side / size
+
+    def to_network_affine(self, size: int) -> np.ndarray:
+        """``(2, 3) float64`` affine mapping input pixel coordinates to network coordinates."""
+        k = size / self.side
+        return np.array(
+            [[k, 0.0, (0.5 - self.x0) * k - 0.5], [0.0, k, (0.5 - self.y0) * k - 0.5]], np.float64
+        )
+
+
+@dataclass(frozen=True)
+class SessionReference:
+    """A session's zero-pressure frame, preprocessed once for all of its frames."""
+
+    gray: np.ndarray | None  # (H, W) uint8 reference frame; None: no reference
+    ring: RingFit | None  # its ring (found or fallback); None without a reference
+    box: CropBox | None  # the session's crop; None: each frame uses its own ring
+    x: np.ndarray | None  # (S, S) float32 reference channel in ``box``; None when box is None
+
+
+@dataclass(frozen=True)
+class Prepared:
+    """A frame ready for the network."""
+
+    x: np.ndarray  # (C, S, S) float32; C = 1 (frame) or 2 (frame, reference)
+    box: CropBox
+    ring: RingFit
+
+
+def crop_box(
+    ring: RingFit, shape: tuple[int, ...], config: PreprocessConfig = PreprocessConfig()
+) -> CropBox:
+    """Square box of side ``crop_factor × ring.radius`` centred on the ring.
+
+    Args:
+        ring: outer ring (from :func:`locate_ring`).
+        shape: input image shape ``(H, W)``; the box must overlap the image.
+        config: ``crop_factor``.
+
+    Returns:
+        Integer box in input pixels (may extend outside the image).
+    """
+    h, w = int(shape[0]), int(shape[1])
+    side = max(2, round(config.crop_factor * ring.radius))
+    x0 = round(ring.cx - (side - 1) / 2.0)
+    y0 = round(ring.cy - (side - 1) / 2.0)
+    if x0 >= w or y0 >= h or x0 + side <= 0 or y0 + side <= 0:
+        raise ValueError(f"crop box {x0, y0, side} does not overlap the {w}×{h} image")
+    return CropBox(x0, y0, side)
+
+
+def crop_resize(image: np.ndarray, box: CropBox, size: int) -> np.ndarray:
+    """Crop ``box`` (zero padding outside the image) and resize to ``(size, size)``.
+
+    Args:
+        image: ``(H, W)`` uint8 or float32 array (frames, or a mask as 0/1 float).
+        box: crop in input pixels.
+        size: output side, px. INTER_AREA when shrinking (anti-aliasing), linear otherwise.
+
+    Returns:
+        ``(size, size) float32`` in the input's units.
+    """
+    h, w = image.shape[:2]
+    crop = np.zeros((box.side, box.side), np.float32)
+    xa, ya = max(box.x0, 0), max(box.y0, 0)
+    xb, yb = min(box.x0 + box.side, w), min(box.y0 + box.side, h)
+    if xb > xa and yb > ya:
+        crop[ya - box.y0 : yb - box.y0, xa - box.x0 : xb - box.x0] = image[ya:yb, xa:xb]
+    interp = cv2.INTER_AREA if box.side > size else cv2.INTER_LINEAR
+    return cv2.resize(crop, (size, size), interpolation=interp)
+
+
+def valid_window(box: CropBox, shape: tuple[int, int], size: int) -> tuple[slice, slice]:
+    """Network-pixel rows/cols whose centres fall inside the image."""
+    k = box.side / size
+    u = (np.arange(size) + 0.5) * k - 0.5
+    cols = np.flatnonzero((u + box.x0 >= -0.5) & (u + box.x0 <= shape[1] - 0.5))
+    rows = np.flatnonzero((u + box.y0 >= -0.5) & (u + box.y0 <= shape[0] - 0.5))
+    if cols.size == 0 or rows.size == 0:
+        return slice(0, size), slice(0, size)
+    return slice(rows[0], rows[-1] + 1), slice(cols[0], cols[-1] + 1)
+
+
+def unit_to_network(u: T, config: PreprocessConfig) -> T:
+    """``[0, 1]`` intensities → network values (numpy arrays or torch tensors alike)."""
+    return (u - config.norm_mean) / config.norm_std  # type: ignore[operator]
+
+
+def network_to_unit(x: T, config: PreprocessConfig) -> T:
+    """Inverse of :func:`unit_to_network` (used by training augmentation)."""
+    return x * config.norm_std + config.norm_mean  # type: ignore[operator]
+
+
+def to_network(
+    gray: np.ndarray, box: CropBox, config: PreprocessConfig = PreprocessConfig()
+) -> np.ndarray:
+    """Crop, resize and normalise one frame.
+
+    Args:
+        gray: ``(H, W) uint8`` frame.
+        box: crop (same box for a frame and its reference).
+        config: size and normalisation.
+
+    Returns:
+        ``(S, S) float32`` network input, ``S = config.input_size``.
+    """
+    gray = to_gray_u8(gray, name="to_network input")
+    s = config.input_size
+    crop = crop_resize(gray, box, s)
+    rows, cols = valid_window(box, gray.shape, s)
+    ref = float(np.percentile(crop[rows, cols], config.norm_percentile))
+    u = np.clip(crop / max(ref, 1.0), 0.0, 1.0)
+    return unit_to_network(u, config).astype(np.float32)
+
+
+def from_network(prob: np.ndarray, box: CropBox, out_shape: tuple[int, ...]) -> np.ndarray:
+    """Map a network-space map back to input pixels (exact inverse affine, bilinear).
+
+    Args:
+        prob: ``(S, S) float32`` probabilities (or logits) in network pixels.
+        box: the crop used for the input.
+        out_shape: input image shape ``(H, W)``.
+
+    Returns:
+        ``(H, W) float32``; 0 outside the crop.
+    """
+    prob = np.asarray(prob)
+    if prob.ndim != 2 or prob.shape[0] != prob.shape[1]:
+        raise ValueError(f"from_network: expected a square (S, S) map, got shape {prob.shape}")
+    if not np.all(np.isfinite(prob)):
+        raise ValueError("from_network: map contains NaN or inf")
+    m = box.to_network_affine(prob.shape[0])  # input → network = dst → src for warpAffine
+    h, w = int(out_shape[0]), int(out_shape[1])
+    return cv2.warpAffine(
+        prob.astype(np.float32),
+        m,
+        (w, h),
+        flags=cv2.INTER_LINEAR | cv2.WARP_INVERSE_MAP,
+        borderMode=cv2.BORDER_CONSTANT,
+        borderValue=0.0,
+    )
+
+
+def session_reference(
+    reference: np.ndarray | None, config: PreprocessConfig = PreprocessConfig()
+) -> SessionReference:
+    """What a session's zero-pressure frame fixes for all of its frames (computed once).
+
+    Args:
+        reference: ``(H, W) uint8`` zero-pressure frame, or None (each frame then finds its own
+            ring, and a 2-channel model gets the frame itself as its reference channel).
+        config: preprocessing.
+
+    Returns:
+        The reference's ring and, when the ring was found, the session's crop and reference
+        channel.
+
+    Raises:
+        ValueError: not an image.
+    """
+    if reference is None:
+        return SessionReference(None, None, None, None)
+    gray = to_gray_u8(reference, name="reference frame")
+    ring = locate_ring(gray, config)
+    if not ring.found:
+        return SessionReference(gray, ring, None, None)
+    box = crop_box(ring, gray.shape, config)
+    return SessionReference(gray, ring, box, to_network(gray, box, config))
+
+
+def prepare(
+    gray: np.ndarray,
+    reference: SessionReference,
+    config: PreprocessConfig,
+    channels: int,
+) -> Prepared:
+    """Full preprocessing of one frame: the one path of training, validation and deployment.
+
+    The crop comes from the reference's ring (fixed in a session; the reference has no contact
+    to confuse the search). When the reference has no ring, or there is no reference, the
+    frame's own ring is used (and if the frame has none either, the reference's fallback box).
+
+    Args:
+        gray: ``(H, W) uint8`` frame.
+        reference: from :func:`session_reference` (same image size as ``gray``).
+        config: preprocessing.
+        channels: 1 (frame) or 2 (frame, reference; without a reference frame, the frame itself).
+
+    Returns:
+        :class:`Prepared` with ``x`` of shape ``(channels, S, S)``.
+
+    Raises:
+        ValueError: bad image, or a reference of a different size than the frame.
+    """
+    gray = to_gray_u8(gray, name="frame")
+    if reference.gray is not None and reference.gray.shape != gray.shape:
+        raise ValueError(
+            f"reference frame size {reference.gray.shape[1]}×{reference.gray.shape[0]} differs "
+            f"from the frame size {gray.shape[1]}×{gray.shape[0]}"
+        )
+    box, ring, ref_x = reference.box, reference.ring, reference.x
+    if box is None or ring is None:
+        own = locate_ring(gray, config)
+        ring = own if own.found or ring is None else ring
+        box = crop_box(ring, gray.shape, config)
+    x = to_network(gray, box, config)
+    chans = [x]
+    if channels == 2:
+        if ref_x is None:
+            ref_x = x if reference.gray is None else to_network(reference.gray, box, config)
+        chans.append(ref_x)
+    return Prepared(np.stack(chans), box, ring)

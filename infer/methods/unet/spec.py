@@ -1,0 +1,110 @@
+"""The deployment spec of an exported U-Net, built strictly from the model's metadata.
+
+``contactcal export`` writes the metadata (``metadata_props``, all strings); deployment reads it
+here and nowhere else. Every key is known: a missing or unknown key is an error naming the key
+(like timm's ``resolve_data_config``), so a model exported by another version cannot be run with
+a silently different preprocessing.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import json
+import math
+from collections.abc import Mapping
+from dataclasses import dataclass
+from pathlib import Path
+
+from contactcal.infer.methods.unet.config import PreprocessConfig
+
+
+class ModelError(ValueError):
+    """A model file that cannot be used; the message names the file."""
+
+
+#: Metadata keys that define the pre- and post-processing (all required).
+SPEC_KEYS = ("channels", "preprocess", "threshold", "min_contact_area_px", "output")
+#: Metadata keys that describe the model's provenance (all required; recorded, not interpreted).
+PROVENANCE_KEYS = (
+    "data_digest",
+    "contactcal_version",
+    "created",
+    "train_config",
+    "best_epoch",
+    "val_metrics",
+)
+
+
+@dataclass(frozen=True)
+class ModelSpec:
+    """What the model's metadata says about its input and output."""
+
+    channels: int  # 1 = frame only, 2 = frame + the session's zero-pressure frame
+    preprocess: PreprocessConfig  # crop, input size and normalisation used in training
+    threshold: float  # probability above which a network pixel is contact
+    min_contact_area_px: float  # network pixels; smaller predicted regions are "no contact"
+
+    def __post_init__(self) -> None:
+        if self.channels not in (1, 2):
+            raise ValueError(f"channels must be 1 or 2, got {self.channels}")
+        if not 0.0 < self.threshold < 1.0:
+            raise ValueError(f"threshold must be in (0, 1), got {self.threshold}")
+        if not (math.isfinite(self.min_contact_area_px) and self.min_contact_area_px >= 0.0):
+            raise ValueError(
+                f"min_contact_area_px must be finite and >= 0, got {self.min_contact_area_px}"
+            )
+
+    def to_metadata(self) -> dict[str, str]:
+        """The :data:`SPEC_KEYS` part of the metadata (what ``contactcal export`` writes)."""
+        return {
+            "channels": str(self.channels),
+            "preprocess": json.dumps(dataclasses.asdict(self.preprocess)),
+            "threshold": repr(self.threshold),
+            "min_contact_area_px": repr(self.min_contact_area_px),
+            "output": "logits",
+        }
+
+
+def _preprocess(text: str) -> PreprocessConfig:
+    values = json.loads(text)
+    if not isinstance(values, dict):
+        raise ValueError("preprocess: expected a JSON object")
+    names = {f.name for f in dataclasses.fields(PreprocessConfig)}
+    unknown, missing = sorted(set(values) - names), sorted(names - set(values))
+    if unknown or missing:
+        raise ValueError(f"preprocess: unknown key(s) {unknown}, missing key(s) {missing}")
+    return PreprocessConfig(**values)
+
+
+def read_spec(meta: Mapping[str, str], path: str | Path) -> ModelSpec:
+    """Build the deployment spec from a model's metadata; every key must be known.
+
+    Args:
+        meta: the ONNX model's ``metadata_props`` (key → string).
+        path: the model file, for messages.
+
+    Returns:
+        The spec.
+
+    Raises:
+        ModelError: a missing, unknown or invalid key; the message names it and the file.
+    """
+    known = (*SPEC_KEYS, *PROVENANCE_KEYS)
+    missing = [k for k in known if k not in meta]
+    unknown = sorted(k for k in meta if k not in known)
+    fix = "re-export the model with this version's `contactcal export`"
+    if missing:
+        raise ModelError(f"{path}: model metadata lacks key(s) {', '.join(missing)}; {fix}")
+    if unknown:
+        raise ModelError(f"{path}: unknown model metadata key(s) {', '.join(unknown)}; {fix}")
+    if meta["output"] != "logits":
+        raise ModelError(f"{path}: metadata 'output' must be 'logits', got {meta['output']!r}")
+    try:
+        return ModelSpec(
+            channels=int(meta["channels"]),
+            preprocess=_preprocess(meta["preprocess"]),
+            threshold=float(meta["threshold"]),
+            min_contact_area_px=float(meta["min_contact_area_px"]),
+        )
+    except (ValueError, TypeError) as exc:
+        raise ModelError(f"{path}: invalid model metadata: {exc}; {fix}") from exc

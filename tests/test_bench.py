@@ -1,0 +1,224 @@
+"""``contactcal bench``: outputs, the tables against hand-computed values, bad folders, the CLI."""
+
+from __future__ import annotations
+
+import csv
+import functools
+import json
+from pathlib import Path
+from typing import Any
+
+import pytest
+from procedural import write_dataset
+
+from contactcal.infer.bench import config as bench_config
+from contactcal.infer.bench import run as bench_run
+from contactcal.infer.bench.accuracy import from_record, onset_errors, to_record
+from contactcal.infer.bench.config import BenchConfig
+from contactcal.infer.bench.plots import pareto_points
+from contactcal.infer.bench.report import hard_table, md_table, onset_table
+from contactcal.infer.bench.run import run_bench
+from contactcal.infer.bench.scoring import PRESSURE_BINS, ScoredFrame, bin_table
+from contactcal.infer.cli import main
+
+#: A benchmark small enough for a unit test (timing numbers are not checked).
+TINY = BenchConfig(repeats=1, timing_frames=1, full_size=(128, 96), threads=(1,))
+PNG_MAGIC = b"\x89PNG\r\n\x1a\n"
+
+
+@pytest.fixture(scope="module")
+def bench(tmp_path_factory: pytest.TempPathFactory) -> tuple[Path, Path, dict[str, Any]]:
+    """A tiny procedural dataset (4 sessions × 5 frames) benchmarked once for the module."""
+    root = tmp_path_factory.mktemp("bench")
+    data = write_dataset(root / "data")
+    out = root / "out"
+    return data, out, run_bench(data, out, config=TINY)
+
+
+def test_outputs_written(bench: tuple[Path, Path, dict[str, Any]]) -> None:
+    _, out, results = bench
+    names = {"report.md", "results.json", "error_vs_pressure.png", "pareto.png"}
+    assert {p.name for p in out.iterdir()} == names  # no temporary files left behind
+    for png in ("error_vs_pressure.png", "pareto.png"):
+        assert (out / png).read_bytes().startswith(PNG_MAGIC)
+    report = (out / "report.md").read_text(encoding="utf-8")
+    for heading in ("## Area error per pressure bin", "## Speed", "## Contact onset", "## Hard"):
+        assert heading in report
+    assert "](error_vs_pressure.png)" in report and "](pareto.png)" in report
+    assert json.loads((out / "results.json").read_text()) == json.loads(json.dumps(results))
+
+
+def test_results_keys(bench: tuple[Path, Path, dict[str, Any]]) -> None:
+    _, out, _ = bench
+    res = json.loads((out / "results.json").read_text())
+    assert {"data", "model", "sessions", "frames", "config", "records", "onset", "timing"} <= set(
+        res
+    )
+    assert {"bins", "hard"} <= set(res)
+    assert res["model"] == "shipped" and res["sessions"] == 4 and res["frames"] == 20
+    assert res["config"] == {"repeats": 1, "timing_frames": 1, "full_size": [128, 96]}
+    methods = {r["method"] for r in res["records"]}
+    assert methods == {"classical", "unet", "unet (soft area)"}
+    assert len(res["records"]) == 3 * 20
+    for r in res["records"]:
+        assert r["true_contact"] == (r["true_area_px"] > 0)
+        assert r["contact"] or r["area_px"] == 0.0
+    configs = [t["config"] for t in res["timing"]]
+    assert configs[:3] == ["classical", "classical@0.25", "unet"]
+    assert configs[-1] == "unet network only"
+    for t in res["timing"]:
+        assert t["ms_compute"] > 0 and "ms_end_to_end_jpg" in t and "ms_end_to_end_png" in t
+    # 3 methods × 4 sessions of onsets; hard sessions are the odd fingers (2 of 4).
+    assert len(res["onset"]) == 12
+    assert {(h["sessions"], h["n"]) for h in res["hard"]} == {("normal", 2), ("hard", 2)}
+
+
+def test_bins_recomputed_from_records(bench: tuple[Path, Path, dict[str, Any]]) -> None:
+    _, out, _ = bench
+    res = json.loads((out / "results.json").read_text())
+    frames = [from_record(r) for r in res["records"]]
+    assert [to_record(f) for f in frames] == res["records"]
+    assert json.loads(json.dumps(bin_table(frames, PRESSURE_BINS))) == res["bins"]
+    assert json.loads(json.dumps(onset_errors(frames))) == res["onset"]
+    # One bin by hand: median |relative error| of the U-Net's contact frames at 5-10 kPa.
+    rel = sorted(
+        abs(r["area_px"] - r["true_area_px"]) / r["true_area_px"]
+        for r in res["records"]
+        if r["method"] == "unet" and 5 <= r["pressure_kpa"] < 10 and r["true_area_px"] > 0
+    )
+    assert len(rel) == 4  # the 8 kPa frame of each finger
+    row = next(b for b in res["bins"] if b["method"] == "unet" and b["bin_kpa"] == "5-10")
+    assert row["contact_frames"] == 4
+    assert row["median_abs_rel_error"] == pytest.approx((rel[1] + rel[2]) / 2)
+    # Below 3 kPa no frame has contact: only the no-contact accuracy is defined.
+    low = next(b for b in res["bins"] if b["method"] == "classical" and b["bin_kpa"] == "0-3")
+    none = [r for r in res["records"] if r["method"] == "classical" and r["pressure_kpa"] < 3]
+    assert low["median_abs_rel_error"] is None and low["no_contact_frames"] == len(none) == 8
+    expected = sum(not r["contact"] for r in none) / 8
+    assert low["no_contact_accuracy"] == pytest.approx(expected)
+
+
+def _frame(p: float, true: float, area: float, session: str = "s0", **kw: Any) -> ScoredFrame:
+    return ScoredFrame(
+        method=kw.pop("method", "m"),
+        session=session,
+        frame=f"{session}/{p}.png",
+        pressure_kpa=p,
+        true_area_px=true,
+        area_px=area,
+        contact=area > 0,
+        mm_per_px=0.1,
+        onset_kpa=3.0,
+        **kw,
+    )
+
+
+def test_tables_by_hand() -> None:
+    frames = [
+        _frame(1.0, 0.0, 0.0),  # correct no-contact
+        _frame(2.0, 0.0, 30.0),  # false contact
+        _frame(6.0, 100.0, 110.0),  # +10 %
+        _frame(7.0, 200.0, 150.0),  # -25 %
+        _frame(8.0, 50.0, 0.0),  # missed: -100 %
+        _frame(12.0, 400.0, 404.0, session="s1", hard=True),  # +1 %, a hard session
+    ]
+    rows = {r["bin_kpa"]: r for r in bin_table(frames, PRESSURE_BINS)}
+    assert list(rows) == ["0-3", "3-5", "5-10", "10-20"]
+    assert rows["0-3"]["no_contact_frames"] == 2
+    assert rows["0-3"]["no_contact_accuracy"] == pytest.approx(0.5)
+    assert rows["0-3"]["median_abs_rel_error"] is None
+    assert rows["3-5"]["frames"] == 0 and rows["3-5"]["contact_recall"] is None
+    five = rows["5-10"]
+    assert five["contact_frames"] == 3
+    assert five["median_abs_rel_error"] == pytest.approx(0.25)
+    assert five["mean_rel_error"] == pytest.approx((0.1 - 0.25 - 1.0) / 3)
+    assert five["contact_recall"] == pytest.approx(2 / 3)
+    assert five["median_abs_error_mm2"] == pytest.approx(0.5)  # |10|, |50|, |50| px × 0.01 mm²
+    assert rows["10-20"]["median_abs_rel_error"] == pytest.approx(0.01)
+
+    onset = [
+        {"method": "m", "session": "s0", "onset_kpa": 5.0, "error_kpa": 2.0},
+        {"method": "m", "session": "s1", "onset_kpa": None, "error_kpa": None},
+    ]
+    hard = {h["sessions"]: h for h in hard_table(frames, onset)}
+    assert hard["normal"]["n"] == 1 and hard["hard"]["n"] == 1
+    assert hard["normal"]["median_abs_rel_error_ge5"] == pytest.approx(0.25)
+    assert hard["normal"]["median_abs_rel_error_3to5"] is None
+    assert hard["normal"]["no_contact_accuracy"] == pytest.approx(0.5)
+    assert hard["normal"]["median_abs_onset_error_kpa"] == pytest.approx(2.0)
+    assert hard["hard"]["median_abs_rel_error_ge5"] == pytest.approx(0.01)
+    assert hard["hard"]["onset_missing"] == 1
+    assert onset_table(onset) == [{"method": "m", "median_abs": 2.0, "max_abs": 2.0}]
+    table = md_table([five], [("bin_kpa", "kPa", False), ("median_abs_rel_error", "err", True)])
+    assert table.splitlines() == ["| kPa | err |", "|---|---|", "| 5-10 | 25.0 % |"]
+
+
+def test_onset_errors_by_hand() -> None:
+    # Contact from 4 kPa on, areas growing linearly from 3 kPa: the onset extrapolates to 3.
+    frames = [_frame(p, 10.0 * max(p - 3.0, 0.0), 10.0 * max(p - 3.0, 0.0)) for p in (2, 4, 5, 6)]
+    (row,) = onset_errors(frames)
+    assert row["onset_kpa"] == pytest.approx(3.0)
+    assert row["truth_masks_onset_kpa"] == pytest.approx(3.0)
+    assert row["mechanics_onset_kpa"] == 3.0 and row["error_kpa"] == pytest.approx(0.0)
+
+
+def test_pareto_points() -> None:
+    bins = [
+        {"method": "unet", "bin_kpa": "5-10", "median_abs_rel_error": 0.02},
+        {"method": "classical", "bin_kpa": "5-10", "median_abs_rel_error": 0.8},
+        {"method": "unet", "bin_kpa": "3-5", "median_abs_rel_error": 0.5},
+    ]
+    timing = [
+        {"config": "classical@0.25", "threads": 1, "ms_compute": 1.0, "ms_end_to_end_jpg": 9.0},
+        {
+            "config": "unet+reduced-decode 1/8",
+            "threads": 2,
+            "ms_compute": 6.0,
+            "ms_end_to_end_jpg": 12.0,
+        },
+        {"config": "unet network only", "threads": 1, "ms_compute": 6.0, "ms_end_to_end_jpg": None},
+    ]
+    assert pareto_points(bins, timing) == [
+        ("classical@0.25, 1 thread", 1.0, 9.0, pytest.approx(80.0)),
+        ("unet+reduced-decode 1/8, 2 threads", 6.0, 12.0, pytest.approx(2.0)),
+    ]
+
+
+def test_bad_dataset_folder(tmp_path: Path) -> None:
+    with pytest.raises(ValueError, match="index.csv"):
+        run_bench(tmp_path, tmp_path / "out", config=TINY)
+    data = write_dataset(tmp_path / "data", fingers=1)
+    index = data / "index.csv"
+    with open(index, newline="") as fh:
+        rows = list(csv.DictReader(fh))
+    with open(index, "w", newline="") as fh:
+        cols = [c for c in rows[0] if c != "mm_per_px"]
+        writer = csv.DictWriter(fh, fieldnames=cols, extrasaction="ignore")
+        writer.writeheader()
+        writer.writerows(rows)
+    with pytest.raises(ValueError, match="mm_per_px") as err:
+        run_bench(data, tmp_path / "out", config=TINY)
+    assert str(index) in str(err.value)
+    assert not (tmp_path / "out").exists()
+
+
+def test_cli(
+    bench: tuple[Path, Path, dict[str, Any]],
+    tmp_path: Path,
+    monkeypatch: pytest.MonkeyPatch,
+    capsys: pytest.CaptureFixture[str],
+) -> None:
+    data, _, _ = bench
+    # The CLI times at 2592×1944 with 1 and 2 threads; keep the test fast.
+    tiny = functools.partial(BenchConfig, full_size=TINY.full_size, threads=TINY.threads)
+    monkeypatch.setattr(bench_config, "BenchConfig", tiny)
+    monkeypatch.setattr(bench_run, "BenchConfig", tiny)
+    out = tmp_path / "report"
+    args = ["bench", "--data", str(data), "--out", str(out), "--repeats", "1"]
+    assert main([*args, "--timing-frames", "1"]) == 0
+    assert (out / "report.md").is_file() and (out / "results.json").is_file()
+    printed = capsys.readouterr().out
+    assert "unet" in printed and "report.md" in printed
+    assert main(["bench", "--data", str(tmp_path / "none"), "--out", str(out)]) == 2
+    assert "none" in capsys.readouterr().err
+    assert main([*args, "--timing-frames", "0"]) == 2

@@ -1,0 +1,78 @@
+"""A training run's settings (``TrainConfig``, written resolved to ``config.json``) and device."""
+
+from __future__ import annotations
+
+import dataclasses
+from dataclasses import dataclass, field
+
+import torch
+
+from contactcal.infer.methods.unet.config import PreprocessConfig
+from contactcal.infer.methods.unet.spec import ModelSpec
+from contactcal.train.augment import AugmentConfig
+from contactcal.train.model import UNetConfig
+
+
+@dataclass(frozen=True)
+class TrainConfig:
+    """Everything a run depends on (written resolved to ``config.json``)."""
+
+    epochs: int = 40  # passes over the training frames; more fits better, costs linear time
+    batch_size: int = 16  # frames per step; larger is smoother but fewer steps per epoch
+    lr: float = 3e-3  # peak learning rate of the one-cycle schedule; higher diverges
+    weight_decay: float = 1e-4  # AdamW decoupled decay; regularises the tiny model lightly
+    seed: int = 0  # split, weight init, shuffling and augmentation
+    input_size: int = 256  # px, network input side (overrides preprocess.input_size)
+    use_reference: bool = True  # 2nd channel = session's zero-pressure frame; helps the onset,
+    #   needs a reference frame at deployment
+    bce_weight: float = 1.0  # weight of per-pixel BCE (calibration, stable gradients)
+    dice_weight: float = 1.0  # weight of per-frame soft Dice (small contacts count fully)
+    device: str = "auto"  # "cpu", "cuda" or "auto" (cuda when available)
+    num_threads: int = 0  # torch CPU threads; 0 = torch's default
+    val_fraction: float = 0.2  # fraction of FINGERS held out for validation
+    prob_threshold: float = 0.5  # probability above which a pixel is contact
+    min_contact_area_px: float = 30.0  # network px at input_size; smaller predicted regions are
+    #   "no contact" (higher misses the onset, lower reports specks as contact)
+    model: UNetConfig = field(default_factory=UNetConfig)  # in_channels is set from use_reference
+    preprocess: PreprocessConfig = field(default_factory=PreprocessConfig)  # size from input_size
+    augment: AugmentConfig = field(default_factory=AugmentConfig)  # training-time only
+
+    def __post_init__(self) -> None:
+        if self.epochs < 1 or self.batch_size < 2:
+            raise ValueError(
+                f"epochs must be >= 1 and batch_size >= 2, got {self.epochs}, {self.batch_size}"
+            )
+        if self.num_threads < 0:
+            raise ValueError(
+                f"num_threads must be >= 0 (0 = torch's default), got {self.num_threads}"
+            )
+        if self.device not in ("cpu", "cuda", "auto"):
+            raise ValueError(f"device must be cpu, cuda or auto, got {self.device!r}")
+        if self.input_size < 16:
+            raise ValueError(f"input_size must be >= 16 px, got {self.input_size}")
+        if not 0.0 < self.prob_threshold < 1.0:
+            raise ValueError(f"prob_threshold must be in (0, 1), got {self.prob_threshold}")
+
+    def resolved(self) -> TrainConfig:
+        """Copy with the derived fields of the nested configs made consistent."""
+        return dataclasses.replace(
+            self,
+            model=dataclasses.replace(self.model, in_channels=2 if self.use_reference else 1),
+            preprocess=dataclasses.replace(self.preprocess, input_size=self.input_size),
+        )
+
+    def spec(self) -> ModelSpec:
+        """The deployment spec of this run (validation, threshold tuning and export use it)."""
+        cfg = self.resolved()
+        return ModelSpec(
+            cfg.model.in_channels, cfg.preprocess, cfg.prob_threshold, cfg.min_contact_area_px
+        )
+
+
+def resolve_device(name: str) -> torch.device:
+    """``"auto"`` → cuda when available, else cpu; ``"cuda"`` without CUDA → ValueError."""
+    if name == "auto":
+        return torch.device("cuda" if torch.cuda.is_available() else "cpu")
+    if name == "cuda" and not torch.cuda.is_available():
+        raise ValueError("device 'cuda' requested but torch sees no CUDA device; use cpu or auto")
+    return torch.device(name)
