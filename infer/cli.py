@@ -28,6 +28,17 @@ def _scale_args(p: argparse.ArgumentParser) -> None:
     g = p.add_mutually_exclusive_group()
     g.add_argument("--mm-per-px", type=float, help="pixel scale at the contact plane (mm/px)")
     g.add_argument("--rig", type=Path, help="rig config JSON with mm_per_px and image_width_px")
+    _bit_depth_arg(p)
+
+
+def _bit_depth_arg(p: argparse.ArgumentParser) -> None:
+    p.add_argument(
+        "--bit-depth",
+        type=int,
+        metavar="N",
+        help="significant bits of 16-bit images (e.g. 12 for a 12-bit camera's PNGs holding "
+        "0-4095; 16 for full-range); default: the PNG sBIT chunk, else required when ambiguous",
+    )
 
 
 def _method_args(p: argparse.ArgumentParser) -> None:
@@ -39,6 +50,9 @@ def _method_args(p: argparse.ArgumentParser) -> None:
         type=Path,
         metavar="DIR",
         help="also write each frame with the learned and classical outlines to DIR",
+    )
+    p.add_argument(
+        "--device-id", help="identifier of the display (1-100 printable characters), recorded"
     )
 
 
@@ -54,6 +68,12 @@ def _resolve_scale(args: argparse.Namespace, default_rig: Path | None = None) ->
     return None
 
 
+def _inputs(args: argparse.Namespace) -> list[Path]:
+    """The files a run reads besides its images: no output may replace them."""
+    names = ("reference", "model", "rig", "manifest")
+    return [p for p in (getattr(args, n, None) for n in names) if p is not None]
+
+
 def _overlay_runs(
     args: argparse.Namespace, primary: list[Measured], files: list[Path], reference: Path | None
 ) -> dict[str, list[Measured]]:
@@ -64,42 +84,77 @@ def _overlay_runs(
     runs = {args.method: primary}
     for name in METHODS:
         if name not in runs:
-            runs[name] = measure_files(
-                files, make_method(name, args.model, args.threads, outline=True), reference
-            )
+            method = make_method(name, args.model, args.threads, outline=True)
+            runs[name] = measure_files(files, method, reference, bit_depth=args.bit_depth)
     return runs
 
 
 def _cmd_measure(args: argparse.Namespace) -> int:
-    from contactcal.infer.files.atomic import write_json
+    from contactcal.infer.calibration.record import check_device_id
+    from contactcal.infer.files.atomic import run_outputs, write_synced
+    from contactcal.infer.files.jsonable import json_text
+    from contactcal.infer.image.read import SUPPORTED_SUFFIXES
     from contactcal.infer.methods.registry import make_method
     from contactcal.infer.pipeline.measure import measure_files
     from contactcal.infer.pipeline.overlay import write_overlays
 
-    method = make_method(args.method, args.model, args.threads, args.overlay is not None)
-    measured = measure_files(args.images, method, args.reference, _resolve_scale(args))
-    write_json(args.out, [m.to_json(method.name) for m in measured])
-    if args.overlay is not None:
-        write_overlays(_overlay_runs(args, measured, args.images, args.reference), args.overlay)
+    check_device_id(args.device_id)
+    to_stdout = str(args.out) == "-"
+    if args.out.suffix.lower() in SUPPORTED_SUFFIXES:
+        raise ValueError(
+            f"--out {args.out}: expected a JSON file name (results.json) or - for standard "
+            "output, got an image name (did the shell expand a pattern right after --out?)"
+        )
+    with run_outputs([*args.images, *_inputs(args)]) as outs:
+        json_path = None if to_stdout else outs.stage(args.out)  # refused here, before work
+        method = make_method(args.method, args.model, args.threads, args.overlay is not None)
+        measured = measure_files(
+            args.images, method, args.reference, _resolve_scale(args), bit_depth=args.bit_depth
+        )
+        # device_id: the display measured, per object (the output stays a list of objects).
+        rows = [{**m.to_json(method.name), "device_id": args.device_id} for m in measured]
+        text = json_text(rows)
+        if json_path is not None:
+            write_synced(json_path, text)
+        if args.overlay is not None:
+            runs = _overlay_runs(args, measured, args.images, args.reference)
+            write_overlays(runs, args.overlay, outputs=outs, bit_depth=args.bit_depth)
+    if to_stdout:
+        sys.stdout.write(text)
     for m in measured:
         mm2 = m.area_mm2
         area = f"{mm2:8.1f} mm²" if mm2 is not None else f"{m.result.area_px:10.0f} px"
-        print(f"{m.file}  contact={'yes' if m.result.contact else 'no ':3s} area={area}")
+        line = f"{m.file}  contact={'yes' if m.result.contact else 'no ':3s} area={area}"
+        print(line, file=sys.stderr if to_stdout else sys.stdout)
     return 0
 
 
 def _cmd_calibrate(args: argparse.Namespace) -> int:
     from contactcal.infer.calibration.calibrate import calibrate_session
+    from contactcal.infer.calibration.record import check_device_id
+    from contactcal.infer.files.atomic import run_outputs
     from contactcal.infer.pipeline.overlay import write_overlays
 
+    check_device_id(args.device_id)
     scale = _resolve_scale(args, args.manifest.parent / "rig.json")
-    rep = calibrate_session(
-        args.manifest, args.out, args.method, args.model, scale, outline=args.overlay is not None
-    )
-    if args.overlay is not None:
-        files = [f.file for f in rep.frames]
-        runs = _overlay_runs(args, rep.measured, files, files[0])
-        write_overlays(runs, args.overlay, [f"{f.pressure_kpa:g} kPa" for f in rep.frames])
+    with run_outputs(_inputs(args)) as outs:
+        rep = calibrate_session(
+            args.manifest,
+            args.out,
+            args.method,
+            args.model,
+            scale,
+            outline=args.overlay is not None,
+            argv=args.argv,
+            device_id=args.device_id,
+            outputs=outs,
+            bit_depth=args.bit_depth,
+        )
+        if args.overlay is not None:
+            files = [f.file for f in rep.frames]
+            runs = _overlay_runs(args, rep.measured, files, files[0])
+            titles = [f"{f.pressure_kpa:g} kPa" for f in rep.frames]
+            write_overlays(runs, args.overlay, titles, outputs=outs, bit_depth=args.bit_depth)
     print(rep.table)
     return 0
 
@@ -127,6 +182,17 @@ def _cmd_bench(args: argparse.Namespace) -> int:
     return 0
 
 
+def _cmd_evaluate(args: argparse.Namespace) -> int:
+    from contactcal.infer.evaluate.run import evaluate_session
+
+    rep = evaluate_session(
+        args.manifest, args.labels, args.out, args.method, args.model, args.bit_depth
+    )
+    print(rep.table)
+    print(f"evaluation: {rep.files['json']}, {rep.files['png']}")
+    return 0
+
+
 def build_parser() -> argparse.ArgumentParser:
     """The argument parser (exposed for tests and docs)."""
     from contactcal.infer import __version__
@@ -142,7 +208,9 @@ def build_parser() -> argparse.ArgumentParser:
     m.add_argument("images", nargs="+", type=Path, metavar="IMAGE")
     _method_args(m)
     m.add_argument("--reference", type=Path, help="the session's zero-pressure frame")
-    m.add_argument("--out", type=Path, required=True, help="results JSON (list, one per image)")
+    m.add_argument(
+        "--out", type=Path, required=True, help="results JSON (list, one per image); - for stdout"
+    )
     _scale_args(m)
     m.set_defaults(func=_cmd_measure)
 
@@ -166,6 +234,23 @@ def build_parser() -> argparse.ArgumentParser:
     b.add_argument("--timing-frames", type=int, default=6, help="frames per timing run")
     b.set_defaults(func=_cmd_bench)
 
+    e = sub.add_parser("evaluate", help="score the methods on your own hand-labelled frames")
+    e.add_argument("manifest", type=Path, metavar="MANIFEST.csv")
+    e.add_argument(
+        "--labels",
+        type=Path,
+        required=True,
+        help="folder of <frame stem>.png masks, or an ImageJ ellipse CSV "
+        "(file,cx,cy,major,minor,angle_deg; see docs/evaluate.md)",
+    )
+    e.add_argument("--out", type=Path, required=True, help="output folder")
+    e.add_argument(
+        "--method", choices=(*METHODS, "both"), default=METHODS[0], help="default %(default)s"
+    )
+    e.add_argument("--model", type=Path, help="ONNX model for the U-Net (default: shipped)")
+    _bit_depth_arg(e)
+    e.set_defaults(func=_cmd_evaluate)
+
     add_plugin_commands(sub)
     return parser
 
@@ -184,6 +269,7 @@ def main(argv: Sequence[str] | None = None) -> int:
     """Entry point of the ``contactcal`` console script."""
     parser = build_parser()
     args = parser.parse_args(argv)
+    args.argv = list(sys.argv[1:] if argv is None else argv)  # recorded in calibration.json
     if getattr(args, "threads", 1) < 1:
         parser.error("--threads must be >= 1")
     try:

@@ -5,6 +5,8 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
+from contactcal.infer.errors import require_extra
+
 
 def add_parsers(sub: argparse._SubParsersAction) -> None:
     """Add ``synth`` to the ``contactcal`` subcommands."""
@@ -23,7 +25,12 @@ def add_parsers(sub: argparse._SubParsersAction) -> None:
     s.set_defaults(func=_cmd_synth)
 
 
+#: Modules of the ``synth`` extra that rendering needs (checked before anything is written).
+SYNTH_MODULES = ("mitsuba", "drjit")
+
+
 def _cmd_synth(args: argparse.Namespace) -> int:
+    require_extra("synth", "synth", SYNTH_MODULES)
     from contactcal.infer.files.atomic import write_json
     from contactcal.synth.dataset import (
         DatasetConfig,

@@ -4,8 +4,8 @@ Work is split by finger (one finger = one session = one seed). ``--shard i/n`` r
 ``f`` with ``f % n == i``, so a cluster job array covers the set exactly once; ``--workers K``
 renders K fingers at a time in worker processes that are recycled after each finger (Mitsuba
 leaks memory across scene loads). Every file is written atomically and a frame's truth JSON is
-written last, so a killed run resumes by skipping frames whose JSON exists. The same seed gives
-byte-identical files (for the same Mitsuba variant).
+written last, so a killed run resumes by skipping frames whose JSON exists (and removes the
+temporaries it left); workers stop when their run dies. Same seed, byte-identical files.
 """
 
 from __future__ import annotations
@@ -13,17 +13,18 @@ from __future__ import annotations
 import csv
 import io
 import json
+import math
 import multiprocessing as mp
 import os
 from dataclasses import asdict, dataclass, field
 from pathlib import Path
 from typing import Any
 
-import cv2
 import numpy as np
 
-from contactcal.infer.files.atomic import atomic_path, write_json, write_text
+from contactcal.infer.files.atomic import remove_stale_temporaries, write_json, write_text
 from contactcal.infer.files.jsonable import jsonable
+from contactcal.infer.image.write import write_image
 from contactcal.synth.randomize import SessionParams, sample_session
 from contactcal.synth.session import FrameOutput, RenderConfig, render_session
 
@@ -46,17 +47,38 @@ class DatasetConfig:
     def __post_init__(self) -> None:
         if self.fingers < 1:
             raise ValueError(f"--fingers must be >= 1, got {self.fingers}")
-        if not self.pressures_kpa or min(self.pressures_kpa) < 0:
-            raise ValueError(f"pressures must be >= 0 kPa, got {self.pressures_kpa}")
-        if len(set(self.pressures_kpa)) != len(self.pressures_kpa):
-            raise ValueError("pressures must be distinct")
+        if not self.pressures_kpa or not all(
+            math.isfinite(p) and p >= 0 for p in self.pressures_kpa
+        ):
+            raise ValueError(f"pressures must be finite and >= 0 kPa, got {self.pressures_kpa}")
+        check_frame_names(self.pressures_kpa)
         if not 0.0 <= self.hard_fraction <= 1.0:
             raise ValueError(f"--hard-fraction must be in [0, 1], got {self.hard_fraction}")
 
 
 def frame_name(p: float) -> str:
-    """File stem of the frame at ``p`` kPa, e.g. ``p05.0kpa``."""
+    """File stem of the frame at ``p`` kPa, e.g. ``p05.0kpa`` (0.1 kPa resolution)."""
     return f"p{p:04.1f}kpa"
+
+
+def check_frame_names(pressures_kpa: tuple[float, ...]) -> None:
+    """Refuse pressures whose frames would share a file name (names have 0.1 kPa resolution).
+
+    Raises:
+        ValueError: names the two pressures and the shared name (before anything is written).
+    """
+    seen: dict[str, float] = {}
+    for p in pressures_kpa:
+        name = frame_name(p)
+        if name in seen and seen[name] == p:
+            raise ValueError(f"--pressures: {p:g} kPa is given twice; pressures must be distinct")
+        if name in seen:
+            raise ValueError(
+                f"--pressures: {seen[name]:g} and {p:g} kPa would both be saved as {name}.png "
+                "(frame names have 0.1 kPa resolution); give pressures that differ when rounded "
+                "to 0.1 kPa"
+            )
+        seen[name] = p
 
 
 def session_params(config: DatasetConfig, finger: int) -> SessionParams:
@@ -64,14 +86,6 @@ def session_params(config: DatasetConfig, finger: int) -> SessionParams:
     rng = np.random.default_rng([config.seed, finger])
     hard = bool(rng.random() < config.hard_fraction)
     return sample_session(rng, hard=hard)
-
-
-def _write_png(path: Path, image: np.ndarray) -> None:
-    ok, buf = cv2.imencode(".png", image)
-    if not ok:
-        raise OSError(f"{path}: PNG encoding failed")
-    with atomic_path(path) as tmp:
-        tmp.write_bytes(buf.tobytes())
 
 
 def _truth(out: FrameOutput, finger: int, session: str, hard: bool) -> dict[str, Any]:
@@ -96,11 +110,37 @@ def _truth(out: FrameOutput, finger: int, session: str, hard: bool) -> dict[str,
     }
 
 
-def render_finger(out_dir: str, config: DatasetConfig, finger: int) -> int:
-    """Render (or finish) one finger's session folder; returns the frames rendered now."""
+def stop_if_orphaned(parent_pid: int | None) -> None:
+    """End this worker process if the run that started it (``parent_pid``) is gone.
+
+    A killed ``contactcal synth`` leaves its pool workers running (they are re-parented);
+    they check before every write and every render, so nothing is written after the run died.
+
+    Raises:
+        SystemExit: the parent died (not an ``Exception``: the pool does not catch it, the
+            worker exits, and open atomic writers remove their temporaries on the way out).
+    """
+    if parent_pid is not None and os.getppid() != parent_pid:
+        raise SystemExit(f"synth worker {os.getpid()}: parent {parent_pid} is gone; stopping")
+
+
+def render_finger(
+    out_dir: str, config: DatasetConfig, finger: int, parent_pid: int | None = None
+) -> int:
+    """Render (or finish) one finger's session folder; returns the frames rendered now.
+
+    Args:
+        out_dir: the dataset folder.
+        config: what to render.
+        finger: the finger (session) number.
+        parent_pid: in a worker process, the pid of the run that started it (the worker stops
+            when that process is gone, see :func:`stop_if_orphaned`); None in the run itself.
+    """
     root = Path(out_dir)
     name = f"finger_{finger:04d}"
     folder = root / name
+    for sub in (folder, folder / "frames", folder / "masks"):
+        remove_stale_temporaries(sub)  # left by a killed run; a resumed run starts clean
     params = session_params(config, finger)
     pressures = sorted(config.pressures_kpa)
     truth_paths = [folder / "frames" / f"{frame_name(p)}.json" for p in pressures]
@@ -109,15 +149,17 @@ def render_finger(out_dir: str, config: DatasetConfig, finger: int) -> int:
     if not all(skip):
         frames = render_session(params, pressures, config.render, (config.seed, finger), None, skip)
         for out, tpath in zip(frames, truth_paths, strict=True):
+            stop_if_orphaned(parent_pid)  # after a render, before its writes
             if out is None:
                 continue
             stem = frame_name(out.pressure_kpa)
-            _write_png(
+            write_image(
                 folder / "frames" / f"{stem}.png", np.ascontiguousarray(out.frame[:, :, ::-1])
             )
-            _write_png(folder / "masks" / f"{stem}.png", out.mask.astype(np.uint8) * 255)
+            write_image(folder / "masks" / f"{stem}.png", out.mask.astype(np.uint8) * 255)
             write_json(tpath, _truth(out, finger, name, params.hard))
             made += 1
+            stop_if_orphaned(parent_pid)  # before the next render
     rows = [json.loads(t.read_text()) for t in truth_paths]
     manifest = "file,pressure_kpa\n" + "".join(
         f"frames/{frame_name(r['pressure_kpa'])}.png,{r['pressure_kpa']}\n" for r in rows
@@ -131,9 +173,9 @@ def render_finger(out_dir: str, config: DatasetConfig, finger: int) -> int:
     return made
 
 
-def _run_finger(task: tuple[str, DatasetConfig, int]) -> tuple[int, int]:
-    out_dir, config, finger = task
-    return finger, render_finger(out_dir, config, finger)
+def _run_finger(task: tuple[str, DatasetConfig, int, int]) -> tuple[int, int]:
+    out_dir, config, finger, parent_pid = task
+    return finger, render_finger(out_dir, config, finger, parent_pid)
 
 
 def write_index(out_dir: str | os.PathLike[str]) -> Path:
@@ -167,9 +209,10 @@ def build_dataset(
     """Render this shard's fingers into ``out_dir`` (resuming), then rebuild ``index.csv``."""
     root = Path(out_dir)
     root.mkdir(parents=True, exist_ok=True)
+    remove_stale_temporaries(root)  # left by a killed run
     _check_config_matches(root, config)
     fingers = shard_fingers(config.fingers, shard)
-    tasks = [(str(root), config, f) for f in fingers]
+    tasks = [(str(root), config, f, os.getpid()) for f in fingers]
     made = 0
     bar = None
     if progress:

@@ -60,13 +60,9 @@ def demo_states(rig: RigGeometry, m: int) -> dict[str, tuple[ZFn, np.ndarray]]:
 
 
 def _save(path: Path, bgr: np.ndarray) -> None:
-    import cv2
+    from contactcal.infer.image.write import write_image
 
-    from contactcal.infer.files.atomic import atomic_path
-
-    with atomic_path(path) as tmp:
-        if not cv2.imwrite(str(tmp), bgr):
-            raise OSError(f"synth/render_demo.py: could not write {path}")
+    write_image(path, bgr)
 
 
 def _label(bgr: np.ndarray, text: str) -> np.ndarray:

@@ -3,18 +3,23 @@
 from __future__ import annotations
 
 import csv
+import hashlib
 import json
 import math
+from dataclasses import asdict
 from pathlib import Path
 
 import numpy as np
 import pytest
+from test_outputs import copy_session
 
 from contactcal.infer.calibration import record as calibration_io
 from contactcal.infer.calibration.fit import fit_monotone
 from contactcal.infer.calibration.points import CalibrationPoint
 from contactcal.infer.calibration.record import load_curve, write_calibration
 from contactcal.infer.calibration.table import format_table
+from contactcal.infer.cli import main
+from contactcal.infer.methods.classical import ClassicalConfig
 
 P = np.arange(0.0, 11.0, 2.0)
 
@@ -113,7 +118,7 @@ def test_failed_write_leaves_nothing(tmp_path: Path, monkeypatch: pytest.MonkeyP
     out = tmp_path / "out"
     with pytest.raises(RuntimeError, match="plot failed"):
         write_calibration(out, results, _curve(results), "classical", {})
-    assert list(out.iterdir()) == []
+    assert not out.exists()  # the folder this run created is removed too
 
 
 def test_failed_write_keeps_previous_run(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
@@ -131,6 +136,29 @@ def test_failed_write_keeps_previous_run(tmp_path: Path, monkeypatch: pytest.Mon
     assert sorted(x.name for x in tmp_path.iterdir()) == sorted(p.name for p in paths.values())
 
 
+def test_load_curve_reads_versions_1_and_2(tmp_path: Path) -> None:
+    results = _results()
+    paths = write_calibration(tmp_path, results, _curve(results), "classical", {})
+    data = json.loads(paths["json"].read_text(encoding="utf-8"))
+    assert data["format_version"] == calibration_io.FORMAT_VERSION == 2
+    v1 = {k: v for k, v in data.items() if k not in ("method_config", "device_id", "argv")}
+    v1 = {**v1, "format_version": 1}
+    del v1["inputs"]
+    (tmp_path / "v1.json").write_text(json.dumps(v1), encoding="utf-8")
+    np.testing.assert_allclose(load_curve(tmp_path / "v1.json").fit_area, _curve(results).fit_area)
+    (tmp_path / "v3.json").write_text(json.dumps({**data, "format_version": 3}), encoding="utf-8")
+    with pytest.raises(ValueError, match="format_version 3"):
+        load_curve(tmp_path / "v3.json")
+
+
+@pytest.mark.parametrize("bad", ["", "x" * 101, "rig\n2", "tab\there"])
+def test_provenance_rejects_bad_device_id(bad: str) -> None:
+    with pytest.raises(ValueError, match="device-id"):
+        calibration_io.Provenance(device_id=bad)
+    assert calibration_io.check_device_id("x" * 100) == "x" * 100
+    assert calibration_io.check_device_id("display #7 (left)") == "display #7 (left)"
+
+
 def test_format_table() -> None:
     results = _results()
     table = format_table(results, _curve(results))
@@ -142,3 +170,63 @@ def test_format_table() -> None:
     assert "dim" in table
     px = format_table(_results(mm2=False), _curve(_results(mm2=False), "px"))
     assert "area (px)" in px.splitlines()[0]
+
+
+def test_calibration_records_provenance(tmp_path: Path) -> None:
+    from contactcal.infer.methods.unet.runner import DEFAULT_MODEL, OnnxSegmenter
+
+    s = copy_session(tmp_path, ("p00.0kpa.jpg", "p08.0kpa.jpg", "p16.0kpa.jpg"))
+    argv = ["calibrate", str(s / "manifest.csv"), "--device-id", "TD-0042 left", "--out"]
+    assert main([*argv, str(tmp_path / "u")]) == 0
+    rec = json.loads((tmp_path / "u" / "calibration.json").read_text())
+    assert rec["format_version"] == 2 and rec["device_id"] == "TD-0042 left"
+    assert rec["argv"] == [*argv, str(tmp_path / "u")]
+    cfg = rec["method_config"]
+    assert cfg["name"] == "unet" and Path(cfg["model"]) == DEFAULT_MODEL.resolve()
+    assert cfg["model_sha256"] == hashlib.sha256(DEFAULT_MODEL.read_bytes()).hexdigest()
+    meta = OnnxSegmenter().metadata
+    assert cfg["data_digest"] == meta["data_digest"] and len(cfg["data_digest"]) > 0
+    assert cfg["spec"]["channels"] in (1, 2) and cfg["spec"]["threshold"] == float(
+        meta["threshold"]
+    )
+    assert cfg["spec"]["preprocess"] == json.loads(meta["preprocess"])
+    assert cfg["spec"]["min_contact_area_px"] == float(meta["min_contact_area_px"])
+    digests = {f["file"]: f["sha256"] for f in rec["inputs"]["frames"]}
+    assert digests == {p.name: hashlib.sha256(p.read_bytes()).hexdigest() for p in s.glob("*.jpg")}
+    assert [f["file"] for f in rec["inputs"]["frames"]] == [p["file"] for p in rec["points"]]
+    manifest_sha = hashlib.sha256((s / "manifest.csv").read_bytes()).hexdigest()
+    assert rec["inputs"]["manifest"]["sha256"] == manifest_sha
+    assert {"contactcal", "onnxruntime", "opencv"} <= set(rec["versions"])
+    assert rec["versions"]["onnxruntime"] is not None and rec["versions"]["opencv"] is not None
+
+    assert (
+        main(
+            [
+                "calibrate",
+                str(s / "manifest.csv"),
+                "--method",
+                "classical",
+                "--out",
+                str(tmp_path / "c"),
+            ]
+        )
+        == 0
+    )
+    rec = json.loads((tmp_path / "c" / "calibration.json").read_text())
+    assert rec["method_config"] == {"name": "classical", "config": asdict(ClassicalConfig())}
+    assert rec["device_id"] is None
+
+
+@pytest.mark.parametrize("bad", ["", "x" * 101, "line\nbreak"])
+def test_bad_device_id_exits_2(
+    bad: str, tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    s = copy_session(tmp_path)
+    out = tmp_path / "c"
+    assert main(["calibrate", str(s / "manifest.csv"), "--device-id", bad, "--out", str(out)]) == 2
+    err = capsys.readouterr().err
+    assert "--device-id" in err and "printable" in err and len(err.strip().splitlines()) == 1
+    assert not out.exists()
+    frame = str(s / "p12.0kpa.jpg")
+    assert main(["measure", "--device-id", bad, "--out", str(tmp_path / "r.json"), frame]) == 2
+    assert not (tmp_path / "r.json").exists()

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import os
 from pathlib import Path
 
 import cv2
@@ -53,3 +54,32 @@ def test_reduction_not_used_when_unsafe(tmp_path: Path) -> None:
     assert unet.start([png], None) == 1
     assert ClassicalMethod().start([_upscaled(tmp_path, 5, (1600, 1200))], None) == 1
     assert np.isfinite(measure_files([odd], unet)[0].result.area_px)
+
+
+def _cut_in_half(tmp_path: Path, src: Path = EXAMPLE / "p10.0kpa.jpg") -> Path:
+    """The frame cut in half with the end-of-image marker re-added (libjpeg only warns)."""
+    data = src.read_bytes()
+    path = tmp_path / "cut.jpg"
+    path.write_bytes(data[: len(data) // 2] + b"\xff\xd9")
+    return path
+
+
+@pytest.mark.parametrize("reduce", [1, 2, 4, 8])
+def test_corrupt_jpeg_is_an_error(
+    tmp_path: Path, capfd: pytest.CaptureFixture[str], reduce: int
+) -> None:
+    cut = _cut_in_half(tmp_path)
+    with pytest.raises(ImageError, match=r"cut\.jpg: corrupt image data .*premature end"):
+        load_image(cut, reduce=reduce)
+    assert load_image(EXAMPLE / "p10.0kpa.jpg", reduce=reduce).size > 0  # clean: no error
+    os.write(2, b"still here\n")  # standard error is restored after the capture
+    assert capfd.readouterr().err == "still here\n"
+
+
+def test_corrupt_jpeg_in_a_reduced_session(tmp_path: Path) -> None:
+    ref, frame = _upscaled(tmp_path, 0, (1600, 1200)), _upscaled(tmp_path, 12, (1600, 1200))
+    cut = _cut_in_half(tmp_path, frame)
+    unet = UnetMethod()
+    assert unet.start([cut], ref) == 4  # the U-Net decodes this session at 1/4
+    with pytest.raises(ImageError, match="Corrupt JPEG data"):
+        measure_files([frame, cut], unet, ref)

@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import struct
+import zlib
 from pathlib import Path
 
 import cv2
@@ -26,7 +28,7 @@ def test_formats_load_to_canonical(tmp_path: Path, suffix: str) -> None:
 
 
 def test_16bit_rgb_rgba_and_gray_agree(tmp_path: Path) -> None:
-    g8 = np.tile(np.arange(0, 250, 5, dtype=np.uint8), (10, 1))
+    g8 = np.tile(np.arange(0, 250, 5, dtype=np.uint8), (20, 1))
     g16 = g8.astype(np.uint16) * 257
     bgr = np.dstack([g8, g8, g8])
     bgra = np.dstack([g8, g8, g8, np.full_like(g8, 7)])
@@ -40,7 +42,7 @@ def test_16bit_rgb_rgba_and_gray_agree(tmp_path: Path) -> None:
 
 
 def test_colour_uses_luma(tmp_path: Path) -> None:
-    bgr = np.zeros((4, 4, 3), np.uint8)
+    bgr = np.zeros((16, 16, 3), np.uint8)
     bgr[..., 2] = 255  # pure red in BGR order
     assert int(load_image(_write(tmp_path / "r.png", bgr))[0, 0]) == 76  # 0.299 * 255
 
@@ -98,3 +100,71 @@ def test_arrays() -> None:
         to_gray_u8(np.zeros((0, 5), np.uint8))
     with pytest.raises(ImageError, match="expected uint8"):
         to_gray_u8(np.zeros((2, 2), np.int64))
+
+
+def _with_sbit(path: Path, bits: int) -> Path:
+    """Insert a gray ``sBIT`` chunk right after the PNG's IHDR chunk (8 + 25 bytes)."""
+    data = path.read_bytes()
+    body = b"sBIT" + bytes([bits])
+    chunk = struct.pack(">I", 1) + body + struct.pack(">I", zlib.crc32(body))
+    path.write_bytes(data[:33] + chunk + data[33:])
+    return path
+
+
+def _ramp(levels: int) -> np.ndarray:
+    """A (20, 64) uint16 ramp 0 .. levels-1 (a camera's N-bit data in the low bits)."""
+    return np.tile(np.linspace(0, levels - 1, 64).round().astype(np.uint16), (20, 1))
+
+
+@pytest.mark.parametrize("bits", [10, 12])
+def test_16bit_png_with_fewer_bits(tmp_path: Path, bits: int) -> None:
+    full = (1 << bits) - 1
+    data = _ramp(full + 1)
+    expected = np.rint(data * (255.0 / full)).astype(np.uint8)
+    plain = _write(tmp_path / f"p{bits}.png", data)
+    with pytest.raises(ImageError, match=rf"p{bits}\.png.*maximum {full}.*--bit-depth"):
+        load_image(plain)
+    np.testing.assert_array_equal(load_image(plain, bit_depth=bits), expected)
+    marked = _with_sbit(_write(tmp_path / f"s{bits}.png", data), bits)
+    np.testing.assert_array_equal(load_image(marked), expected)
+    np.testing.assert_array_equal(load_image(marked, bit_depth=bits), expected)
+    with pytest.raises(ImageError, match="contradicts the file's sBIT chunk"):
+        load_image(marked, bit_depth=16)
+
+
+def test_bit_depth_rules(tmp_path: Path) -> None:
+    msb = _with_sbit(_write(tmp_path / "msb.png", _ramp(4096) << 4), 12)  # PNG's own convention
+    np.testing.assert_array_equal(load_image(msb), load_image(msb, bit_depth=12))
+    assert load_image(msb)[0, -1] == 255
+    dark16 = _write(tmp_path / "dark16.png", _ramp(4096))
+    assert load_image(dark16, bit_depth=16).max() == round(4095 * 255 / 65535)
+    with pytest.raises(ImageError, match="exceeds the 10-bit range"):
+        load_image(_write(tmp_path / "w.png", _ramp(4096)), bit_depth=10)
+    with pytest.raises(ImageError, match="holds 8-bit samples"):
+        load_image(_write(tmp_path / "e.jpg", np.full((30, 40), 9, np.uint8)), bit_depth=12)
+    with pytest.raises(ValueError, match="1-16"):
+        load_image(dark16, bit_depth=17)
+
+
+def test_float_tiff_range(tmp_path: Path) -> None:
+    ramp = np.tile(np.linspace(0.0, 1.0, 64, dtype=np.float32), (20, 1))
+    out = load_image(_write(tmp_path / "unit.tif", ramp))
+    np.testing.assert_array_equal(out, np.rint(ramp * 255).astype(np.uint8))
+    with pytest.raises(
+        ImageError, match=r"f255\.tif.*\[0, 255\].*expected intensities in \[0, 1\]"
+    ):
+        load_image(_write(tmp_path / "f255.tif", ramp * 255))
+    with pytest.raises(ImageError, match=r"span \[-0\.5"):
+        to_gray_u8(ramp - 0.5)
+
+
+@pytest.mark.parametrize(("h", "w"), [(3, 1990), (1990, 3), (15, 40), (20, 90)])
+def test_images_that_are_no_rig_frame(tmp_path: Path, h: int, w: int) -> None:
+    path = _write(tmp_path / "strip.png", np.full((h, w), 120, np.uint8))
+    with pytest.raises(ImageError, match=rf"strip\.png: {w}×{h} px is not a rig frame"):
+        load_image(path)
+
+
+def test_smallest_frames_accepted(tmp_path: Path) -> None:
+    assert load_image(_write(tmp_path / "a.png", np.zeros((16, 64), np.uint8))).shape == (16, 64)
+    assert load_image(_write(tmp_path / "b.png", np.zeros((29, 37), np.uint8))).shape == (29, 37)

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import os
 from pathlib import Path
 
 import pytest
@@ -102,6 +103,8 @@ def test_empty_file_cell(tmp_path: Path) -> None:
         ("-1", "negative"),
         ("", "not a number"),
         ("2 kPa", "not a number"),
+        ("1e308", "above the plausible 200 kPa"),
+        ("20000", "above the plausible 200 kPa"),
     ],
 )
 def test_bad_pressure(tmp_path: Path, cell: str, problem: str) -> None:
@@ -115,6 +118,35 @@ def test_duplicate_pressure(tmp_path: Path) -> None:
         "one frame per pressure step",
     )
     assert "2 kPa" in msg
+
+
+def test_pressure_range_bounds_are_accepted(tmp_path: Path) -> None:
+    frames = read_manifest(_session(tmp_path, "file,pressure_kpa\na.png,0\nb.png,200\n"))
+    assert [f.pressure_kpa for f in frames] == [0.0, 200.0]
+
+
+def test_same_file_on_two_rows(tmp_path: Path) -> None:
+    _fails(
+        _session(tmp_path, "file,pressure_kpa\na.png,0\nb.png,2\n./b.png,4\n"),
+        "rows 2",
+        "and 3",
+        "same image file",
+        str((tmp_path / "b.png").resolve()),
+    )
+
+
+def test_one_file_on_many_rows(tmp_path: Path) -> None:
+    rows = "".join(f"a.png,{p / 10:g}\n" for p in range(1000))
+    _fails(_session(tmp_path, "file,pressure_kpa\n" + rows), "rows 1", "and 2", "same image")
+
+
+def test_link_to_a_listed_file(tmp_path: Path) -> None:
+    path = _session(tmp_path, "file,pressure_kpa\na.png,0\nb.png,2\nlink.png,4\n")
+    (tmp_path / "link.png").symlink_to(tmp_path / "a.png")
+    _fails(path, "rows 1", "and 3", "same image file")
+    (tmp_path / "link.png").unlink()
+    os.link(tmp_path / "a.png", tmp_path / "link.png")  # a hard link: another path, one file
+    _fails(path, "rows 1", "and 3", "same image file")
 
 
 def test_single_frame(tmp_path: Path) -> None:

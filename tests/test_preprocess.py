@@ -130,3 +130,14 @@ def test_bad_input_raises(rng: np.random.Generator) -> None:
         from_network(np.zeros((4, 5), np.float32), CropBox(0, 0, 4), (4, 4))
     with pytest.raises(ValueError, match="input_size"):
         PreprocessConfig(input_size=0)
+
+
+def test_ring_radius_is_bounded() -> None:
+    # A bright arc of a circle far larger than the image (nearly straight): its fitted radius is
+    # ~5000 px, which would make a crop of ~11000 px side; it is not accepted as the ring.
+    h, w = 120, 1000
+    yy, xx = np.mgrid[0:h, 0:w]
+    r = np.hypot(xx - w / 2, yy - 5060.0)
+    img = np.where(np.abs(r - 5000.0) < 6, 220, 20).astype(np.uint8)
+    ring = locate_ring(img)
+    assert not ring.found and ring.radius <= max(h, w)

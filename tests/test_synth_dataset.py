@@ -4,6 +4,9 @@ from __future__ import annotations
 
 import csv
 import dataclasses
+import json
+import os
+import subprocess
 from pathlib import Path
 
 import cv2
@@ -19,7 +22,9 @@ from contactcal.synth.dataset import (
     parse_pressures,
     parse_shard,
     parse_size,
+    render_finger,
     shard_fingers,
+    stop_if_orphaned,
 )
 from contactcal.synth.session import RenderConfig
 
@@ -123,3 +128,62 @@ def test_bad_arguments(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> No
         build_dataset(
             tmp_path / "a", dataclasses.replace(CONFIG, fingers=1, seed=9), progress=False
         )
+
+
+def test_pressures_that_share_a_frame_name_are_refused(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    out = tmp_path / "ds"
+    argv = ["synth", "--fingers", "1", "--pressures", "0,0.04,5", "--out", str(out)]
+    assert main(argv) == 2
+    err = capsys.readouterr().err
+    assert "p00.0kpa" in err and "0.04" in err and len(err.strip().splitlines()) == 1
+    assert not out.exists(), "nothing may be rendered or written"
+    with pytest.raises(ValueError, match="given twice"):
+        DatasetConfig(fingers=1, pressures_kpa=(0.0, 0.0), seed=0)
+    with pytest.raises(ValueError, match="finite"):
+        DatasetConfig(fingers=1, pressures_kpa=(0.0, float("nan")), seed=0)
+    DatasetConfig(fingers=1, pressures_kpa=(0.0, 0.06, 5.0), seed=0)  # p00.0 / p00.1: distinct
+
+
+def test_worker_stops_when_its_run_is_gone(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    stop_if_orphaned(None)
+    stop_if_orphaned(os.getppid())
+    with pytest.raises(SystemExit):
+        stop_if_orphaned(os.getppid() + 1)
+    rendered = []
+
+    def fake_render(*args: object, **kwargs: object) -> object:
+        rendered.append(1)
+        yield object()  # a rendered frame, never to be written
+
+    monkeypatch.setattr("contactcal.synth.dataset.render_session", fake_render)
+    with pytest.raises(SystemExit):
+        render_finger(str(tmp_path), CONFIG, 0, parent_pid=os.getppid() + 1)
+    assert rendered and not list(tmp_path.rglob("*.png")) and not list(tmp_path.rglob("*.json"))
+
+
+def _dead_pid() -> int:
+    proc = subprocess.Popen(["true"])
+    proc.wait()
+    return proc.pid
+
+
+def test_resume_removes_stale_temporaries(tmp_path: Path) -> None:
+    config = dataclasses.replace(CONFIG, fingers=1, pressures_kpa=(0.0, 6.0))
+    frames = tmp_path / "finger_0000" / "frames"
+    frames.mkdir(parents=True)
+    for p in config.pressures_kpa:  # every frame done: the resumed run renders nothing
+        truth = {"finger": 0, "pressure_kpa": p, "contact": int(p > 0), "mm_per_px": 0.1}
+        (frames / f"p{p:04.1f}kpa.json").write_text(json.dumps(truth))
+    pid = _dead_pid()
+    stale = [
+        frames / f".p06.0kpa.png.{pid}.abc123.tmp",
+        tmp_path / "finger_0000" / "masks" / f".p06.0kpa.png.{pid}.def456.tmp",
+        tmp_path / f".index.csv.{pid}.ghi789.tmp",
+    ]
+    for path in stale:
+        path.mkdir(parents=True)
+        (path / "half_written").write_bytes(b"x")
+    assert build_dataset(tmp_path, config, workers=1, progress=False)["frames_rendered"] == 0
+    assert not [p for p in stale if p.exists()], "stale temporaries of a killed run left"

@@ -11,6 +11,8 @@ import json
 from pathlib import Path
 from typing import Any
 
+from contactcal.infer.errors import require_extra
+
 
 def add_parsers(sub: Any) -> None:
     """Add ``train`` and ``export`` to the CLI's subparsers object.
@@ -68,6 +70,10 @@ def add_parsers(sub: Any) -> None:
     e.set_defaults(func=_cmd_export)
 
 
+#: Modules of the ``train`` extra that training and export need (checked before anything runs).
+TRAIN_MODULES = ("torch", "kornia", "onnx")
+
+
 def _check_dirs(dirs: list[Path]) -> None:
     """Cheap path checks before torch is imported (clear message, exit 2 in the CLI)."""
     for d in dirs:
@@ -114,6 +120,7 @@ def build_config(args: argparse.Namespace) -> Any:
 
 
 def _cmd_train(args: argparse.Namespace) -> int:
+    require_extra("train", "train", TRAIN_MODULES)
     _check_dirs(list(args.data))
     from contactcal.train.loop import train
 
@@ -130,6 +137,7 @@ def _cmd_train(args: argparse.Namespace) -> int:
 
 
 def _cmd_export(args: argparse.Namespace) -> int:
+    require_extra("export", "train", TRAIN_MODULES)
     from contactcal.train.export import export_onnx
 
     min_area = None

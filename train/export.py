@@ -13,8 +13,10 @@ deployment's :func:`contactcal.infer.methods.unet.spec.read_spec` accepts:
   (sha256 of the training index.csv files), ``contactcal_version``, ``created`` (UTC ISO 8601),
   ``train_config`` (JSON), ``best_epoch``, ``val_metrics`` (JSON).
 
-Before the file is written, the serialised model's metadata is read back through ``read_spec``
-(self-check: deployment accepts it and reads the run's spec).
+Before the file is written: ``onnx.checker``, logit parity at another shape
+(:func:`check_parity`), the same contact decisions as torch on the run's validation frames through
+the one prepare and postprocess (:func:`contactcal.train.export_check.check_decisions`), and the
+serialised metadata read back through ``read_spec`` (deployment accepts it, reads the run's spec).
 """
 
 from __future__ import annotations
@@ -37,6 +39,7 @@ from contactcal.infer.files.atomic import atomic_open
 from contactcal.infer.methods.unet.spec import ModelSpec, read_spec
 from contactcal.train.checkpoint import config_from_dict, load_checkpoint
 from contactcal.train.config import TrainConfig
+from contactcal.train.export_check import check_decisions
 from contactcal.train.model import UNet
 
 #: torch vs onnxruntime tolerance on logits (float32; BN folding and kernel order differ).
@@ -171,6 +174,7 @@ def export_onnx(
         raise RuntimeError(f"exported model fails onnx.checker: {exc}") from exc
     data = proto.SerializeToString()
     check_parity(model, data, cfg.model.in_channels)
+    check_decisions(model, data, spec, info, cfg.val_fraction, cfg.seed)
     self_check(data, spec, out)  # the bytes about to be written, read back as deployment does
     with atomic_open(out, "wb") as fh:
         fh.write(data)

@@ -3,15 +3,17 @@
 from __future__ import annotations
 
 import os
-from dataclasses import dataclass
+from collections.abc import Sequence
+from dataclasses import dataclass, replace
 from pathlib import Path
 
 from contactcal.infer.calibration.curve import MM2, PX, Curve
 from contactcal.infer.calibration.fit import CurveConfig, fit_monotone
 from contactcal.infer.calibration.points import CalibrationPoint
-from contactcal.infer.calibration.record import write_calibration
+from contactcal.infer.calibration.record import Provenance, input_digests, write_calibration
 from contactcal.infer.calibration.table import format_table
 from contactcal.infer.errors import RunError
+from contactcal.infer.files.atomic import OutputSet, run_outputs
 from contactcal.infer.methods.registry import make_method
 from contactcal.infer.pipeline.manifest import Frame, read_manifest
 from contactcal.infer.pipeline.measure import Measured, measure_files
@@ -37,6 +39,10 @@ def calibrate_session(
     scale: PixelScale | None = None,
     curve_config: CurveConfig | None = None,
     outline: bool = False,
+    argv: Sequence[str] | None = None,
+    device_id: str | None = None,
+    outputs: OutputSet | None = None,
+    bit_depth: int | None = None,
 ) -> CalibrationReport:
     """Calibrate the session listed in ``manifest`` and write its outputs into ``out_dir``.
 
@@ -50,18 +56,26 @@ def calibrate_session(
         scale: pixel scale; None → the curve is in px (``area_mm2`` null).
         curve_config: fit settings (None → defaults).
         outline: keep each frame's outline in input pixels (for overlays).
+        argv: the command line's arguments, recorded (None: not run from the command line).
+        device_id: identifier of the calibrated display, recorded (1-100 printable characters).
+        outputs: the enclosing run's outputs to stage into (None: this call is the run). The
+            manifest and its frames are protected: no output may replace them.
+        bit_depth: significant bits of 16-bit frames (``--bit-depth``); None → from the files.
 
     Returns:
         The :class:`CalibrationReport` (table, measurements, curve, written files).
 
     Raises:
         ManifestError / ImageError: bad manifest or frame (nothing written).
+        ValueError: an invalid ``device_id``, or an output that would replace an input.
         RunError: no contact in any frame (nothing written).
     """
     manifest = Path(manifest)
+    provenance = Provenance(argv=None if argv is None else list(argv), device_id=device_id)
     frames = read_manifest(manifest)
     method = make_method(method_name, None if model is None else str(model), outline=outline)
-    measured = measure_files([f.file for f in frames], method, frames[0].file, scale)
+    files = [f.file for f in frames]
+    measured = measure_files(files, method, frames[0].file, scale, bit_depth=bit_depth)
     results = _points(manifest, frames, measured)
     if not any(r.contact for r in results):
         raise RunError(
@@ -82,8 +96,12 @@ def calibrate_session(
         "mm_per_px": None if scale is None else scale.mm_per_px,
         "scale_image_width_px": None if scale is None else scale.image_width_px,
     }
-    files = write_calibration(out_dir, results, curve, method.name, extra)
-    return CalibrationReport(format_table(results, curve), frames, measured, curve, files)
+    provenance = replace(
+        provenance, method_config=method.describe(), inputs=input_digests(manifest, files)
+    )
+    with run_outputs([manifest, model, *files], join=outputs) as outs:
+        paths = write_calibration(out_dir, results, curve, method.name, extra, provenance, outs)
+    return CalibrationReport(format_table(results, curve), frames, measured, curve, paths)
 
 
 def _points(

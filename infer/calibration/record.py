@@ -1,10 +1,15 @@
 """Calibration outputs: ``calibration.json``, ``calibration.csv``, ``curve.png``, and a text table.
 
-All-or-nothing writing: the three files are first written completely to temporary files in the
-output folder (`contactcal.infer.atomic.atomic_path`); only when all three succeeded are they
-renamed onto their final names, ``calibration.json`` last. If anything fails, the temporary
-files are removed and no new file appears (files from an earlier run are left as they were).
+All or nothing (:func:`contactcal.infer.files.atomic.run_outputs`): the three files are written
+completely into a staging folder and moved into place only when all succeeded,
+``calibration.json`` last; with ``outputs`` they join an enclosing run (e.g. with its overlays).
+If anything fails, no new file appears (files from an earlier run are left as they were).
 A reader should therefore treat ``calibration.json`` as the record of a complete run.
+
+``calibration.json`` (format version 2) records what the run used: the method and its
+configuration (for the U-Net the model file, its sha256 and its training ``data_digest``), the
+sha256 of the manifest and of every frame, the command line, the display's ``device_id`` and the
+package versions. :func:`load_curve` reads versions 1 and 2.
 """
 
 from __future__ import annotations
@@ -14,6 +19,8 @@ import csv
 import io
 import json
 import os
+from collections.abc import Sequence
+from dataclasses import dataclass
 from datetime import datetime, timezone
 from importlib import metadata
 from pathlib import Path
@@ -24,13 +31,18 @@ import numpy as np
 from contactcal.infer.calibration.curve import Curve
 from contactcal.infer.calibration.plot import plot_curve
 from contactcal.infer.calibration.points import CalibrationPoint
-from contactcal.infer.files.atomic import atomic_path, write_synced
-from contactcal.infer.files.jsonable import finite_or_none, jsonable
+from contactcal.infer.files.atomic import OutputSet, run_outputs, write_synced
+from contactcal.infer.files.digest import sha256_file
+from contactcal.infer.files.jsonable import finite_or_none, json_text, jsonable
 
 # plot_curve is looked up here at call time, so tests can replace it.
 
 FORMAT = "contactcal.calibration"
-FORMAT_VERSION = 1
+FORMAT_VERSION = 2
+#: Versions :func:`load_curve` reads (2 added the run's provenance; the curve is unchanged).
+READABLE_VERSIONS = (1, 2)
+#: Longest accepted ``--device-id``, characters.
+DEVICE_ID_MAX = 100
 CSV_COLUMNS = ("file", "pressure_kpa", "contact", "area_px", "area_mm2", "fit_area")
 # Distribution names probed for versions (first installed one wins); metadata only, no import.
 _DISTRIBUTIONS: dict[str, tuple[str, ...]] = {
@@ -58,10 +70,60 @@ def package_versions() -> dict[str, str | None]:
     return out
 
 
+def check_device_id(device_id: str | None) -> str | None:
+    """Validate a display identifier: None, or 1-100 printable characters.
+
+    Raises:
+        ValueError: empty, too long or with control characters (the message says which).
+    """
+    if device_id is None:
+        return None
+    if not device_id or not device_id.isprintable() or len(device_id) > DEVICE_ID_MAX:
+        shown = device_id if len(device_id) <= 40 else device_id[:40] + "…"
+        raise ValueError(
+            f"--device-id {shown!r}: expected 1-{DEVICE_ID_MAX} printable characters (e.g. the "
+            f"display's serial number), got {len(device_id)} characters"
+            + ("" if device_id.isprintable() else " including control characters")
+        )
+    return device_id
+
+
+def input_digests(manifest: Path, files: Sequence[Path]) -> dict[str, Any]:
+    """sha256 of the manifest and of each frame (frame names relative to the manifest's folder).
+
+    Raises:
+        OSError: an unreadable file.
+    """
+    return {
+        "manifest": {"file": str(manifest.resolve()), "sha256": sha256_file(manifest)},
+        "frames": [
+            {"file": os.path.relpath(f, manifest.parent), "sha256": sha256_file(f)} for f in files
+        ],
+    }
+
+
+@dataclass(frozen=True)
+class Provenance:
+    """What a calibration run used, recorded in ``calibration.json``."""
+
+    method_config: dict[str, Any] | None = None  # Method.describe() (None: not recorded)
+    inputs: dict[str, Any] | None = None  # input_digests() (None: not recorded)
+    argv: list[str] | None = None  # the command line's arguments (None: not run from the CLI)
+    device_id: str | None = None  # the calibrated display's identifier (1-100 printable chars)
+
+    def __post_init__(self) -> None:
+        check_device_id(self.device_id)
+
+
 def calibration_record(
-    results: list[CalibrationPoint], curve: Curve, method: str, extra: dict[str, Any]
+    results: list[CalibrationPoint],
+    curve: Curve,
+    method: str,
+    extra: dict[str, Any],
+    provenance: Provenance | None = None,
 ) -> dict[str, Any]:
     """The content of ``calibration.json`` (JSON-safe: no NaN, None for missing values)."""
+    prov = provenance or Provenance()
     ordered = sorted(results, key=lambda r: r.pressure_kpa)
     points = [
         {
@@ -91,6 +153,9 @@ def calibration_record(
         "format_version": FORMAT_VERSION,
         "created": datetime.now(timezone.utc).isoformat(timespec="seconds"),
         "method": method,
+        "method_config": prov.method_config,
+        "device_id": prov.device_id,
+        "argv": prov.argv,
         "area_unit": curve.area_unit,
         "onset_kpa": curve.onset_kpa,
         "calibrated_range": {
@@ -100,6 +165,7 @@ def calibration_record(
         "points": points,
         "fit": {"pressure_kpa": curve.pressures_kpa, "area": curve.fit_area},
         "inverse": inverse,
+        "inputs": prov.inputs,
         "versions": package_versions(),
         "extra": extra,
     }
@@ -135,6 +201,8 @@ def write_calibration(
     curve: Curve,
     method: str,
     extra: dict[str, Any] | None = None,
+    provenance: Provenance | None = None,
+    outputs: OutputSet | None = None,
 ) -> dict[str, Path]:
     """Write ``calibration.json``, ``calibration.csv`` and ``curve.png`` into ``out_dir``.
 
@@ -146,6 +214,8 @@ def write_calibration(
         curve: the fitted curve (its ``area_unit`` decides which area is plotted).
         method: name of the measuring method (recorded and shown in the plot title).
         extra: free, JSON-able metadata (e.g. mm_per_px, model path); NaN becomes null.
+        provenance: what the run used (method configuration, input digests, argv, device).
+        outputs: the enclosing run's outputs to stage into (None: this call is the run).
 
     Returns:
         ``{"json": path, "csv": path, "png": path}``, final paths.
@@ -157,24 +227,13 @@ def write_calibration(
         "png": out / "curve.png",
     }
     # Serialise first: a content error fails before anything touches the disk.
-    text = (
-        json.dumps(
-            calibration_record(results, curve, method, extra or {}),
-            indent=2,
-            ensure_ascii=False,
-            allow_nan=False,
-        )
-        + "\n"
-    )
+    record = calibration_record(results, curve, method, extra or {}, provenance)
+    text = json_text(record, ensure_ascii=False)
     csv_text = _csv_text(results, curve)
-    with contextlib.ExitStack() as stack:
-        # Entered first, so renamed last: calibration.json appears only after the others.
-        tmp_json = stack.enter_context(atomic_path(paths["json"]))
-        tmp_csv = stack.enter_context(atomic_path(paths["csv"]))
-        tmp_png = stack.enter_context(atomic_path(paths["png"]))
-        plot_curve(tmp_png, results, curve, method)
-        write_synced(tmp_csv, csv_text)
-        write_synced(tmp_json, text)
+    with run_outputs(join=outputs) as outs:
+        plot_curve(outs.stage(paths["png"]), results, curve, method)
+        write_synced(outs.stage(paths["csv"]), csv_text)
+        write_synced(outs.stage(paths["json"]), text)  # staged last, so moved last
     return paths
 
 
@@ -188,6 +247,11 @@ def load_curve(path: str | os.PathLike[str]) -> Curve:
         data = json.loads(Path(path).read_text(encoding="utf-8"))
         if data.get("format") != FORMAT:
             raise ValueError(f"format {data.get('format')!r}, expected {FORMAT!r}")
+        if data.get("format_version") not in READABLE_VERSIONS:
+            raise ValueError(
+                f"format_version {data.get('format_version')!r}, expected one of "
+                f"{', '.join(map(str, READABLE_VERSIONS))} (written by a newer contactcal?)"
+            )
         fit = data["fit"]
         step = (data.get("inverse") or {}).get("step")
         return Curve(

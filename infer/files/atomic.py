@@ -1,52 +1,242 @@
-"""Atomic file output: write to a temporary file in the same folder, then rename.
+"""Outputs written all or nothing: staged in a temporary folder, moved into place together.
 
-A reader (or a resumed run) therefore sees either the complete old file, the complete new
-file, or no file, never a truncated one.
+Every output of a run is first written into a staging folder next to its destination (same file
+system, so the final move is a rename). Only when the whole run succeeded are the staged files
+renamed onto their destinations, in the order they were staged; on any error the staging folders
+(and the output folders this run created) are removed, so nothing of the run appears and files
+from an earlier run stay as they were. A reader therefore sees complete old or complete new files.
+
+Outputs never replace an input of the run, a symbolic link (or, through it, its target) or
+anything that is not a regular file (a device, a folder, a pipe): :func:`check_destination`.
+
+Staging folders are named ``.<name>.<pid>.<random>.tmp`` (``name``: the first output staged in
+that folder; ``pid``: the writing process). A process killed with ``kill -9`` leaves its staging
+folder behind; the next write into that folder removes the temporaries of processes that no
+longer run (:func:`remove_stale_temporaries`); those of running processes are kept.
 """
 
 from __future__ import annotations
 
 import contextlib
-import json
 import os
+import re
+import shutil
+import stat
 import tempfile
-from collections.abc import Iterator
+from collections.abc import Iterable, Iterator
 from pathlib import Path
 from typing import IO, Any
 
+from contactcal.infer.files.jsonable import json_text
 
-def _umask() -> int:
-    mask = os.umask(0)
-    os.umask(mask)
-    return mask
+#: Names of this module's temporaries: ``.<name>.<pid>.<random>.tmp``.
+TEMP_NAME = re.compile(r"^\..+\.(?P<pid>[0-9]+)\.[A-Za-z0-9_]+\.tmp$")
+
+
+class OutputError(ValueError):
+    """An output path that must not be written (an input, a link, a device); names the path."""
+
+
+def check_destination(path: str | os.PathLike[str], protect: Iterable[Path] = ()) -> None:
+    """Refuse a destination that is a link, not a regular file, or one of the inputs.
+
+    Args:
+        path: the output path.
+        protect: the run's input files (compared by device and inode, so another spelling or a
+            hard link of an input is refused too).
+
+    Raises:
+        OutputError: the message names the path and says what to do instead.
+    """
+    p = Path(path)
+    try:
+        st = os.lstat(p)
+    except (FileNotFoundError, NotADirectoryError):
+        return  # nothing there to replace
+    if stat.S_ISLNK(st.st_mode):
+        raise OutputError(
+            f"{p}: is a symbolic link; outputs never replace a link or its target "
+            "(give a regular file path; --out - writes to standard output)"
+        )
+    if not stat.S_ISREG(st.st_mode):
+        raise OutputError(
+            f"{p}: exists and is not a regular file (a folder, device or pipe); "
+            "outputs replace only regular files"
+        )
+    for q in protect:
+        with contextlib.suppress(OSError):
+            qs = os.stat(q)
+            if (qs.st_dev, qs.st_ino) == (st.st_dev, st.st_ino):
+                raise OutputError(
+                    f"{p}: is an input of this run ({q}); refusing to overwrite it "
+                    "(choose another output path)"
+                )
+
+
+def _pid_running(pid: int) -> bool:
+    """Whether process ``pid`` exists (POSIX); elsewhere every pid counts as running."""
+    if pid == os.getpid():
+        return True
+    if os.name != "posix":
+        return True  # os.kill(pid, 0) would signal the process on Windows
+    try:
+        os.kill(pid, 0)
+    except ProcessLookupError:
+        return False
+    except PermissionError:
+        return True  # exists, owned by another user
+    return True
+
+
+def remove_stale_temporaries(folder: str | os.PathLike[str]) -> list[Path]:
+    """Remove the temporaries (:data:`TEMP_NAME`) of processes that no longer run in ``folder``.
+
+    Returns:
+        The removed paths.
+    """
+    removed: list[Path] = []
+    with contextlib.suppress(FileNotFoundError, NotADirectoryError):
+        for entry in os.scandir(folder):
+            match = TEMP_NAME.match(entry.name)
+            if match is None or _pid_running(int(match["pid"])):
+                continue
+            with contextlib.suppress(FileNotFoundError):  # another process removed it first
+                if entry.is_dir(follow_symlinks=False):
+                    shutil.rmtree(entry.path)
+                else:
+                    os.unlink(entry.path)
+                removed.append(Path(entry.path))
+    return removed
+
+
+class OutputSet:
+    """The outputs of one run: staged files that :meth:`commit` moves into place together.
+
+    Use through :func:`run_outputs`.
+
+    Args:
+        protect: the run's input files, never to be replaced (see :func:`check_destination`).
+    """
+
+    def __init__(self, protect: Iterable[str | os.PathLike[str] | None] = ()) -> None:
+        self._protect: list[Path] = []
+        self._staged: dict[Path, Path] = {}  # destination → staged file, in staging order
+        self._stages: dict[Path, Path] = {}  # destination folder → its staging folder
+        self._made: list[Path] = []  # output folders this run created, parents first
+        self.protect(*protect)
+
+    def protect(self, *paths: str | os.PathLike[str] | None) -> None:
+        """Add input files that no output may replace (None entries are ignored)."""
+        self._protect += [Path(p) for p in paths if p is not None]
+
+    def stage(self, path: str | os.PathLike[str]) -> Path:
+        """The path to write destination ``path`` to (same name, in a staging folder).
+
+        Raises:
+            OutputError: ``path`` must not be written, or was staged already in this run.
+            OSError: its folder cannot be created (the message names it).
+        """
+        final = Path(os.path.abspath(path))
+        check_destination(final, self._protect)
+        if final in self._staged:
+            raise OutputError(f"{path}: written twice by one run; give each output its own name")
+        stage = self._stages.get(final.parent)
+        if stage is None:
+            self._make_folder(final.parent)
+            remove_stale_temporaries(final.parent)
+            name = f".{final.name}.{os.getpid()}."
+            stage = Path(tempfile.mkdtemp(prefix=name, suffix=".tmp", dir=final.parent))
+            self._stages[final.parent] = stage
+        self._staged[final] = stage / final.name
+        return self._staged[final]
+
+    def _make_folder(self, folder: Path) -> None:
+        missing = [p for p in (folder, *folder.parents) if not p.exists()][::-1]
+        for p in missing:
+            try:
+                p.mkdir()
+            except FileExistsError:
+                pass  # made meanwhile by another process
+            except OSError as exc:
+                raise OSError(f"{p}: cannot create the output folder ({exc.strerror})") from exc
+            else:
+                self._made.append(p)
+        if not folder.is_dir():
+            raise OSError(f"{folder}: is not a folder; cannot write outputs into it")
+
+    def commit(self) -> list[Path]:
+        """Sync every staged file, check every destination again, then rename them into place.
+
+        Returns:
+            The destinations, in staging order.
+
+        Raises:
+            OSError: a staged file was never written (nothing is moved).
+            OutputError: a destination became unwritable meanwhile (nothing is moved).
+        """
+        for final, staged in self._staged.items():
+            if not staged.is_file():
+                raise OSError(f"{final}: its writer produced no file")
+            with open(staged, "rb+") as fh:
+                os.fsync(fh.fileno())
+            check_destination(final, self._protect)
+        for final, staged in self._staged.items():
+            os.replace(staged, final)
+        self._made.clear()  # the folders now hold outputs: keep them
+        return list(self._staged)
+
+    def discard(self) -> None:
+        """Remove the staging folders and, if nothing was committed, the folders created."""
+        for stage in self._stages.values():
+            shutil.rmtree(stage, ignore_errors=True)
+        for folder in reversed(self._made):
+            with contextlib.suppress(OSError):
+                folder.rmdir()  # only if empty
 
 
 @contextlib.contextmanager
-def atomic_path(path: str | os.PathLike[str]) -> Iterator[Path]:
-    """Yield a temporary path next to ``path``; rename it onto ``path`` on success.
+def run_outputs(
+    protect: Iterable[str | os.PathLike[str] | None] = (), join: OutputSet | None = None
+) -> Iterator[OutputSet]:
+    """All outputs of a run: stage them in the block, committed when the block succeeds.
+
+    Args:
+        protect: the run's input files (never replaced).
+        join: an enclosing run's :class:`OutputSet` to stage into instead (the enclosing run
+            commits, or discards, everything together).
+
+    Yields:
+        The :class:`OutputSet`; write each output to ``outputs.stage(destination)``.
+    """
+    if join is not None:
+        join.protect(*protect)
+        yield join
+        return
+    outputs = OutputSet(protect)
+    try:
+        yield outputs
+        outputs.commit()
+    finally:
+        outputs.discard()
+
+
+@contextlib.contextmanager
+def atomic_path(
+    path: str | os.PathLike[str], protect: Iterable[str | os.PathLike[str] | None] = ()
+) -> Iterator[Path]:
+    """Yield a temporary path for ``path``; it is moved onto ``path`` if the block succeeds.
 
     Args:
         path: final destination. Its parent folder is created if missing.
+        protect: input files ``path`` must not be (see :func:`check_destination`).
 
     Yields:
-        A temporary path with the same suffix (so writers that infer the format from the
-        extension, like ``cv2.imwrite`` or matplotlib, still work). On an exception the
-        temporary file is removed and ``path`` is left untouched.
+        A path with the same file name in a staging folder (so writers that infer the format
+        from the extension, like ``cv2.imwrite`` or matplotlib, still work). On an exception it
+        is removed and ``path`` is left untouched.
     """
-    final = Path(path)
-    final.parent.mkdir(parents=True, exist_ok=True)
-    fd, tmp_name = tempfile.mkstemp(
-        prefix=f".{final.stem}.", suffix=f".tmp{final.suffix}", dir=final.parent
-    )
-    os.close(fd)
-    tmp = Path(tmp_name)
-    os.chmod(tmp, 0o666 & ~_umask())  # mkstemp creates 0600; give the usual permissions
-    try:
-        yield tmp
-        os.replace(tmp, final)
-    finally:
-        if tmp.exists():
-            tmp.unlink()
+    with run_outputs(protect) as outputs:
+        yield outputs.stage(path)
 
 
 def _sync(fh: IO[Any]) -> None:
@@ -84,9 +274,9 @@ def atomic_open(path: str | os.PathLike[str], mode: str = "w") -> Iterator[IO[An
 
 def write_json(path: str | os.PathLike[str], obj: Any) -> None:
     """Write ``obj`` as indented JSON, atomically. Rejects NaN/inf (``allow_nan=False``)."""
-    text = json.dumps(obj, indent=2, allow_nan=False)
+    text = json_text(obj)
     with atomic_open(path, "w") as fh:
-        fh.write(text + "\n")
+        fh.write(text)
 
 
 def write_text(path: str | os.PathLike[str], text: str) -> None:

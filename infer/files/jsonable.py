@@ -1,7 +1,9 @@
-"""Plain-JSON conversion of result values (numpy scalars and arrays, paths; NaN/inf → None)."""
+"""Plain-JSON conversion of result values (numpy scalars and arrays, paths; NaN/inf → None) and
+the one JSON text form of outputs."""
 
 from __future__ import annotations
 
+import json
 import math
 import os
 from typing import Any
@@ -36,3 +38,8 @@ def jsonable(obj: Any) -> Any:
     if isinstance(obj, os.PathLike):
         return os.fspath(obj)
     return str(obj)
+
+
+def json_text(obj: Any, ensure_ascii: bool = True) -> str:
+    """``obj`` as indented JSON text with a final newline; NaN/inf are rejected (ValueError)."""
+    return json.dumps(obj, indent=2, ensure_ascii=ensure_ascii, allow_nan=False) + "\n"

@@ -1,7 +1,8 @@
 """Any image array → the canonical ``(H, W) uint8`` grayscale form (the published routine's).
 
 Colour is converted with OpenCV's ITU-R BT.601 luma, alpha is dropped, 16-bit samples are scaled
-by 255/65535 with rounding, float arrays are taken as ``[0, 1]`` intensities.
+by 255/65535 with rounding, float arrays are taken as ``[0, 1]`` intensities (values outside are
+an error, never clipped: a float image in 0-255 would otherwise read as almost all white).
 """
 
 from __future__ import annotations
@@ -19,8 +20,8 @@ def to_gray_u8(image: np.ndarray, name: str = "<array>", bgr: bool = False) -> n
 
     Args:
         image: ``(H, W)``, ``(H, W, 1)``, ``(H, W, 3)`` or ``(H, W, 4)`` array of dtype uint8,
-            uint16 (scaled to 8 bits), bool, or float (intensities in ``[0, 1]``, clipped;
-            NaN/inf rejected).
+            uint16 (scaled to 8 bits), bool, or float (intensities in ``[0, 1]``; NaN, inf and
+            values outside ``[0, 1]`` rejected).
         name: how to refer to the input in error messages (usually its file name).
         bgr: channel order is OpenCV's BGR(A) (files) rather than RGB(A) (arrays).
 
@@ -28,7 +29,7 @@ def to_gray_u8(image: np.ndarray, name: str = "<array>", bgr: bool = False) -> n
         ``(H, W) uint8`` contiguous array.
 
     Raises:
-        ImageError: wrong shape or dtype, empty, or non-finite values.
+        ImageError: wrong shape or dtype, empty, non-finite or out-of-range float values.
     """
     if not isinstance(image, np.ndarray):
         raise ImageError(f"{name}: expected a numpy array, got {type(image).__name__}")
@@ -45,7 +46,13 @@ def to_gray_u8(image: np.ndarray, name: str = "<array>", bgr: bool = False) -> n
     elif np.issubdtype(image.dtype, np.floating):
         if not np.all(np.isfinite(image)):
             raise ImageError(f"{name}: float image contains NaN or inf; expected finite values")
-        image = np.rint(np.clip(image, 0.0, 1.0) * 255.0).astype(np.uint8)
+        lo, hi = float(image.min()), float(image.max())
+        if lo < 0.0 or hi > 1.0:
+            raise ImageError(
+                f"{name}: float image values span [{lo:g}, {hi:g}]; expected intensities in "
+                "[0, 1] (divide a 0-255 image by 255, or save it as 8- or 16-bit integers)"
+            )
+        image = np.rint(image * 255.0).astype(np.uint8)
     elif image.dtype != np.uint8:
         raise ImageError(f"{name}: expected uint8, uint16, bool or float, got {image.dtype}")
     if image.ndim == 3:

@@ -1,4 +1,4 @@
-"""JPEG frame size from the file header, without decoding the image (Pillow reads the header)."""
+"""JPEG frame size from the file header (Pillow reads the header; the pixels are not decoded)."""
 
 from __future__ import annotations
 

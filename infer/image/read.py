@@ -2,8 +2,13 @@
 
 The canonical form is a ``(H, W) uint8`` grayscale image, the form the published OpenCV routine
 works on (its ROI threshold of 150 is an 8-bit grey level). Colour is converted with OpenCV's
-ITU-R BT.601 luma (``cv2.cvtColor(..., COLOR_BGR2GRAY)``), alpha is dropped, 16-bit samples are
-scaled by 255/65535 with rounding, float arrays are taken as ``[0, 1]`` intensities.
+ITU-R BT.601 luma (``cv2.cvtColor(..., COLOR_BGR2GRAY)``), alpha is dropped, float arrays are
+taken as ``[0, 1]`` intensities (values outside are an error).
+
+Bit depth is never guessed silently. 8-bit samples are full range. 16-bit samples holding N-bit
+data (10- or 12-bit cameras) are scaled by ``255 / (2**N - 1)``; N comes from the PNG ``sBIT``
+chunk or from the caller (``--bit-depth``). Without either, a 16-bit file is full range
+(255/65535) only when its maximum exceeds :data:`LOW_BITS_MAX`; otherwise it is an error.
 """
 
 from __future__ import annotations
@@ -14,10 +19,24 @@ from pathlib import Path
 import cv2
 import numpy as np
 
+from contactcal.infer.image.decode import decode_strict
 from contactcal.infer.image.gray import ImageError, to_gray_u8
+from contactcal.infer.image.png import png_significant_bits
 
 #: File suffixes accepted by :func:`load_image` (lower case).
 SUPPORTED_SUFFIXES = (".png", ".jpg", ".jpeg", ".tif", ".tiff", ".bmp")
+#: Largest maximum a 16-bit file without stated depth may have before it is ambiguous: 10-,
+#: 12- and 14-bit data stored in the low bits never exceed 16383 (= 2**14 - 1), and a genuine
+#: 16-bit rig frame (bright ring near saturation) does. Read such data as 16-bit and it comes
+#: out 4 to 64 times too dark (areas off by +6 to +17 %, or no ring found).
+LOW_BITS_MAX = 16383
+#: Smallest width and height of a frame, px. The bundled tests' frames are 64×48, rig frames
+#: thousands of px; below 16 px no ring or contact patch is resolvable, and a 3 px strip makes
+#: the U-Net's ring fit ask for terabytes.
+MIN_FRAME_SIDE_PX = 16
+#: Largest long/short side ratio of a frame: sensors are 1:1 to 16:9 (1.8), panoramic ones
+#: 21:9 (2.3); a more elongated image is a strip or a raw buffer read with the wrong width.
+MAX_ASPECT_RATIO = 4.0
 
 
 def _check_complete(path: Path, data: bytes) -> None:
@@ -61,36 +80,103 @@ def read_file_bytes(path: str | os.PathLike[str]) -> bytes:
     return data
 
 
-def load_image(path: str | os.PathLike[str], reduce: int = 1) -> np.ndarray:
+def _check_frame_shape(p: Path, height: int, width: int) -> None:
+    """Reject images too small or too elongated to be a rig frame (sizes in file pixels)."""
+    short, long = min(height, width), max(height, width)
+    if short < MIN_FRAME_SIDE_PX or long > MAX_ASPECT_RATIO * short:
+        raise ImageError(
+            f"{p}: {width}×{height} px is not a rig frame; expected both sides >= "
+            f"{MIN_FRAME_SIDE_PX} px and a long/short side ratio <= {MAX_ASPECT_RATIO:g}"
+        )
+
+
+def _stated_depth(p: Path, data: bytes, bit_depth: int | None) -> tuple[int | None, str]:
+    """The data's bit depth and who stated it: the caller, the PNG ``sBIT`` chunk, or nobody."""
+    sbit = png_significant_bits(data) if p.suffix.lower() == ".png" else None
+    if sbit is not None and not 1 <= sbit <= 16:
+        raise ImageError(f"{p}: invalid PNG sBIT chunk ({sbit} bits); re-export the file")
+    if bit_depth is not None and sbit is not None and bit_depth != sbit:
+        raise ImageError(
+            f"{p}: --bit-depth {bit_depth} contradicts the file's sBIT chunk ({sbit} bits); "
+            "drop the option or correct it"
+        )
+    if sbit is not None:
+        return sbit, "the PNG sBIT chunk"
+    return bit_depth, "--bit-depth"
+
+
+def _scale_depth(p: Path, img: np.ndarray, depth: int | None, source: str) -> np.ndarray:
+    """Integer samples holding ``depth``-bit data → uint8; full-range samples pass unchanged."""
+    if img.dtype not in (np.uint8, np.uint16):
+        return img  # float (intensities in [0, 1]) or a dtype to_gray_u8 reports
+    colour = img[..., :3] if img.ndim == 3 and img.shape[2] == 4 else img  # alpha is dropped
+    bits, top = 8 * img.dtype.itemsize, int(colour.max())
+    if depth is None:
+        if bits == 8 or top > LOW_BITS_MAX:
+            return img
+        raise ImageError(
+            f"{p}: 16-bit samples with maximum {top} (<= {LOW_BITS_MAX}) and no sBIT chunk; "
+            "the bit depth cannot be told: pass --bit-depth N (10 or 12 for such cameras, "
+            "16 for a dark 16-bit frame)"
+        )
+    if depth > bits:
+        raise ImageError(
+            f"{p}: {source} says {depth}-bit data but the file holds {bits}-bit samples"
+        )
+    full = (1 << depth) - 1
+    if top > full and source == "--bit-depth":
+        raise ImageError(
+            f"{p}: maximum {top} exceeds the {depth}-bit range 0-{full} of --bit-depth {depth}; "
+            f"pass the data's true depth (--bit-depth {bits} for full-range samples)"
+        )
+    if depth == bits or top > full:  # PNG's convention: N-bit data scaled to the full range
+        return img
+    return np.rint(img.astype(np.float32) * (255.0 / full)).astype(np.uint8)
+
+
+def load_image(
+    path: str | os.PathLike[str], reduce: int = 1, bit_depth: int | None = None
+) -> np.ndarray:
     """Load an image file into the canonical ``(H, W) uint8`` grayscale form.
 
     Args:
-        path: PNG, JPEG, TIFF or BMP file; 8- or 16-bit; gray, RGB or RGBA.
+        path: PNG, JPEG, TIFF or BMP file; 8- or 16-bit integer or float; gray, RGB or RGBA.
         reduce: 1, 2, 4 or 8. For JPEG, decode at 1/reduce resolution directly (libjpeg's
             DCT scaling: several times cheaper); other formats are decoded fully and
             area-resized. The result is about ``(H/reduce, W/reduce)``.
+        bit_depth: significant bits of the integer samples (1-16), e.g. 12 for a 12-bit
+            camera's 16-bit PNG holding 0-4095; None → from the PNG ``sBIT`` chunk, else the
+            rule of the module docstring. Ignored for float files.
 
     Returns:
         ``(H, W) uint8`` grayscale image.
 
     Raises:
-        ImageError: the file is missing, unreadable, empty, truncated or not an image.
+        ImageError: the file is missing, unreadable, empty, truncated, corrupt, not an image,
+            not frame-shaped, or of an unknown or contradictory bit depth.
     """
     if reduce not in (1, 2, 4, 8):
         raise ValueError(f"reduce must be 1, 2, 4 or 8, got {reduce}")
+    if bit_depth is not None and not 1 <= bit_depth <= 16:
+        raise ValueError(f"bit depth must be 1-16 bits per sample, got {bit_depth}")
     p = Path(path)
     data = read_file_bytes(p)
     buf = np.frombuffer(data, dtype=np.uint8)
     jpeg = p.suffix.lower() in (".jpg", ".jpeg")
-    if reduce > 1 and jpeg:
-        flag = {2: cv2.IMREAD_REDUCED_GRAYSCALE_2, 4: cv2.IMREAD_REDUCED_GRAYSCALE_4}.get(
-            reduce, cv2.IMREAD_REDUCED_GRAYSCALE_8
-        )
-        img = cv2.imdecode(buf, flag)
+    if jpeg:
+        flag = {
+            2: cv2.IMREAD_REDUCED_GRAYSCALE_2,
+            4: cv2.IMREAD_REDUCED_GRAYSCALE_4,
+            8: cv2.IMREAD_REDUCED_GRAYSCALE_8,
+        }.get(reduce, cv2.IMREAD_UNCHANGED)
     else:
-        img = cv2.imdecode(buf, cv2.IMREAD_UNCHANGED)
+        flag = cv2.IMREAD_UNCHANGED
+    img = decode_strict(buf, flag, str(p))
     if img is None or img.size == 0:
         raise ImageError(f"{p}: not a decodable image (corrupt or unsupported content)")
+    k = reduce if jpeg else 1  # the JPEG was decoded at 1/k
+    _check_frame_shape(p, img.shape[0] * k, img.shape[1] * k)
+    img = _scale_depth(p, img, *_stated_depth(p, data, bit_depth))
     gray = to_gray_u8(img, name=str(p), bgr=True)
     if reduce > 1 and not jpeg:
         h, w = gray.shape

@@ -11,7 +11,7 @@ import os
 from collections.abc import Sequence
 from dataclasses import dataclass, replace
 from pathlib import Path
-from typing import Protocol
+from typing import Any, Protocol
 
 import numpy as np
 
@@ -42,10 +42,13 @@ class Method(Protocol):
 
     name: str
 
-    def start(self, files: Sequence[Path], reference: Path | None) -> int:
+    def start(
+        self, files: Sequence[Path], reference: Path | None, bit_depth: int | None = None
+    ) -> int:
         """Begin a session of image files: read the reference, return the decode reduction k.
 
-        The frames are then to be loaded with ``load_image(path, reduce=k)``.
+        The frames are then to be loaded with ``load_image(path, reduce=k, bit_depth=...)``;
+        ``bit_depth`` is the significant bits of 16-bit files (None: from the file).
         """
 
     def set_reference(self, reference: np.ndarray | None, reduction: int = 1) -> None:
@@ -54,7 +57,12 @@ class Method(Protocol):
     def measure(self, image: np.ndarray) -> AreaResult:
         """Measure one ``(H, W) uint8`` frame; areas in pixels of the undecimated file."""
 
+    def describe(self) -> dict[str, Any]:
+        """The method's configuration as plain JSON values, for records (``calibration.json``)."""
 
-def load_reference(path: str | os.PathLike[str] | None, reduction: int = 1) -> np.ndarray | None:
+
+def load_reference(
+    path: str | os.PathLike[str] | None, reduction: int = 1, bit_depth: int | None = None
+) -> np.ndarray | None:
     """The session's reference frame decoded at 1/reduction, or None."""
-    return None if path is None else load_image(path, reduce=reduction)
+    return None if path is None else load_image(path, reduce=reduction, bit_depth=bit_depth)

@@ -17,10 +17,12 @@ meaningless below the contact onset. It is kept faithful on purpose: it is the b
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from collections.abc import Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
+from typing import Any
 
 import cv2
 import numpy as np
@@ -188,9 +190,11 @@ class ClassicalMethod:
         self.config = config or ClassicalConfig()
         self.roi: Roi | None = None
 
-    def start(self, files: Sequence[Path], reference: Path | None) -> int:
+    def start(
+        self, files: Sequence[Path], reference: Path | None, bit_depth: int | None = None
+    ) -> int:
         """Read the reference fully decoded (the routine's constants are for full frames)."""
-        self.set_reference(load_reference(reference))
+        self.set_reference(load_reference(reference, bit_depth=bit_depth))
         return 1
 
     def set_reference(self, reference: np.ndarray | None, reduction: int = 1) -> None:
@@ -210,3 +214,7 @@ class ClassicalMethod:
             )
             contour = pts.reshape(-1, 1, 2).astype(np.int32)
         return AreaResult(res.contact, res.area_px, res.reason, contour)
+
+    def describe(self) -> dict[str, Any]:
+        """``{"name": "classical", "config": <ClassicalConfig fields>}``."""
+        return {"name": self.name, "config": dataclasses.asdict(self.config)}

@@ -8,7 +8,7 @@ from pathlib import Path
 import numpy as np
 
 from contactcal.infer.calibration.calibrate import CalibrationReport, calibrate_session
-from contactcal.infer.files.atomic import write_text
+from contactcal.infer.files.atomic import run_outputs, write_synced
 from contactcal.infer.image.read import load_image
 from contactcal.infer.image.write import write_image
 from contactcal.infer.methods.registry import METHODS
@@ -26,7 +26,7 @@ def run_demo(
     """Calibrate a session (default: the bundled example) with every method.
 
     Writes ``<out>/<method>/{calibration.json, calibration.csv, curve.png}``, a side-by-side
-    overlay montage ``<out>/overlay_montage.png`` and ``<out>/summary.txt``.
+    overlay montage ``<out>/overlay_montage.png`` and ``<out>/summary.txt``, all or nothing.
 
     Returns:
         The printed summary (one table per method).
@@ -37,20 +37,23 @@ def run_demo(
     scale = load_rig_config(rig) if rig.is_file() else None
     reports: dict[str, CalibrationReport] = {}
     lines = [f"session: {manifest}"]
-    for method in METHODS:
-        rep = calibrate_session(manifest, out / method, method, None, scale, outline=True)
-        reports[method] = rep
-        lines += [f"\n== {method} → {out / method}", rep.table]
-    frames = next(iter(reports.values())).frames
-    pressures = [f.pressure_kpa for f in frames]
-    picks = sorted({int(np.argmin(np.abs(np.subtract(pressures, p)))) for p in MONTAGE_KPA})
-    tiles = []
-    for i in picks:
-        contours = {name: rep.measured[i].result.contour for name, rep in reports.items()}
-        title = f"{frames[i].pressure_kpa:g} kPa"
-        tiles.append(draw_overlay(load_image(frames[i].file), contours, title))
-    write_image(out / "overlay_montage.png", montage(tiles, columns=3))
-    lines.append(f"\noverlays: {out / 'overlay_montage.png'}")
-    text = "\n".join(lines) + "\n"
-    write_text(out / "summary.txt", text)
+    with run_outputs() as outs:
+        for method in METHODS:
+            rep = calibrate_session(
+                manifest, out / method, method, None, scale, outline=True, outputs=outs
+            )
+            reports[method] = rep
+            lines += [f"\n== {method} → {out / method}", rep.table]
+        frames = next(iter(reports.values())).frames
+        pressures = [f.pressure_kpa for f in frames]
+        picks = sorted({int(np.argmin(np.abs(np.subtract(pressures, p)))) for p in MONTAGE_KPA})
+        tiles = []
+        for i in picks:
+            contours = {name: rep.measured[i].result.contour for name, rep in reports.items()}
+            title = f"{frames[i].pressure_kpa:g} kPa"
+            tiles.append(draw_overlay(load_image(frames[i].file), contours, title))
+        write_image(outs.stage(out / "overlay_montage.png"), montage(tiles, columns=3))
+        lines.append(f"\noverlays: {out / 'overlay_montage.png'}")
+        text = "\n".join(lines) + "\n"
+        write_synced(outs.stage(out / "summary.txt"), text)
     return text

@@ -7,8 +7,9 @@ Format: a UTF-8 CSV (a byte-order mark is tolerated) whose header is exactly ``f
     p00.0kpa.png,0.0
     p02.0kpa.png,2.0
 
-``file`` is an image path, relative to the manifest's folder or absolute; ``pressure_kpa`` is the
-chamber gauge pressure in kPa (>= 0), one frame per pressure step. Blank lines are skipped.
+``file`` is an image path, relative to the manifest's folder or absolute, each image on one row
+only; ``pressure_kpa`` is the chamber gauge pressure in kPa (0 to :data:`MAX_PRESSURE_KPA`), one
+frame per pressure step. Blank lines are skipped.
 Rows may be in any order: `read_manifest` returns the frames sorted by pressure, and the
 lowest-pressure frame is the session's reference frame (normally 0 kPa, membrane at rest, no
 contact).
@@ -23,11 +24,15 @@ import os
 from dataclasses import dataclass
 from pathlib import Path
 
-__all__ = ["EXPECTED_COLUMNS", "Frame", "ManifestError", "read_manifest"]
+__all__ = ["EXPECTED_COLUMNS", "MAX_PRESSURE_KPA", "Frame", "ManifestError", "read_manifest"]
 
 EXPECTED_COLUMNS: tuple[str, ...] = ("file", "pressure_kpa")
 _HEADER = ",".join(EXPECTED_COLUMNS)
 _MAX_LISTED = 5
+#: Highest plausible chamber gauge pressure, kPa. The display works at 0-20 kPa; 200 kPa is ten
+#: times that, so a larger value is a unit slip (Pa for kPa) or a typo, not a calibration step.
+#: (Negative gauge pressure, suction, is no calibration step either: the lower bound is 0.)
+MAX_PRESSURE_KPA = 200.0
 
 
 class ManifestError(ValueError):
@@ -159,6 +164,11 @@ def _parse_pressure(at: str, cell: str) -> float:
         raise ManifestError(
             f"{at}: pressure_kpa {value:g} is negative; expected a gauge pressure >= 0 kPa"
         )
+    if value > MAX_PRESSURE_KPA:
+        raise ManifestError(
+            f"{at}: pressure_kpa {value:g} is above the plausible {MAX_PRESSURE_KPA:g} kPa "
+            "(the display works at 0-20 kPa); expected kPa, not Pa or another unit"
+        )
     return value
 
 
@@ -192,7 +202,7 @@ def _parse_row(
 
 
 def _check_frames(where: str, frames: list[Frame], base: Path) -> None:
-    """Sort by pressure in place; reject repeated pressures, < 2 frames and missing files."""
+    """Sort by pressure in place; reject repeated pressures or files, < 2 frames, missing files."""
     frames.sort(key=lambda f: f.pressure_kpa)
     for a, b in itertools.pairwise(frames):
         if a.pressure_kpa == b.pressure_kpa:
@@ -215,3 +225,17 @@ def _check_frames(where: str, frames: list[Frame], base: Path) -> None:
             f"{where}: {len(missing)} image file(s) not found: {listed}{more}; relative paths "
             f"are resolved against the manifest's folder {base}"
         )
+    _check_distinct_files(where, frames)
+
+
+def _check_distinct_files(where: str, frames: list[Frame]) -> None:
+    """Reject one image on two rows (same file after resolving links, or a hard link to it)."""
+    seen: dict[tuple[int, int], Frame] = {}
+    for f in sorted(frames, key=lambda f: f.row):
+        st = f.file.stat()
+        first = seen.setdefault((st.st_dev, st.st_ino), f)
+        if first is not f:
+            raise ManifestError(
+                f"{where}: rows {first.row} ({first.file}) and {f.row} ({f.file}) are the same "
+                "image file; expected one image per pressure step: list each frame once"
+            )

@@ -3,13 +3,16 @@
 from __future__ import annotations
 
 import os
+from collections import Counter
 from collections.abc import Mapping, Sequence
 from pathlib import Path
 
 import cv2
 import numpy as np
 
+from contactcal.infer.files.atomic import OutputSet, run_outputs
 from contactcal.infer.image.read import load_image
+from contactcal.infer.image.write import write_image
 from contactcal.infer.pipeline.measure import Measured
 
 #: Outline colours (BGR) per method.
@@ -59,30 +62,69 @@ def montage(images: Sequence[np.ndarray], columns: int, width: int = 400) -> np.
     return np.vstack([np.hstack(tiles[r * columns : (r + 1) * columns]) for r in range(rows)])
 
 
+def overlay_names(files: Sequence[str | os.PathLike[str]]) -> list[str]:
+    """One overlay file name per input, distinct (case-insensitively) and deterministic.
+
+    ``<stem>_overlay.png``; inputs whose names still collide get the next form, in turn:
+    ``<stem>_<ext>`` (``x.jpg`` → ``x_jpg_overlay.png``), ``<folder>_<stem>_<ext>``
+    (``a/x.jpg`` → ``a_x_jpg_overlay.png``), then ``<folder>_<stem>_<ext>_<n>`` with ``n`` the
+    input's 1-based position (always distinct: ``n`` is the only part after the last ``_``).
+
+    Args:
+        files: the input images, in order.
+
+    Returns:
+        File names (no folder), in input order.
+    """
+    paths = [Path(os.path.abspath(f)) for f in files]
+    forms = [
+        lambda p, n: [p.stem],
+        lambda p, n: [p.stem, p.suffix[1:]],
+        lambda p, n: [p.parent.name, p.stem, p.suffix[1:]],
+        lambda p, n: [p.parent.name, p.stem, p.suffix[1:], str(n)],
+    ]
+    level = [0] * len(paths)
+    while True:
+        names = [
+            "_".join(x for x in forms[lv](p, n) if x) + "_overlay.png"
+            for n, (p, lv) in enumerate(zip(paths, level, strict=True), start=1)
+        ]
+        seen = Counter(name.casefold() for name in names)
+        clash = [k for k, name in enumerate(names) if seen[name.casefold()] > 1]
+        if not clash:
+            return names
+        for k in clash:
+            level[k] = min(level[k] + 1, len(forms) - 1)
+
+
 def write_overlays(
     runs: dict[str, list[Measured]],
     out_dir: str | os.PathLike[str],
     titles: Sequence[str] | None = None,
+    outputs: OutputSet | None = None,
+    bit_depth: int | None = None,
 ) -> list[Path]:
-    """Draw every method's outline on each frame and write ``<stem>_overlay.png`` files.
+    """Draw every method's outline on each frame and write one overlay PNG per frame.
+
+    File names: :func:`overlay_names`. All or nothing (:func:`run_outputs`).
 
     Args:
         runs: method name → its measurements of the same files (same order).
         out_dir: folder for the overlays.
         titles: per-file caption (e.g. ``"8.0 kPa"``); default the file name.
+        outputs: the enclosing run's outputs to stage into (None: this call is the run).
+        bit_depth: significant bits of 16-bit frames, as measured (None: from the file).
 
     Returns:
-        The written paths, in file order.
+        The destination paths, in file order.
     """
-    from contactcal.infer.image.write import write_image
-    from contactcal.infer.pipeline.overlay import draw_overlay
-
     first = next(iter(runs.values()))
-    paths: list[Path] = []
-    for k, m in enumerate(first):
-        gray = load_image(m.file)
-        contours = {name: ms[k].result.contour for name, ms in runs.items()}
-        title = titles[k] if titles is not None else m.file.name
-        img = draw_overlay(gray, contours, title)
-        paths.append(write_image(Path(out_dir) / f"{m.file.stem}_overlay.png", img))
+    names = overlay_names([m.file for m in first])
+    paths = [Path(out_dir) / name for name in names]
+    with run_outputs([m.file for m in first], join=outputs) as outs:
+        for k, m in enumerate(first):
+            gray = load_image(m.file, bit_depth=bit_depth)
+            contours = {name: ms[k].result.contour for name, ms in runs.items()}
+            title = titles[k] if titles is not None else m.file.name
+            write_image(outs.stage(paths[k]), draw_overlay(gray, contours, title))
     return paths

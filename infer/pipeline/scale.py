@@ -12,9 +12,19 @@ from __future__ import annotations
 
 import json
 import math
+import numbers
 import os
 from dataclasses import dataclass
 from pathlib import Path
+
+#: Plausible mm per pixel at the contact plane. The rig's camera gives ~0.012 mm/px on a
+#: 2592 px frame (a ~30 mm field); 1e-4 mm/px (a 0.26 mm field) is finer than any camera's view
+#: of a fingertip and 10 mm/px (a 16 px frame spans 16 cm) coarser than any frame of one. The
+#: bounds keep every area conversion finite.
+MM_PER_PX_RANGE = (1e-4, 10.0)
+#: Plausible width (px) a scale was measured at: a rig frame is >= 16 px wide and no camera
+#: sensor has more than 100,000 px per row.
+IMAGE_WIDTH_RANGE_PX = (16, 100_000)
 
 
 class RigConfigError(ValueError):
@@ -25,31 +35,56 @@ class RigConfigError(ValueError):
 class PixelScale:
     """Camera scale at the contact plane."""
 
-    mm_per_px: float  # mm per pixel at image_width_px
+    mm_per_px: float  # mm per pixel at image_width_px, within MM_PER_PX_RANGE
     image_width_px: int | None  # width the scale was measured at; None = any width (as given)
 
     def __post_init__(self) -> None:
-        if not (math.isfinite(self.mm_per_px) and self.mm_per_px > 0):
-            raise ValueError(f"mm_per_px must be a positive number, got {self.mm_per_px}")
-        if self.image_width_px is not None and self.image_width_px <= 0:
-            raise ValueError(f"image_width_px must be positive, got {self.image_width_px}")
+        lo, hi = MM_PER_PX_RANGE
+        m = self.mm_per_px
+        if isinstance(m, bool) or not isinstance(m, numbers.Real) or not lo <= m <= hi:
+            raise ValueError(
+                f"mm_per_px must be a number of mm per pixel in [{lo:g}, {hi:g}] "
+                f"(the rig: ~0.012 at 2592 px wide), got {m!r}"
+            )
+        w, (wlo, whi) = self.image_width_px, IMAGE_WIDTH_RANGE_PX
+        if w is not None and (
+            isinstance(w, bool) or not isinstance(w, numbers.Integral) or not wlo <= w <= whi
+        ):
+            raise ValueError(
+                f"image_width_px must be a whole number of pixels in [{wlo}, {whi}], got {w!r}"
+            )
 
     def at_width(self, width_px: int) -> float:
-        """mm per pixel for an image ``width_px`` wide."""
+        """mm per pixel for an image ``width_px`` (>= 1) wide."""
+        if width_px < 1:
+            raise ValueError(f"image width must be >= 1 px, got {width_px}")
         if self.image_width_px is None:
             return self.mm_per_px
         return self.mm_per_px * self.image_width_px / width_px
 
     def area_mm2(self, area_px: float, width_px: int) -> float:
-        """Convert an area in pixels of an image ``width_px`` wide to mm²."""
+        """Convert an area in pixels of an image ``width_px`` wide to mm².
+
+        Finite for any finite area: the scale's bounds keep ``at_width`` <= 1e6 mm/px.
+        """
+        if not (math.isfinite(area_px) and area_px >= 0.0):
+            raise ValueError(f"area must be a finite number of pixels >= 0, got {area_px}")
         return area_px * self.at_width(width_px) ** 2
+
+
+def _width(value: object) -> object:
+    """A JSON width as an int when it is a whole number (2592.0 → 2592); else unchanged."""
+    if isinstance(value, float) and math.isfinite(value) and value.is_integer():
+        return int(value)
+    return value
 
 
 def load_rig_config(path: str | os.PathLike[str]) -> PixelScale:
     """Read a rig config JSON (``mm_per_px`` and ``image_width_px``).
 
     Raises:
-        RigConfigError: missing file, invalid JSON, missing or invalid fields.
+        RigConfigError: missing file, invalid JSON, missing or invalid (non-numeric,
+            non-finite, out-of-range, fractional width) fields.
     """
     p = Path(path)
     try:
@@ -64,6 +99,6 @@ def load_rig_config(path: str | os.PathLike[str]) -> PixelScale:
             '{"mm_per_px": 0.0118, "image_width_px": 2592}'
         )
     try:
-        return PixelScale(float(data["mm_per_px"]), int(data["image_width_px"]))
-    except (TypeError, ValueError) as exc:
+        return PixelScale(data["mm_per_px"], _width(data["image_width_px"]))
+    except ValueError as exc:
         raise RigConfigError(f"{p}: {exc}") from exc

@@ -7,13 +7,16 @@ as the crop stays at least the network's input size.
 
 from __future__ import annotations
 
+import dataclasses
 import os
 from collections.abc import Sequence
 from pathlib import Path
+from typing import Any
 
 import cv2
 import numpy as np
 
+from contactcal.infer.files.digest import sha256_file
 from contactcal.infer.image.jpeg import jpeg_size
 from contactcal.infer.image.read import load_image
 from contactcal.infer.methods.base import AreaResult, load_reference
@@ -45,7 +48,9 @@ class UnetMethod:
         self.reference = session_reference(None)
         self.reduction = 1
 
-    def start(self, files: Sequence[Path], reference: Path | None) -> int:
+    def start(
+        self, files: Sequence[Path], reference: Path | None, bit_depth: int | None = None
+    ) -> int:
         """Choose the decode reduction from the ring's size, then prepare the reference.
 
         A reduction k > 1 is used only when every file is a JPEG of one size divisible by k (so
@@ -53,16 +58,14 @@ class UnetMethod:
         ring is searched on the 1/8 decode; at k = 8 that search is the session's.
         """
         paths = [*files, *([reference] if reference is not None else [])]
-        if not paths or not all(p.suffix.lower() in (".jpg", ".jpeg") for p in paths):
-            self.set_reference(load_reference(reference))
-            return 1
-        sizes = {jpeg_size(p) for p in paths}
-        if len(sizes) != 1:
-            self.set_reference(load_reference(reference))
+        jpegs = bool(paths) and all(p.suffix.lower() in (".jpg", ".jpeg") for p in paths)
+        sizes = {jpeg_size(p) for p in paths} if jpegs else set()
+        if len(sizes) != 1:  # not all JPEG, or JPEGs of several sizes: decode fully
+            self.set_reference(load_reference(reference, bit_depth=bit_depth))
             return 1
         (h, w), cfg = sizes.pop(), self.segmenter.spec.preprocess
         # paths[-1] is the reference when there is one.
-        coarse = session_reference(load_image(paths[-1], reduce=8), cfg)
+        coarse = session_reference(load_image(paths[-1], reduce=8, bit_depth=bit_depth), cfg)
         k = 1
         if coarse.box is not None:  # the ring was found
             side = coarse.box.side * 8  # crop side in file pixels
@@ -71,7 +74,7 @@ class UnetMethod:
         if k == 8 and reference is not None:
             self.reference, self.reduction = coarse, 8
         else:
-            self.set_reference(load_reference(reference, k), k)
+            self.set_reference(load_reference(reference, k, bit_depth), k)
         return k
 
     def set_reference(self, reference: np.ndarray | None, reduction: int = 1) -> None:
@@ -91,3 +94,19 @@ class UnetMethod:
             contour = max(contours, key=cv2.contourArea) if contours else None
         res = AreaResult(True, seg.area_px, "", contour, seg.soft_area_px)
         return res.upscaled(self.reduction)
+
+    def describe(self) -> dict[str, Any]:
+        """The model file, its sha256, its training ``data_digest`` and its deployment spec."""
+        seg, spec = self.segmenter, self.segmenter.spec
+        return {
+            "name": self.name,
+            "model": str(seg.path.resolve()),
+            "model_sha256": sha256_file(seg.path),
+            "data_digest": seg.metadata.get("data_digest"),
+            "spec": {
+                "channels": spec.channels,
+                "preprocess": dataclasses.asdict(spec.preprocess),
+                "threshold": spec.threshold,
+                "min_contact_area_px": spec.min_contact_area_px,
+            },
+        }

@@ -33,7 +33,8 @@ def postprocess(
 ) -> Segmentation:
     """Keep the largest connected region above the threshold; decide contact; measure it.
 
-    Network pixels whose centres fall outside the image are ignored. Ring reflections and
+    Network pixels whose centres fall outside the image are ignored (a crop that barely overlaps
+    the image may have none inside: then no contact, area 0). Ring reflections and
     sparkle give small or detached specks: only the largest region counts, and only if it covers
     at least ``spec.min_contact_area_px`` network pixels.
 

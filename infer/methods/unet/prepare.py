@@ -113,14 +113,25 @@ def crop_resize(image: np.ndarray, box: CropBox, size: int) -> np.ndarray:
     return cv2.resize(crop, (size, size), interpolation=interp)
 
 
-def valid_window(box: CropBox, shape: tuple[int, int], size: int) -> tuple[slice, slice]:
-    """Network-pixel rows/cols whose centres fall inside the image."""
+def valid_window(box: CropBox, shape: tuple[int, ...], size: int) -> tuple[slice, slice]:
+    """Network-pixel rows/cols whose centres fall inside the image.
+
+    Args:
+        box: the crop.
+        shape: input image shape ``(H, W)``.
+        size: network input side ``S``, px.
+
+    Returns:
+        ``(rows, cols)`` slices into an ``(S, S)`` map; EMPTY (``slice(0, 0)`` both) when no
+        network pixel centre falls inside the image (a box that barely overlaps it): such a
+        crop holds no measurable pixel.
+    """
     k = box.side / size
     u = (np.arange(size) + 0.5) * k - 0.5
     cols = np.flatnonzero((u + box.x0 >= -0.5) & (u + box.x0 <= shape[1] - 0.5))
     rows = np.flatnonzero((u + box.y0 >= -0.5) & (u + box.y0 <= shape[0] - 0.5))
     if cols.size == 0 or rows.size == 0:
-        return slice(0, size), slice(0, size)
+        return slice(0, 0), slice(0, 0)
     return slice(rows[0], rows[-1] + 1), slice(cols[0], cols[-1] + 1)
 
 
@@ -150,8 +161,10 @@ def to_network(
     gray = to_gray_u8(gray, name="to_network input")
     s = config.input_size
     crop = crop_resize(gray, box, s)
-    rows, cols = valid_window(box, gray.shape, s)
-    ref = float(np.percentile(crop[rows, cols], config.norm_percentile))
+    inside = crop[valid_window(box, gray.shape, s)]
+    # No network pixel inside the image: nothing to normalise to; postprocess then reports no
+    # contact (it ignores every network pixel outside the image), so the scale is immaterial.
+    ref = float(np.percentile(inside, config.norm_percentile)) if inside.size else 1.0
     u = np.clip(crop / max(ref, 1.0), 0.0, 1.0)
     return unit_to_network(u, config).astype(np.float32)
 

@@ -10,6 +10,11 @@ import numpy as np
 from contactcal.infer.image.gray import to_gray_u8
 from contactcal.infer.methods.unet.config import PreprocessConfig
 
+#: Largest plausible ring radius, × the image's longest side: the ring may be cut by the border,
+#: but a circle fitted to a few nearly straight contour points can be arbitrarily large (and its
+#: crop would then ask for an arbitrarily large allocation).
+MAX_RADIUS_FRACTION = 1.0
+
 
 @dataclass(frozen=True)
 class RingFit:
@@ -86,6 +91,7 @@ def locate_ring(gray: np.ndarray, config: PreprocessConfig = PreprocessConfig())
     cx, cy, r, resid = _fit_circle(pts)
     if (
         r < config.ring_min_radius_fraction * min(h, w)
+        or r > MAX_RADIUS_FRACTION * max(h, w)
         or resid > config.ring_max_residual_fraction * r
     ):
         return fallback

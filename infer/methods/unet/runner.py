@@ -10,16 +10,63 @@ selection). Everything about the model's input and output comes from its metadat
 from __future__ import annotations
 
 import os
+from importlib import resources
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import numpy as np
 
 from contactcal.infer.methods.unet.postprocess import Segmentation, postprocess
 from contactcal.infer.methods.unet.prepare import SessionReference, prepare
-from contactcal.infer.methods.unet.spec import ModelError, read_spec
+from contactcal.infer.methods.unet.spec import ModelError, ModelSpec, read_spec
 
-#: The shipped model (source tree; present in editable installs and the repository).
-DEFAULT_MODEL = Path(__file__).resolve().parents[3] / "models" / "contact_unet.onnx"
+if TYPE_CHECKING:
+    from onnxruntime import InferenceSession
+
+#: The shipped model: package data of ``contactcal.models`` (the repository's ``models/``), in
+#: wheels and editable installs alike (pip installs packages as folders, so this is a real path).
+DEFAULT_MODEL = Path(str(resources.files("contactcal.models").joinpath("contact_unet.onnx")))
+
+
+def _dims(shape: list[object]) -> str:
+    return "(" + ", ".join(str(d) for d in shape) + ")"
+
+
+def check_graph_io(ort_session: InferenceSession, spec: ModelSpec, path: Path) -> None:
+    """Check that the graph takes and gives what the metadata promises.
+
+    Expected: one float input ``(N, C, S, S)`` with ``C == spec.channels`` (and ``N == 1``,
+    ``S == input_size`` where static) and a float output ``(N, 1, S, S)`` of logits (dynamic
+    dimensions are accepted).
+
+    Args:
+        ort_session: the ``onnxruntime.InferenceSession``.
+        spec: the model's metadata.
+        path: the model file, for messages.
+
+    Raises:
+        ModelError: another input or output; the message names the file and what was expected.
+    """
+    s = spec.preprocess.input_size
+    inputs, outputs = ort_session.get_inputs(), ort_session.get_outputs()
+    checks = (
+        ("input", inputs, (1, spec.channels, s, s)),
+        ("output", outputs, (1, 1, s, s)),
+    )
+    for role, args, want in checks:
+        shape = list(args[0].shape) if len(args) == 1 else []
+        if (
+            len(args) == 1
+            and args[0].type == "tensor(float)"
+            and len(shape) == 4
+            and all(not isinstance(d, int) or d == w for d, w in zip(shape, want, strict=True))
+        ):
+            continue
+        got = ", ".join(f"{a.type} {_dims(a.shape)}" for a in args) or "none"
+        raise ModelError(
+            f"{path}: expected one float {role} of shape {_dims(['N', want[1], s, s])} "
+            f"(as its metadata says), got {got}; use a model written by `contactcal export`"
+        )
 
 
 def sigmoid(logits: np.ndarray) -> np.ndarray:
@@ -36,7 +83,8 @@ class OnnxSegmenter:
             calibration runs beside other work).
 
     Raises:
-        ModelError: missing, unloadable, or without valid contactcal metadata.
+        ModelError: missing, unloadable, without valid contactcal metadata, or with a graph
+            input/output that does not match it.
     """
 
     def __init__(self, path: str | os.PathLike[str] | None = None, threads: int = 1) -> None:
@@ -58,6 +106,7 @@ class OnnxSegmenter:
             raise ModelError(f"{self.path}: not a loadable ONNX model ({exc})") from exc
         self.metadata = dict(self.ort_session.get_modelmeta().custom_metadata_map)
         self.spec = read_spec(self.metadata, self.path)
+        check_graph_io(self.ort_session, self.spec, self.path)
         self.input_name = self.ort_session.get_inputs()[0].name
 
     def probabilities(self, x: np.ndarray) -> np.ndarray:

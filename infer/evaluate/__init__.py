@@ -1,0 +1,1 @@
+"""evaluate: the methods' areas against a lab's own hand-labelled frames."""

@@ -1,0 +1,227 @@
+"""A session's hand labels: a folder of mask PNGs or an ImageJ ellipse CSV, matched to frames.
+
+Masks: ``<frame stem>.png`` per labelled frame, the frame's size; 0 = background, > 0 = contact
+(an all-zero mask labels a frame without contact). Other files in the folder are ignored.
+
+Ellipses: a UTF-8 CSV with (at least) the columns :data:`LABEL_COLUMNS`, one row per labelled
+frame, in ImageJ's convention (:mod:`contactcal.infer.evaluate.ellipse`). ``file`` is the frame's
+path relative to the manifest's folder, or its file name when that is unique in the manifest.
+A row whose five numbers are all empty labels the frame as without contact.
+
+Every label must name a frame of the manifest; frames without a label are returned as such.
+"""
+
+from __future__ import annotations
+
+import csv
+import math
+import os
+from dataclasses import dataclass
+from pathlib import Path
+
+import cv2
+import numpy as np
+
+from contactcal.infer.evaluate.ellipse import ImageJEllipse, rasterise
+from contactcal.infer.image.read import read_file_bytes
+from contactcal.infer.pipeline.manifest import Frame
+
+#: Required columns of an ellipse CSV (other columns, e.g. ImageJ's Area, are ignored).
+LABEL_COLUMNS = ("file", "cx", "cy", "major", "minor", "angle_deg")
+_HEADER = ",".join(LABEL_COLUMNS)
+
+
+class LabelError(ValueError):
+    """Unusable labels; the message names the file and says what was expected."""
+
+
+@dataclass(frozen=True)
+class Label:
+    """One frame's hand label."""
+
+    frame: Path  # the labelled frame (as resolved by the manifest)
+    source: Path  # the mask PNG, or the CSV
+    row: int | None  # 1-based CSV data row; None for a mask
+    ellipse: ImageJEllipse | None  # CSV label; None for a mask or a no-contact row
+
+    def where(self) -> str:
+        """The label's location for messages: the mask file or ``CSV row N``."""
+        return str(self.source) if self.row is None else f"{self.source} row {self.row}"
+
+
+@dataclass(frozen=True)
+class LabelMask:
+    """A label rasterised at its frame's size."""
+
+    mask: np.ndarray  # (H, W) bool, True = contact
+    area_px: int  # pixel count of ``mask`` (the area errors are computed against)
+    analytic_area_px: float | None  # π·major·minor/4 for an ellipse, else None
+
+
+def read_labels(labels: str | os.PathLike[str], frames: list[Frame], manifest: Path) -> list[Label]:
+    """The labels in ``labels`` (a folder of masks or a CSV), each matched to a frame.
+
+    Raises:
+        LabelError: unreadable labels, a label naming no frame of the manifest, two labels of
+            one frame, or a malformed CSV row (the message names the file).
+    """
+    path = Path(labels)
+    if path.is_dir():
+        return _mask_labels(path, frames)
+    if not path.is_file():
+        raise LabelError(
+            f"{path}: labels not found; expected a folder of <frame stem>.png masks or a CSV "
+            f"'{_HEADER}'"
+        )
+    return _ellipse_labels(path, frames, manifest)
+
+
+def _mask_labels(folder: Path, frames: list[Frame]) -> list[Label]:
+    by_stem: dict[str, list[Path]] = {}
+    for f in frames:
+        by_stem.setdefault(f.file.stem, []).append(f.file)
+    out = []
+    for mask in sorted(p for p in folder.iterdir() if p.suffix.lower() == ".png"):
+        match = by_stem.get(mask.stem, [])
+        if not match:
+            raise LabelError(
+                f"{mask}: no frame of the manifest has the stem '{mask.stem}'; expected masks "
+                "named like the frames (<frame stem>.png), e.g. "
+                f"{frames[-1].file.stem}.png for {frames[-1].file.name}"
+            )
+        if len(match) > 1:
+            raise LabelError(
+                f"{mask}: frames {match[0]} and {match[1]} share its stem; masks are matched "
+                "by stem, so give the frames distinct names"
+            )
+        out.append(Label(match[0], mask, None, None))
+    return out
+
+
+def _read_rows(path: Path) -> tuple[dict[str, int], list[tuple[int, list[str]]]]:
+    """Column index by name and the non-blank data rows ``(row number, cells)`` of a CSV."""
+    try:
+        with open(path, encoding="utf-8-sig", newline="") as fh:
+            rows = [r for r in csv.reader(fh) if any(c.strip() for c in r)]
+    except (OSError, UnicodeDecodeError, csv.Error) as exc:
+        raise LabelError(
+            f"{path}: cannot read the label CSV ({exc}); expected '{_HEADER}'"
+        ) from None
+    if not rows:
+        raise LabelError(f"{path}: empty; expected a header '{_HEADER}' and one row per frame")
+    names = [h.strip() for h in rows[0]]
+    missing = [c for c in LABEL_COLUMNS if c not in names]
+    if missing:
+        raise LabelError(
+            f"{path}: missing column(s) {', '.join(missing)}; expected the header to contain "
+            f"'{_HEADER}' (got {','.join(names)!r})"
+        )
+    return {n: names.index(n) for n in LABEL_COLUMNS}, list(enumerate(rows[1:], start=1))
+
+
+def _number(at: str, name: str, cell: str) -> float:
+    try:
+        value = float(cell)
+    except ValueError:
+        value = math.nan
+    if not math.isfinite(value):
+        raise LabelError(f"{at}: {name} {cell!r} is not a finite number; expected pixels/degrees")
+    return value
+
+
+def _ellipse(at: str, cells: dict[str, str]) -> ImageJEllipse | None:
+    """The row's ellipse; None when all five numbers are empty (a frame without contact)."""
+    keys = LABEL_COLUMNS[1:]
+    if not any(cells[k] for k in keys):
+        return None
+    v = {k: _number(at, k, cells[k]) for k in keys}
+    for k in ("major", "minor"):
+        if v[k] <= 0:
+            raise LabelError(
+                f"{at}: {k} {v[k]:g} is not positive; expected the ellipse's full axis length in "
+                "pixels (leave all five numbers empty to label a frame without contact)"
+            )
+    return ImageJEllipse(v["cx"], v["cy"], v["major"], v["minor"], v["angle_deg"])
+
+
+def _frame_of(at: str, name: str, frames: list[Frame], base: Path) -> Path:
+    """The frame a CSV ``file`` cell names (path relative to ``base``, or a unique name)."""
+    for f in frames:
+        if Path(name) == Path(os.path.relpath(f.file, base)) or Path(name) == f.file:
+            return f.file
+    named = [f.file for f in frames if f.file.name == name]
+    if len(named) == 1:
+        return named[0]
+    if named:
+        raise LabelError(
+            f"{at}: file '{name}' matches frames {named[0]} and {named[1]}; give its path "
+            "relative to the manifest's folder"
+        )
+    raise LabelError(
+        f"{at}: file '{name}' is not a frame of the manifest; expected one of its file names, "
+        f"e.g. {frames[-1].file.name}"
+    )
+
+
+def _ellipse_labels(path: Path, frames: list[Frame], manifest: Path) -> list[Label]:
+    col, rows = _read_rows(path)
+    base = manifest.resolve().parent
+    out: dict[Path, Label] = {}
+    for row, cells in rows:
+        at = f"{path}: row {row}"
+        if len(cells) <= max(col.values()):
+            raise LabelError(f"{at}: expected the columns '{_HEADER}', got {cells!r}")
+        named = {k: cells[i].strip() for k, i in col.items()}
+        frame = _frame_of(at, named["file"], frames, base)
+        if frame in out:
+            raise LabelError(
+                f"{at}: {frame.name} is labelled already on row {out[frame].row}; expected one "
+                "ellipse per frame"
+            )
+        out[frame] = Label(frame, path, row, _ellipse(at, named))
+    return list(out.values())
+
+
+def _read_mask(path: Path) -> np.ndarray:
+    """``(H, W)`` bool: any colour channel > 0 (alpha ignored)."""
+    img = cv2.imdecode(np.frombuffer(read_file_bytes(path), np.uint8), cv2.IMREAD_UNCHANGED)
+    if img is None or img.ndim not in (2, 3):
+        raise LabelError(
+            f"{path}: not a decodable PNG mask; expected 0 = background, > 0 = contact"
+        )
+    if img.ndim == 3:
+        img = img[..., : 3 if img.shape[2] >= 3 else 1]
+        return np.any(img > 0, axis=2)
+    return img > 0
+
+
+def label_mask(label: Label, frame_size: tuple[int, int]) -> LabelMask:
+    """Rasterise ``label`` at its frame's ``(width, height)`` in px.
+
+    Raises:
+        LabelError: a mask of another size than the frame (naming both files), an ellipse
+            whose centre lies outside the frame, or one covering no pixel centre.
+    """
+    w, h = frame_size
+    if label.row is None:
+        mask = _read_mask(label.source)
+        if mask.shape != (h, w):
+            raise LabelError(
+                f"{label.source}: mask is {mask.shape[1]}×{mask.shape[0]} px but its frame "
+                f"{label.frame} is {w}×{h} px; expected a mask of the frame's size"
+            )
+        return LabelMask(mask, int(mask.sum()), None)
+    e = label.ellipse
+    if e is None:
+        return LabelMask(np.zeros((h, w), dtype=bool), 0, None)
+    if not (0 <= e.cx <= w and 0 <= e.cy <= h):
+        raise LabelError(
+            f"{label.where()}: centre ({e.cx:g}, {e.cy:g}) lies outside the {w}×{h} px frame "
+            f"{label.frame.name}; expected pixels (in ImageJ: Analyze › Set Scale › remove scale)"
+        )
+    mask = rasterise(e.to_opencv(), (h, w))
+    if not mask.any():
+        raise LabelError(
+            f"{label.where()}: the ellipse covers no pixel centre; expected axes of >= 1 px"
+        )
+    return LabelMask(mask, int(mask.sum()), e.analytic_area_px)

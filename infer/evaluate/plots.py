@@ -1,0 +1,73 @@
+"""``evaluation.png``: signed relative area error vs pressure, and a Bland-Altman plot.
+
+matplotlib is imported inside :func:`plot_evaluation` only (object API with the Agg canvas, never
+pyplot's global backend). Both panels show the frames labelled with contact only (a relative
+error needs a label area > 0).
+"""
+
+from __future__ import annotations
+
+import os
+from collections.abc import Sequence
+
+import numpy as np
+
+from contactcal.infer.bench.scoring import ScoredFrame
+
+
+def bland_altman(frames: Sequence[ScoredFrame]) -> tuple[np.ndarray, np.ndarray, float, float]:
+    """Mean and difference of method and label areas, the mean bias and its 1.96 sd half-width.
+
+    Args:
+        frames: one method's frames labelled with contact (>= 1).
+
+    Returns:
+        ``(mean, diff, bias, half_width)``: ``(N,)`` arrays of ``(method + label) / 2`` and
+        ``method − label`` in px, the mean difference (px) and ``1.96 ×`` its sd (px; 0 for N=1).
+    """
+    a = np.array([f.area_px for f in frames], dtype=np.float64)
+    t = np.array([f.true_area_px for f in frames], dtype=np.float64)
+    diff = a - t
+    sd = float(np.std(diff, ddof=1)) if diff.size > 1 else 0.0
+    return (a + t) / 2.0, diff, float(diff.mean()), 1.96 * sd
+
+
+def plot_evaluation(path: str | os.PathLike[str], scored: Sequence[ScoredFrame]) -> None:
+    """Draw the two panels per method into the PNG ``path`` (written as given: stage it)."""
+    from matplotlib.backends.backend_agg import FigureCanvasAgg
+    from matplotlib.figure import Figure
+
+    fig = Figure(figsize=(11, 4.4), dpi=110)
+    FigureCanvasAgg(fig)
+    err_ax, ba_ax = fig.subplots(1, 2)
+    err_ax.axhline(0.0, color="black", lw=0.8)
+    for i, method in enumerate(sorted({s.method for s in scored})):
+        fs = [s for s in scored if s.method == method and s.true_contact]
+        if not fs:
+            continue
+        colour = f"C{i}"
+        err_ax.plot(
+            [f.pressure_kpa for f in fs],
+            [100.0 * f.rel_error for f in fs],
+            color=colour,
+            marker="o",
+            ms=4,
+            label=method,
+        )
+        mean, diff, bias, half = bland_altman(fs)
+        ba_ax.scatter(mean, diff, color=colour, s=16, label=f"{method}: bias {bias:+.0f} px")
+        ba_ax.axhline(bias, color=colour, lw=1.2)
+        for y in (bias - half, bias + half):
+            ba_ax.axhline(y, color=colour, lw=0.9, ls="--")
+    err_ax.set_xlabel("pressure (kPa)")
+    err_ax.set_ylabel("(method − label) / label area (%)")
+    err_ax.set_title("Signed relative area error")
+    ba_ax.set_xlabel("(method + label) / 2 area (px)")
+    ba_ax.set_ylabel("method − label area (px)")
+    ba_ax.set_title("Bland-Altman: bias (solid), ±1.96 sd (dashed)")
+    for ax in (err_ax, ba_ax):
+        ax.grid(alpha=0.3)
+        if ax.get_legend_handles_labels()[0]:
+            ax.legend(loc="best", fontsize=8)
+    fig.tight_layout()
+    fig.savefig(os.fspath(path), format="png")

@@ -1,0 +1,151 @@
+"""Scoring measured frames against hand labels: per-frame records, bins and the onset.
+
+Areas are compared with the label's RASTERISED pixel count (for an ellipse too: its analytic
+area ``π·major·minor/4`` is recorded beside it), so the relative error and the IoU refer to the
+same pixels.
+"""
+
+from __future__ import annotations
+
+import os
+from collections.abc import Sequence
+from pathlib import Path
+from typing import Any
+
+import cv2
+import numpy as np
+
+from contactcal.infer.bench.scoring import ScoredFrame
+from contactcal.infer.calibration.fit import estimate_onset
+from contactcal.infer.evaluate.labels import LabelMask
+from contactcal.infer.methods.base import AreaResult
+from contactcal.infer.pipeline.measure import Measured
+
+
+def iou(result: AreaResult, truth: np.ndarray) -> float | None:
+    """IoU of the method's outline (filled) with a label mask that has contact.
+
+    Args:
+        result: the method's outcome; ``contour`` in input pixels (None without contact).
+        truth: ``(H, W)`` bool label mask, not empty.
+
+    Returns:
+        The IoU in [0, 1]; None when the method reports contact without an outline.
+    """
+    pred = np.zeros(truth.shape, dtype=np.uint8)
+    if result.contact:
+        if result.contour is None:
+            return None
+        cv2.drawContours(pred, [result.contour.astype(np.int32)], -1, 1, thickness=-1)
+    inter = np.logical_and(pred > 0, truth).sum()
+    union = np.logical_or(pred > 0, truth).sum()
+    return float(inter / union)
+
+
+def score_frames(
+    session: str,
+    pressures: Sequence[float],
+    labels: Sequence[LabelMask],
+    measured: dict[str, list[Measured]],
+) -> list[ScoredFrame]:
+    """One :class:`ScoredFrame` per method and labelled frame (label area = rasterised count).
+
+    Args:
+        session: session key (the manifest's path).
+        pressures: ``(N,)`` kPa of the labelled frames.
+        labels: the N rasterised labels, same order.
+        measured: per method name, the N measurements, same order.
+    """
+    out = []
+    for name, ms in measured.items():
+        for p, lab, m in zip(pressures, labels, ms, strict=True):
+            out.append(
+                ScoredFrame(
+                    method=name,
+                    session=session,
+                    frame=str(m.file),
+                    pressure_kpa=float(p),
+                    true_area_px=float(lab.area_px),
+                    area_px=float(m.result.area_px),
+                    contact=bool(m.result.contact),
+                    iou=iou(m.result, lab.mask) if lab.area_px > 0 else None,
+                )
+            )
+    return out
+
+
+def _result(s: ScoredFrame) -> dict[str, Any]:
+    return {
+        "contact": s.contact,
+        "area_px": s.area_px,
+        "rel_error": s.rel_error if s.true_contact else None,
+        "iou": s.iou,
+    }
+
+
+def frame_records(
+    base: Path, labels: Sequence[LabelMask], sources: Sequence[str], scored: Sequence[ScoredFrame]
+) -> list[dict[str, Any]]:
+    """``evaluation.json``'s ``frames``: per labelled frame, its label and each method's result.
+
+    Args:
+        base: the manifest's folder (file names are written relative to it).
+        labels: the N rasterised labels, in frame order.
+        sources: the N labels' locations (mask file or ``CSV row N``).
+        scored: :func:`score_frames` of the same frames, each method's N frames in that order.
+
+    ``rel_error`` and ``iou`` are null for a frame labelled without contact.
+    """
+    by_method: dict[str, list[ScoredFrame]] = {}
+    for s in scored:
+        by_method.setdefault(s.method, []).append(s)
+    records = []
+    for i, (lab, src) in enumerate(zip(labels, sources, strict=True)):
+        first = next(iter(by_method.values()))[i]
+        records.append(
+            {
+                "file": os.path.relpath(first.frame, base),
+                "pressure_kpa": first.pressure_kpa,
+                "label": src,
+                "label_area_px": lab.area_px,
+                "label_area_analytic_px": lab.analytic_area_px,
+                "results": {m: _result(fs[i]) for m, fs in by_method.items()},
+            }
+        )
+    return records
+
+
+def onset_summary(scored: Sequence[ScoredFrame]) -> dict[str, Any]:
+    """Onset from the labels vs from each method (both by ``estimate_onset``), kPa.
+
+    Returns:
+        ``{"labels_onset_kpa", "methods": {name: {"onset_kpa", "error_kpa"}}, "note"}``; the
+        onsets are null (with the reason in ``note``) when the labelled frames do not give at
+        least two distinct pressures, one frame each.
+    """
+    methods = sorted({s.method for s in scored})
+    first = [s for s in scored if s.method == methods[0]]
+    p = [s.pressure_kpa for s in first]
+    if len(p) < 2 or len(set(p)) < len(p):
+        note = (
+            f"onset not compared: it needs >= 2 labelled frames at distinct pressures, got "
+            f"{len(p)} frame(s) at {len(set(p))} pressure(s)"
+        )
+        none = {"onset_kpa": None, "error_kpa": None}
+        return {"labels_onset_kpa": None, "methods": {m: none for m in methods}, "note": note}
+    truth = estimate_onset(p, [s.true_area_px for s in first], [s.true_contact for s in first])
+    out: dict[str, Any] = {}
+    for m in methods:
+        fs = [s for s in scored if s.method == m]
+        est = estimate_onset(p, [s.area_px for s in fs], [s.contact for s in fs])
+        err = None if est is None or truth is None else est - truth
+        out[m] = {"onset_kpa": est, "error_kpa": err}
+    note = ""
+    if truth is None:
+        note = "no contact range in the labels: no onset to compare"
+    elif min(first, key=lambda s: s.pressure_kpa).true_contact:
+        note = (
+            f"the lowest labelled frame ({min(p):g} kPa) has contact, so the labels' onset is only "
+            "bounded by it: label a frame without contact below the onset"
+        )
+    return {"labels_onset_kpa": truth, "methods": out, "note": note}

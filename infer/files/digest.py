@@ -1,0 +1,22 @@
+"""Content digests of files, for records of what a run read (frames, manifests, models)."""
+
+from __future__ import annotations
+
+import hashlib
+import os
+
+#: Read size, bytes (bounded memory for large files).
+_CHUNK = 1 << 20
+
+
+def sha256_file(path: str | os.PathLike[str]) -> str:
+    """The sha256 of a file's content, lower-case hex (64 characters).
+
+    Raises:
+        OSError: unreadable file (the message names it).
+    """
+    h = hashlib.sha256()
+    with open(path, "rb") as fh:
+        while chunk := fh.read(_CHUNK):
+            h.update(chunk)
+    return h.hexdigest()

@@ -1,0 +1,108 @@
+"""A model file is checked before it is trusted: metadata values, graph input and output; and a
+crop with no network pixel inside the image measures nothing (never more than the image)."""
+
+from __future__ import annotations
+
+import warnings
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from contactcal.infer.cli import main
+from contactcal.infer.methods.unet.config import PreprocessConfig
+from contactcal.infer.methods.unet.postprocess import postprocess
+from contactcal.infer.methods.unet.prepare import CropBox, to_network, valid_window
+from contactcal.infer.methods.unet.runner import DEFAULT_MODEL, OnnxSegmenter
+from contactcal.infer.methods.unet.spec import ModelError, ModelSpec
+
+FRAME = Path(__file__).resolve().parents[1] / "examples" / "session" / "p05.0kpa.jpg"
+
+
+def _measure(model: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> tuple[int, str]:
+    out = tmp_path / "results.json"
+    code = main(["measure", str(FRAME), "--model", str(model), "--out", str(out)])
+    assert not out.exists(), "a rejected model must not produce results"
+    return code, capsys.readouterr().err
+
+
+def test_nan_min_area_in_a_real_model_is_rejected(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    onnx = pytest.importorskip("onnx")
+    proto = onnx.load(str(DEFAULT_MODEL))
+    for prop in proto.metadata_props:
+        if prop.key == "min_contact_area_px":
+            prop.value = "nan"
+    path = tmp_path / "nan_area.onnx"
+    onnx.save(proto, str(path))
+    with pytest.raises(ModelError, match="min_contact_area_px"):
+        OnnxSegmenter(path)
+    code, err = _measure(path, tmp_path, capsys)
+    assert code == 2 and str(path) in err and "min_contact_area_px" in err
+    assert len(err.strip().splitlines()) == 1, err
+
+
+def _identity_model(path: Path, channels_in: int, channels_meta: int) -> Path:
+    """A valid ONNX graph (Identity) with otherwise valid contactcal metadata."""
+    onnx = pytest.importorskip("onnx")
+    helper = onnx.helper
+    shape = ["batch", channels_in, "height", "width"]
+    graph = helper.make_graph(
+        [helper.make_node("Identity", ["input"], ["logits"])],
+        "identity",
+        [helper.make_tensor_value_info("input", onnx.TensorProto.FLOAT, shape)],
+        [helper.make_tensor_value_info("logits", onnx.TensorProto.FLOAT, shape)],
+    )
+    proto = helper.make_model(graph, opset_imports=[helper.make_opsetid("", 17)])
+    proto.ir_version = 8  # readable by every supported onnxruntime
+    shipped = onnx.load(str(DEFAULT_MODEL))
+    meta = {p.key: p.value for p in shipped.metadata_props}
+    meta["channels"] = str(channels_meta)
+    helper.set_model_props(proto, meta)
+    onnx.save(proto, str(path))
+    return path
+
+
+def test_wrong_input_channels_is_one_clear_line(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    path = _identity_model(tmp_path / "rgb.onnx", channels_in=3, channels_meta=2)
+    with pytest.raises(ModelError, match=r"expected one float input of shape \(N, 2, "):
+        OnnxSegmenter(path)
+    code, err = _measure(path, tmp_path, capsys)
+    assert code == 2 and str(path) in err and "input" in err
+    assert len(err.strip().splitlines()) == 1, err
+
+
+def test_wrong_output_channels_is_rejected(tmp_path: Path) -> None:
+    path = _identity_model(tmp_path / "two_out.onnx", channels_in=2, channels_meta=2)
+    with pytest.raises(ModelError, match=r"expected one float output of shape \(N, 1, "):
+        OnnxSegmenter(path)
+
+
+def test_shipped_model_passes_the_graph_check() -> None:
+    assert OnnxSegmenter().spec.channels in (1, 2)
+
+
+def test_crop_without_network_pixel_in_the_image_measures_nothing() -> None:
+    shape = (10, 10)
+    size = 64
+    box = CropBox(x0=-999, y0=-999, side=1000)  # overlaps the image by one pixel
+    rows, cols = valid_window(box, shape, size)
+    assert rows.stop - rows.start == 0 and cols.stop - cols.start == 0
+    spec = ModelSpec(1, PreprocessConfig(input_size=size), 0.5, 0.0)
+    seg = postprocess(np.ones((size, size), np.float32), box, shape, spec)
+    assert not seg.contact and seg.area_px == 0.0 and seg.soft_area_px == 0.0
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")  # no "mean of empty slice" or NaN on the way
+        x = to_network(np.full(shape, 200, np.uint8), box, spec.preprocess)
+    assert x.shape == (size, size) and np.all(np.isfinite(x))
+
+
+def test_crop_partly_outside_counts_only_pixels_inside() -> None:
+    shape = (40, 40)
+    box = CropBox(x0=20, y0=20, side=64)  # a quarter of the crop lies inside the image
+    spec = ModelSpec(1, PreprocessConfig(input_size=32), 0.5, 0.0)
+    seg = postprocess(np.ones((32, 32), np.float32), box, shape, spec)
+    assert seg.contact and 0.0 < seg.area_px <= shape[0] * shape[1]

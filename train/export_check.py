@@ -1,0 +1,71 @@
+"""Export's decision check: torch and onnxruntime decide alike on the run's own frames.
+
+Beyond logit parity on random inputs (:func:`contactcal.train.export.check_parity`), the exported
+graph is run on real frames prepared by the one preprocessing path
+(:func:`contactcal.infer.methods.unet.prepare.prepare`, through the training cache) and decided
+by the one decision (:func:`contactcal.infer.methods.unet.postprocess.postprocess`): contact and
+area must agree with the torch model's.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import onnxruntime as ort
+import torch
+
+from contactcal.infer.bench.dataset import read_datasets
+from contactcal.infer.methods.unet.postprocess import postprocess
+from contactcal.infer.methods.unet.runner import sigmoid
+from contactcal.infer.methods.unet.spec import ModelSpec
+from contactcal.train.data import build_cache, split_by_finger
+
+#: Largest area difference (network pixels) between torch's and onnxruntime's decision: logits
+#: agree to PARITY_ATOL, so a pixel within that of the threshold may flip.
+DECISION_TOL_NET_PX = 2.0
+#: Frames checked: spread over the validation fingers' pressures.
+DECISION_FRAMES = 8
+
+
+def check_decisions(
+    model: torch.nn.Module,
+    onnx_bytes: bytes,
+    spec: ModelSpec,
+    info: dict,
+    val_fraction: float,
+    seed: int,
+) -> int:
+    """Compare torch's and onnxruntime's contact decisions on validation frames of the run.
+
+    Args:
+        model: the torch model (eval mode).
+        onnx_bytes: the exported graph.
+        spec: the exported spec.
+        info: the run's ``config.json`` (``data_dirs``).
+        val_fraction, seed: the run's split (validation fingers, as in training).
+
+    Returns:
+        The number of frames checked.
+
+    Raises:
+        ValueError: the run's dataset folders cannot be read.
+        RuntimeError: a decision differs.
+    """
+    rows = read_datasets(info.get("data_dirs") or [])
+    train_rows, val_rows = split_by_finger(rows, val_fraction, seed)
+    pool = val_rows or train_rows
+    idx = np.linspace(0, len(pool) - 1, min(DECISION_FRAMES, len(pool))).astype(int)
+    picks = [pool[i] for i in sorted(set(idx))]
+    cache = build_cache(picks, spec.preprocess, spec.channels)
+    sess = ort.InferenceSession(onnx_bytes, providers=["CPUExecutionProvider"])
+    with torch.no_grad():
+        p_torch = torch.sigmoid(model(cache.x)).numpy()[:, 0]
+    p_ort = sigmoid(sess.run(None, {"input": cache.x.numpy()})[0][:, 0])
+    for i, row in enumerate(picks):
+        a = postprocess(p_torch[i], cache.boxes[i], cache.shapes[i], spec)
+        b = postprocess(p_ort[i], cache.boxes[i], cache.shapes[i], spec)
+        if a.contact != b.contact or abs(a.region_net_px - b.region_net_px) > DECISION_TOL_NET_PX:
+            raise RuntimeError(
+                f"{row.frame}: torch and ONNX decide differently (contact {a.contact} vs "
+                f"{b.contact}, region {a.region_net_px:g} vs {b.region_net_px:g} network px)"
+            )
+    return len(picks)
