@@ -16,7 +16,7 @@ from contactcal.infer.bench import run as bench_run
 from contactcal.infer.bench.accuracy import from_record, onset_errors, to_record
 from contactcal.infer.bench.config import BenchConfig
 from contactcal.infer.bench.plots import pareto_points
-from contactcal.infer.bench.report import hard_table, md_table, onset_table
+from contactcal.infer.bench.report import coverage_table, hard_table, md_table, onset_table
 from contactcal.infer.bench.run import run_bench
 from contactcal.infer.bench.scoring import PRESSURE_BINS, ScoredFrame, bin_table
 from contactcal.infer.cli import main
@@ -96,6 +96,47 @@ def test_bins_recomputed_from_records(bench: tuple[Path, Path, dict[str, Any]]) 
     assert low["median_abs_rel_error"] is None and low["no_contact_frames"] == len(none) == 8
     expected = sum(not r["contact"] for r in none) / 8
     assert low["no_contact_accuracy"] == pytest.approx(expected)
+
+
+def test_interval_coverage(bench: tuple[Path, Path, dict[str, Any]]) -> None:
+    _, out, _ = bench
+    res = json.loads((out / "results.json").read_text())
+    for r in res["records"]:
+        iv = r["area_interval_px"]
+        if r["method"] == "unet":  # the U-Net states one on every frame; it holds the estimate
+            assert iv[0] <= r["area_px"] <= iv[1]
+            assert r["covered"] == (iv[0] <= r["true_area_px"] <= iv[1])
+        else:  # the classical routine and the soft area state none
+            assert iv is None and r["covered"] is None
+    rows = [c for c in res["coverage"] if c["method"] == "unet"]
+    assert [c["bin_kpa"] for c in rows] == ["0-3", "3-5", "5-10", "10-20", "all"]
+    unet = [r for r in res["records"] if r["method"] == "unet"]
+    assert rows[-1]["frames"] == 20
+    assert rows[-1]["coverage"] == pytest.approx(sum(r["covered"] for r in unet) / 20)
+    assert {"method": "classical", "bin_kpa": "no interval"} in res["coverage"]
+    report = (out / "report.md").read_text(encoding="utf-8")
+    assert "## Coverage of the stated area interval" in report
+    assert "| classical | no interval |" in report and "| unet | all | 20 |" in report
+
+
+def test_coverage_table_by_hand() -> None:
+    frames = [
+        _frame(1.0, 0.0, 0.0, area_interval_px=(0.0, 0.0)),  # covered (no contact)
+        _frame(6.0, 100.0, 110.0, area_interval_px=(95.0, 120.0)),  # covered, width 25 %
+        _frame(7.0, 200.0, 150.0, area_interval_px=(140.0, 160.0)),  # missed, width 10 %
+        _frame(12.0, 400.0, 404.0, area_interval_px=(380.0, 420.0)),  # covered, width 10 %
+        _frame(12.0, 400.0, 404.0, method="c"),  # states none
+    ]
+    rows = {(r["method"], r["bin_kpa"]): r for r in coverage_table(frames, PRESSURE_BINS)}
+    assert rows[("c", "no interval")] == {"method": "c", "bin_kpa": "no interval"}
+    assert rows[("m", "0-3")]["coverage"] == 1.0 and rows[("m", "0-3")]["contact_frames"] == 0
+    assert rows[("m", "3-5")]["frames"] == 0 and rows[("m", "3-5")]["coverage"] is None
+    assert rows[("m", "5-10")]["coverage"] == pytest.approx(0.5)
+    assert rows[("m", "5-10")]["median_rel_width"] == pytest.approx(0.175)
+    every = rows[("m", "all")]
+    assert every["frames"] == 4 and every["coverage"] == pytest.approx(0.75)
+    assert every["contact_coverage"] == pytest.approx(2 / 3)
+    assert every["median_rel_width"] == pytest.approx(0.1)
 
 
 def _frame(p: float, true: float, area: float, session: str = "s0", **kw: Any) -> ScoredFrame:

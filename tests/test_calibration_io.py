@@ -14,9 +14,10 @@ import pytest
 from test_outputs import copy_session
 
 from contactcal.infer.calibration import record as calibration_io
-from contactcal.infer.calibration.fit import fit_monotone
+from contactcal.infer.calibration.fit import CurveConfig
 from contactcal.infer.calibration.points import CalibrationPoint
 from contactcal.infer.calibration.record import load_curve, write_calibration
+from contactcal.infer.calibration.session import SessionFit, fit_session
 from contactcal.infer.calibration.table import format_table
 from contactcal.infer.cli import main
 from contactcal.infer.methods.classical import ClassicalConfig
@@ -41,11 +42,8 @@ def _results(mm2: bool = True) -> list[CalibrationPoint]:
     return out
 
 
-def _curve(results: list[CalibrationPoint], unit: str = "mm²"):
-    areas = [r.area_mm2 if unit != "px" else r.area_px for r in results]
-    return fit_monotone(
-        [r.pressure_kpa for r in results], areas, [r.contact for r in results], area_unit=unit
-    )
+def _curve(results: list[CalibrationPoint], unit: str = "mm²") -> SessionFit:
+    return fit_session(results, unit, CurveConfig(n_bootstrap=40))
 
 
 def _no_nan(obj) -> None:
@@ -61,9 +59,10 @@ def _no_nan(obj) -> None:
 
 def test_write_calibration_outputs(tmp_path: Path) -> None:
     results = _results()
-    curve = _curve(results)
+    fit = _curve(results)
+    curve = fit.curve
     extra = {"mm_per_px": 0.045, "bad": float("nan"), "arr": np.array([1.0, np.inf]), "p": tmp_path}
-    paths = write_calibration(tmp_path / "out", results, curve, "classical", extra)
+    paths = write_calibration(tmp_path / "out", results, fit, "classical", extra)
     assert set(paths) == {"json", "csv", "png"}
     assert all(p.is_file() and p.stat().st_size > 0 for p in paths.values())
     assert sorted(x.name for x in (tmp_path / "out").iterdir()) == [
@@ -87,13 +86,17 @@ def test_write_calibration_outputs(tmp_path: Path) -> None:
 
     with open(paths["csv"], newline="", encoding="utf-8") as fh:
         rows = list(csv.DictReader(fh))
-    assert list(rows[0]) == ["file", "pressure_kpa", "contact", "area_px", "area_mm2", "fit_area"]
+    assert list(rows[0]) == list(calibration_io.CSV_COLUMNS)
     assert [float(r["pressure_kpa"]) for r in rows] == sorted(P.tolist())
     assert rows[0]["contact"] == "false" and rows[-1]["contact"] == "true"
+    assert {r["n_frames"] for r in rows} == {"1"} and rows[0]["phase"] == "loading"
 
     loaded = load_curve(paths["json"])
     np.testing.assert_allclose(loaded.fit_area, curve.fit_area)
-    assert loaded.pressure_for_area(5.0) == curve.pressure_for_area(5.0)
+    assert loaded.pressure_for_area(5.0) == pytest.approx(curve.pressure_for_area(5.0))
+    assert loaded.pressure_interval_for_area(5.0) == pytest.approx(
+        (*curve.pressure_interval_for_area(5.0)[:3], None)
+    )
 
 
 def test_px_curve_without_mm2_and_without_contact(tmp_path: Path) -> None:
@@ -101,7 +104,7 @@ def test_px_curve_without_mm2_and_without_contact(tmp_path: Path) -> None:
     paths = write_calibration(tmp_path, results, _curve(results, "px"), "learned", {})
     data = json.loads(paths["json"].read_text(encoding="utf-8"))
     assert data["area_unit"] == "px" and all(pt["area_mm2"] is None for pt in data["points"])
-    assert ",," in paths["csv"].read_text(encoding="utf-8")  # empty area_mm2 cells
+    assert all(pt["area_interval_px"] is None for pt in data["points"])
 
     flat = [CalibrationPoint(r.file, r.pressure_kpa, False, 0.0, None) for r in results]
     paths = write_calibration(tmp_path / "none", flat, _curve(flat, "px"), "classical", {})
@@ -138,17 +141,34 @@ def test_failed_write_keeps_previous_run(tmp_path: Path, monkeypatch: pytest.Mon
 
 def test_load_curve_reads_versions_1_and_2(tmp_path: Path) -> None:
     results = _results()
-    paths = write_calibration(tmp_path, results, _curve(results), "classical", {})
+    fit = _curve(results)
+    paths = write_calibration(tmp_path, results, fit, "classical", {})
     data = json.loads(paths["json"].read_text(encoding="utf-8"))
-    assert data["format_version"] == calibration_io.FORMAT_VERSION == 2
-    v1 = {k: v for k, v in data.items() if k not in ("method_config", "device_id", "argv")}
+    assert data["format_version"] == calibration_io.FORMAT_VERSION == 3
+    # A version 2 record: the top-level fit, no phases (the fields of format 2 only).
+    v3_only = ("phases", "steps", "hysteresis", "inverse_phase", "phase_source")
+    v2 = {k: v for k, v in data.items() if k not in v3_only} | {"format_version": 2}
+    v2["points"] = [
+        {k: pt[k] for k in ("file", "pressure_kpa", "contact")} for pt in data["points"]
+    ]
+    (tmp_path / "v2.json").write_text(json.dumps(v2), encoding="utf-8")
+    old = load_curve(tmp_path / "v2.json")
+    np.testing.assert_allclose(old.fit_area, fit.curve.fit_area)
+    assert old.band is None and old.model is None
+    with pytest.raises(ValueError, match="no uncertainty band"):
+        old.pressure_interval_for_area(5.0)
+    with pytest.raises(ValueError, match="loading pass only"):
+        load_curve(tmp_path / "v2.json", phase="unloading")
+    v1 = {k: v for k, v in v2.items() if k not in ("method_config", "device_id", "argv")}
     v1 = {**v1, "format_version": 1}
     del v1["inputs"]
     (tmp_path / "v1.json").write_text(json.dumps(v1), encoding="utf-8")
-    np.testing.assert_allclose(load_curve(tmp_path / "v1.json").fit_area, _curve(results).fit_area)
-    (tmp_path / "v3.json").write_text(json.dumps({**data, "format_version": 3}), encoding="utf-8")
-    with pytest.raises(ValueError, match="format_version 3"):
-        load_curve(tmp_path / "v3.json")
+    np.testing.assert_allclose(load_curve(tmp_path / "v1.json").fit_area, fit.curve.fit_area)
+    with pytest.raises(ValueError, match="no unloading phase"):
+        load_curve(paths["json"], phase="unloading")
+    (tmp_path / "v4.json").write_text(json.dumps({**data, "format_version": 4}), encoding="utf-8")
+    with pytest.raises(ValueError, match="format_version 4"):
+        load_curve(tmp_path / "v4.json")
 
 
 @pytest.mark.parametrize("bad", ["", "x" * 101, "rig\n2", "tab\there"])
@@ -163,13 +183,13 @@ def test_format_table() -> None:
     results = _results()
     table = format_table(results, _curve(results))
     lines = table.splitlines()
-    assert "pressure (kPa)" in lines[0] and "area (mm²)" in lines[0] and "contact" in lines[0]
-    assert len(lines) == 2 + len(results)
-    assert lines[2].split()[:4] == ["0.00", "0.0", "0.0", "no"]
-    assert lines[-1].split()[0] == "10.00" and "yes" in lines[-1]
-    assert "dim" in table
+    assert "pressure (kPa)" in lines[0] and "median (mm²)" in lines[0] and "contact" in lines[0]
+    assert "90 % band" in lines[0] and "min-max" in lines[0]
+    assert lines[2].split()[:5] == ["loading", "0.00", "1", "0.0", "0.0"]
+    assert lines[2 + len(results) - 1].split()[1] == "10.00"
+    assert "dim" in table and "CV RMSE" in table and "as given" in table
     px = format_table(_results(mm2=False), _curve(_results(mm2=False), "px"))
-    assert "area (px)" in px.splitlines()[0]
+    assert "median (px)" in px.splitlines()[0]
 
 
 def test_calibration_records_provenance(tmp_path: Path) -> None:
@@ -179,7 +199,7 @@ def test_calibration_records_provenance(tmp_path: Path) -> None:
     argv = ["calibrate", str(s / "manifest.csv"), "--device-id", "TD-0042 left", "--out"]
     assert main([*argv, str(tmp_path / "u")]) == 0
     rec = json.loads((tmp_path / "u" / "calibration.json").read_text())
-    assert rec["format_version"] == 2 and rec["device_id"] == "TD-0042 left"
+    assert rec["format_version"] == 3 and rec["device_id"] == "TD-0042 left"
     assert rec["argv"] == [*argv, str(tmp_path / "u")]
     cfg = rec["method_config"]
     assert cfg["name"] == "unet" and Path(cfg["model"]) == DEFAULT_MODEL.resolve()

@@ -11,13 +11,17 @@ from __future__ import annotations
 
 import re
 import shlex
+import shutil
 from pathlib import Path
 
+import cv2
+import numpy as np
 import pytest
 
 from contactcal.infer.cli import build_parser, main
 
 ROOT = Path(__file__).resolve().parents[1]
+EXAMPLE = ROOT / "examples" / "session"
 DOCS = sorted(
     [
         ROOT / "README.md",
@@ -67,6 +71,30 @@ def shrink(argv: list[str]) -> list[str]:
 ALL = [(p, argv) for p in DOCS for argv in documented_commands(p)]
 
 
+def python_blocks(path: Path) -> list[str]:
+    """The ``python`` fenced code blocks of a Markdown file."""
+    return re.findall(r"```python\n(.*?)```", path.read_text(encoding="utf-8"), flags=re.S)
+
+
+def rig_files(root: Path) -> None:
+    """The walkthrough's stand-in rig files, made from the bundled example session."""
+    from test_video import make_log, make_video
+
+    shutil.copytree(EXAMPLE, root / "session")
+    (root / "rig" / "check").mkdir(parents=True)
+    shutil.copy(EXAMPLE / "rig.json", root / "rig" / "rig.json")
+    for name, kpa in (("ref", 0), ("pressed", 10)):
+        img = cv2.imread(str(EXAMPLE / f"p{kpa:04.1f}kpa.jpg"))
+        cv2.imwrite(str(root / "rig" / "check" / f"{name}.png"), img)
+    kpas = (0, 2, 4, 8, 12, 16, 20, 12, 4, 0)
+    make_video(root / "rig" / "run.avi", kpas)
+    make_log(root / "rig" / "pressure_log.csv", kpas, np.random.default_rng(0))
+
+
+#: Doc file name → what its commands expect to find in the working folder.
+FIXTURES = {"calibrate-a-display.md": rig_files}
+
+
 def test_docs_show_commands() -> None:
     assert len(ALL) >= 8, "the docs' command examples were not found"
     assert {a[0] for _, a in ALL} >= {"synth", "train", "export", "bench"}
@@ -94,6 +122,10 @@ def test_documented_commands_run(
     monkeypatch.setattr(bench_run, "BenchConfig", lambda **_: tiny)
     monkeypatch.setattr(bench_config, "BenchConfig", lambda **_: tiny)
     monkeypatch.chdir(tmp_path)
+    if path.name in FIXTURES:
+        FIXTURES[path.name](tmp_path)
     for argv in documented_commands(path):
         code = main(shrink(argv))
         assert code == 0, f"{path.name}: `contactcal {' '.join(argv)}` exited {code}"
+    for code in python_blocks(path):
+        exec(compile(code, str(path), "exec"), {})  # the doc's snippet, as written

@@ -3,6 +3,7 @@ deployment's ``read_spec``, errors."""
 
 from __future__ import annotations
 
+import dataclasses
 import json
 from pathlib import Path
 
@@ -46,9 +47,16 @@ def test_export_metadata_and_parity(run_dir: Path, tmp_path: Path) -> None:
     assert float(meta["threshold"]) == 0.5 and float(meta["min_contact_area_px"]) == 4.0
     assert meta["data_digest"] == dataset_digest([run_dir.parent / "data"])
     assert meta["contactcal_version"] and meta["created"] and meta["output"] == "logits"
-    # deployment reads exactly the run's spec
+    # the area interval, calibrated on the run's validation finger (5 frames at most)
+    interval = json.loads(meta["interval"])
+    assert interval["level"] == 0.9 and 1 <= interval["frames"] <= 5 and interval["widen"] >= 0
+    # deployment reads exactly the run's spec, with the calibrated interval
     cfg, _, ckpt = load_run(run_dir)
-    assert read_spec(meta, out) == cfg.spec() == OnnxSegmenter(out).spec
+    spec = read_spec(meta, out)
+    assert (
+        spec == dataclasses.replace(cfg.spec(), interval=spec.interval) == OnnxSegmenter(out).spec
+    )
+    assert spec.interval is not None and spec.interval.widen == interval["widen"]
     # dynamic batch/H/W: run at a size other than the export's and compare with torch
     from contactcal.train.model import UNet
 
@@ -64,9 +72,11 @@ def test_export_metadata_and_parity(run_dir: Path, tmp_path: Path) -> None:
 
 
 def test_self_check_rejects_foreign_metadata(tmp_path: Path) -> None:
-    from contactcal.infer.methods.unet.spec import ModelSpec
+    from contactcal.infer.methods.unet.spec import IntervalSpec, ModelSpec
 
-    spec = ModelSpec(1, PreprocessConfig(input_size=32), 0.5, 4.0)
+    spec = ModelSpec(
+        1, PreprocessConfig(input_size=32), 0.5, 4.0, IntervalSpec(0.9, 0.1, 0.9, 1.0, 9)
+    )
     graph = onnx.helper.make_graph(
         [onnx.helper.make_node("Identity", ["input"], ["logits"])],
         "g",

@@ -7,7 +7,13 @@ from pathlib import Path
 
 import pytest
 
-from contactcal.infer.pipeline.manifest import Frame, ManifestError, read_manifest
+from contactcal.infer.calibration.phases import FROM_COLUMN, FROM_ORDER, SINGLE_PASS
+from contactcal.infer.pipeline.manifest import (
+    Frame,
+    ManifestError,
+    read_manifest,
+    read_session,
+)
 
 
 def _session(tmp_path: Path, text: str, images: tuple[str, ...] = ("a.png", "b.png", "c.png")):
@@ -76,14 +82,18 @@ def test_missing_column(tmp_path: Path) -> None:
     _fails(_session(tmp_path, "file\na.png\n"), "missing required column 'pressure_kpa'")
 
 
-def test_unknown_column(tmp_path: Path) -> None:
-    msg = _fails(
-        _session(tmp_path, "file,pressure_kpa,temp\na.png,0,20\nb.png,1,20\n"),
-        "unknown column 'temp'",
-    )
-    assert "pressure_kpa" in msg and "file" in msg
+def test_extra_columns_are_kept(tmp_path: Path) -> None:
+    path = _session(tmp_path, "file,pressure_kpa,timestamp\na.png,0,12:00\nb.png,1,12:01\n")
+    frames = read_manifest(path)
+    assert [f.extras for f in frames] == [(("timestamp", "12:00"),), (("timestamp", "12:01"),)]
+
+
+def test_bad_columns(tmp_path: Path) -> None:
     _fails(_session(tmp_path, "file;pressure_kpa\na.png;0\n"), "comma-separated")
     _fails(_session(tmp_path, "File,pressure_kpa\na.png,0\n"), "did you mean 'file'")
+    _fails(_session(tmp_path, "file,pressure_kpa,PHASE\na.png,0,x\n"), "did you mean 'phase'")
+    _fails(_session(tmp_path, "file,pressure_kpa,file\na.png,0,b.png\n"), "['file'] appear twice")
+    _fails(_session(tmp_path, "file,pressure_kpa,\na.png,0,\n"), "column 3 has no name")
 
 
 def test_wrong_cell_count(tmp_path: Path) -> None:
@@ -111,13 +121,60 @@ def test_bad_pressure(tmp_path: Path, cell: str, problem: str) -> None:
     _fails(_session(tmp_path, f"file,pressure_kpa\na.png,0\nb.png,{cell}\n"), "row 2", problem)
 
 
-def test_duplicate_pressure(tmp_path: Path) -> None:
-    msg = _fails(
-        _session(tmp_path, "file,pressure_kpa\na.png,2\nb.png,0\nc.png,2.0\n"),
-        "rows 1 (a.png) and 3 (c.png)",
-        "one frame per pressure step",
+def test_repeated_pressures_are_steps(tmp_path: Path) -> None:
+    path = _session(tmp_path, "file,pressure_kpa\na.png,2\nb.png,0\nc.png,2.0\n")
+    session = read_session(path)
+    assert [(f.file.name, f.step) for f in session.frames] == [
+        ("b.png", 0),
+        ("a.png", 1),
+        ("c.png", 1),
+    ]
+    assert {f.phase for f in session.frames} == {"loading"}
+    assert session.phase_source == SINGLE_PASS
+
+
+def test_phase_column(tmp_path: Path) -> None:
+    names = ("a.png", "b.png", "c.png", "d.png")
+    text = "file,pressure_kpa,phase\na.png,0,Loading\nb.png,4,LOADING\n"
+    text += "c.png,2, unloading\nd.png,0,unloading\n"
+    session = read_session(_session(tmp_path, text, names))
+    assert [(f.file.name, f.phase, f.step) for f in session.frames] == [
+        ("a.png", "loading", 0),
+        ("b.png", "loading", 1),
+        ("d.png", "unloading", 0),
+        ("c.png", "unloading", 1),
+    ]
+    assert session.phase_source == FROM_COLUMN
+    _fails(
+        _session(tmp_path, "file,pressure_kpa,phase\na.png,0,loading\nb.png,1,up\n"),
+        "row 2",
+        "'up'",
     )
-    assert "2 kPa" in msg
+    _fails(
+        _session(tmp_path, "file,pressure_kpa,phase\na.png,0,unloading\nb.png,1,unloading\n"),
+        "no loading frame",
+    )
+    text = "file,pressure_kpa,phase\na.png,0,loading\nb.png,1,loading\nc.png,1,unloading\n"
+    _fails(_session(tmp_path, text), "unloading pass has 1 frame", ">= 2 pressure steps")
+
+
+def test_phases_from_row_order(tmp_path: Path) -> None:
+    names = ("a.png", "b.png", "c.png", "d.png", "e.png", "f.png")
+    text = "file,pressure_kpa\na.png,0\nb.png,2\nc.png,4\nd.png,4\ne.png,2\nf.png,0\n"
+    session = read_session(_session(tmp_path, text, names))
+    assert [(f.file.name, f.phase) for f in session.frames] == [
+        ("a.png", "loading"),
+        ("b.png", "loading"),
+        ("c.png", "loading"),
+        ("d.png", "loading"),
+        ("f.png", "unloading"),
+        ("e.png", "unloading"),
+    ]
+    assert session.phase_source == FROM_ORDER
+    text = "file,pressure_kpa\na.png,0\nb.png,2\nc.png,4\nd.png,0\n"
+    _fails(_session(tmp_path, text, names), "unloading pass has 1 frame", "'phase' column")
+    descending = "file,pressure_kpa\na.png,4\nb.png,2\nc.png,0\n"
+    assert read_session(_session(tmp_path, descending)).phase_source == SINGLE_PASS
 
 
 def test_pressure_range_bounds_are_accepted(tmp_path: Path) -> None:

@@ -43,6 +43,24 @@ def test_nan_min_area_in_a_real_model_is_rejected(
     assert len(err.strip().splitlines()) == 1, err
 
 
+def test_model_without_interval_is_one_clear_line(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    onnx = pytest.importorskip("onnx")
+    proto = onnx.load(str(DEFAULT_MODEL))
+    keep = [p for p in proto.metadata_props if p.key != "interval"]
+    assert len(keep) == len(proto.metadata_props) - 1  # the shipped model states one
+    del proto.metadata_props[:]
+    proto.metadata_props.extend(keep)
+    path = tmp_path / "no_interval.onnx"
+    onnx.save(proto, str(path))
+    with pytest.raises(ModelError, match="lacks key.*interval"):
+        OnnxSegmenter(path)
+    code, err = _measure(path, tmp_path, capsys)
+    assert code == 2 and str(path) in err and "interval" in err and "re-export" in err
+    assert len(err.strip().splitlines()) == 1, err
+
+
 def _identity_model(path: Path, channels_in: int, channels_meta: int) -> Path:
     """A valid ONNX graph (Identity) with otherwise valid contactcal metadata."""
     onnx = pytest.importorskip("onnx")

@@ -8,7 +8,11 @@ deployment's :func:`contactcal.infer.methods.unet.spec.read_spec` accepts:
   :meth:`ModelSpec.to_metadata`): ``channels`` (1, or 2 = frame + the session's zero-pressure
   frame), ``preprocess`` (JSON of :class:`~contactcal.infer.methods.unet.config.PreprocessConfig`,
   incl. ``input_size``), ``threshold`` (probability), ``min_contact_area_px`` (network pixels),
-  ``output`` ("logits");
+  ``output`` ("logits"), ``interval`` (JSON of
+  :class:`~contactcal.infer.methods.unet.spec.IntervalSpec`: the stated 90 % interval of a frame's
+  area, ALWAYS calibrated here on the run's validation fingers by
+  :func:`contactcal.train.interval.calibrate_run`; a run without validation fingers cannot be
+  exported);
 * provenance (:data:`~contactcal.infer.methods.unet.spec.PROVENANCE_KEYS`): ``data_digest``
   (sha256 of the training index.csv files), ``contactcal_version``, ``created`` (UTC ISO 8601),
   ``train_config`` (JSON), ``best_epoch``, ``val_metrics`` (JSON).
@@ -40,6 +44,7 @@ from contactcal.infer.methods.unet.spec import ModelSpec, read_spec
 from contactcal.train.checkpoint import config_from_dict, load_checkpoint
 from contactcal.train.config import TrainConfig
 from contactcal.train.export_check import check_decisions
+from contactcal.train.interval import calibrate_run
 from contactcal.train.model import UNet
 
 #: torch vs onnxruntime tolerance on logits (float32; BN folding and kernel order differ).
@@ -150,7 +155,8 @@ def export_onnx(
         ``out_path`` as a Path.
 
     Raises:
-        ValueError: bad run folder or output name.
+        ValueError: bad run folder or output name, or no validation fingers to calibrate the
+            area interval on.
         RuntimeError: the exported model fails the checker, the parity test or the metadata
             self-check (nothing is written then).
     """
@@ -166,7 +172,8 @@ def export_onnx(
     model.load_state_dict(ckpt["model"])
     model.eval()
     proto = to_onnx(model, cfg.model.in_channels, cfg.input_size, opset)
-    spec = cfg.spec()
+    interval, _ = calibrate_run(model, cfg.spec(), info, cfg.val_fraction, cfg.seed)
+    spec = dataclasses.replace(cfg.spec(), interval=interval)
     onnx.helper.set_model_props(proto, metadata(spec, info, ckpt))
     try:
         onnx.checker.check_model(proto, full_check=True)

@@ -46,17 +46,21 @@ def score_session(method: Method, name: str, rows: Sequence[IndexRow]) -> list[S
             mm_per_px=r.mm_per_px,
             onset_kpa=r.onset_kpa,
             hard=r.hard,
+            area_interval_px=res.area_interval_px,
         )
         out.append(scored)
         if res.soft_area_px is not None or name == "unet":
-            # The same prediction measured by its probability mass (0 without contact).
+            # The same prediction measured by its probability mass (0 without contact); the
+            # stated interval is the pixel count's, not the soft area's.
             soft = float(res.soft_area_px) if res.soft_area_px is not None else 0.0
             out.append(_renamed(scored, name + SOFT_SUFFIX, soft))
     return out
 
 
 def _renamed(frame: ScoredFrame, method: str, area_px: float) -> ScoredFrame:
-    return ScoredFrame(**{**asdict(frame), "method": method, "area_px": area_px})
+    return ScoredFrame(
+        **{**asdict(frame), "method": method, "area_px": area_px, "area_interval_px": None}
+    )
 
 
 def evaluate(
@@ -103,11 +107,21 @@ def onset_errors(frames: Sequence[ScoredFrame]) -> list[dict[str, Any]]:
 
 
 def to_record(frame: ScoredFrame) -> dict[str, Any]:
-    """A frame as a ``results.json`` record: its fields plus ``true_contact``."""
-    return {**asdict(frame), "true_contact": frame.true_contact}
+    """A frame as a ``results.json`` record: its fields plus ``true_contact`` and ``covered``
+    (the stated ``area_interval_px``, a ``[lower, upper]`` list or None, contains the truth)."""
+    iv = frame.area_interval_px
+    return {
+        **asdict(frame),
+        "area_interval_px": None if iv is None else [float(iv[0]), float(iv[1])],
+        "true_contact": frame.true_contact,
+        "covered": frame.covered,
+    }
 
 
 def from_record(record: Mapping[str, Any]) -> ScoredFrame:
     """The frame of a ``results.json`` record (derived keys such as ``true_contact`` ignored)."""
     names = {f.name for f in fields(ScoredFrame)}
-    return ScoredFrame(**{k: v for k, v in record.items() if k in names})
+    values = {k: v for k, v in record.items() if k in names}
+    if values.get("area_interval_px") is not None:
+        values["area_interval_px"] = tuple(float(x) for x in values["area_interval_px"])
+    return ScoredFrame(**values)

@@ -8,7 +8,13 @@ from pathlib import Path
 from typing import Any
 
 from contactcal.infer.bench.plots import plot_error_vs_pressure, plot_pareto
-from contactcal.infer.bench.scoring import ScoredFrame, bin_table, median_or_none
+from contactcal.infer.bench.scoring import (
+    ScoredFrame,
+    bin_label,
+    bin_table,
+    coverage_row,
+    median_or_none,
+)
 from contactcal.infer.files.atomic import write_json, write_text
 
 #: Markdown table columns: (key, header, shown as %).
@@ -31,6 +37,15 @@ TIMING_COLUMNS: Columns = (
     ("ms_compute", "ms/frame (decoded)", False),
     ("ms_end_to_end_jpg", "ms/frame incl. JPEG decode", False),
     ("ms_end_to_end_png", "ms/frame incl. PNG decode", False),
+)
+COVERAGE_COLUMNS: Columns = (
+    ("method", "method", False),
+    ("bin_kpa", "kPa", False),
+    ("frames", "frames", False),
+    ("coverage", "coverage", True),
+    ("contact_frames", "contact frames", False),
+    ("contact_coverage", "coverage (contact)", True),
+    ("median_rel_width", "median rel. width", True),
 )
 ONSET_COLUMNS: Columns = (
     ("method", "method", False),
@@ -88,6 +103,27 @@ def hard_table(
     return out
 
 
+def coverage_table(
+    frames: Sequence[ScoredFrame], bins: Sequence[tuple[float, float]]
+) -> list[dict[str, Any]]:
+    """Per method: coverage of its stated area interval per pressure bin and overall.
+
+    A method that states no interval (the classical routine) gets one row, ``bin_kpa`` "no
+    interval", with no values.
+    """
+    out: list[dict[str, Any]] = []
+    for method in sorted({f.method for f in frames}):
+        fs = [f for f in frames if f.method == method]
+        if all(f.area_interval_px is None for f in fs):
+            out.append({"method": method, "bin_kpa": "no interval"})
+            continue
+        for lo, hi in bins:
+            sel = [f for f in fs if lo <= f.pressure_kpa < hi]
+            out.append({"method": method, "bin_kpa": bin_label(lo, hi), **coverage_row(sel)})
+        out.append({"method": method, "bin_kpa": "all", **coverage_row(fs)})
+    return out
+
+
 def onset_table(onset: Sequence[Mapping[str, Any]]) -> list[dict[str, Any]]:
     """Per method: median and max |onset error| (kPa) over the sessions where one was found."""
     out = []
@@ -124,7 +160,7 @@ def md_table(rows: Sequence[Mapping[str, Any]], cols: Columns) -> str:
 
 
 def report_text(results: Mapping[str, Any]) -> str:
-    """``report.md`` from the results (with their ``bins`` and ``hard`` tables)."""
+    """``report.md`` from the results (with their ``bins``, ``hard`` and ``coverage`` tables)."""
     cfg = results["config"]
     w, h = cfg["full_size"]
     sections = [
@@ -140,6 +176,10 @@ def report_text(results: Mapping[str, Any]) -> str:
         "## Speed\n\n"
         + md_table(results["timing"], TIMING_COLUMNS)
         + "\n\n![speed vs error](pareto.png)",
+        "## Coverage of the stated area interval\n\n"
+        "Share of frames whose stated interval (`area_interval_px`) contains the true area; "
+        "width\nover the true area, frames with true contact.\n\n"
+        + md_table(results["coverage"], COVERAGE_COLUMNS),
         "## Contact onset (estimated from each method's frames vs the mechanics' onset)\n\n"
         + md_table(onset_table(results["onset"]), ONSET_COLUMNS),
         "## Hard cases\n\n" + md_table(results["hard"], HARD_COLUMNS),
@@ -153,8 +193,9 @@ def write_report(
     frames: Sequence[ScoredFrame],
     bins: Sequence[tuple[float, float]],
 ) -> None:
-    """Add the ``bins`` and ``hard`` tables to ``results``; write ``results.json``, the figures
-    (``error_vs_pressure.png``, ``pareto.png``) and ``report.md`` into ``out_dir``, atomically.
+    """Add the ``bins``, ``hard`` and ``coverage`` tables to ``results``; write ``results.json``,
+    the figures (``error_vs_pressure.png``, ``pareto.png``) and ``report.md`` into ``out_dir``,
+    atomically.
 
     Args:
         out_dir: report folder (created if missing).
@@ -166,6 +207,7 @@ def write_report(
     out = Path(out_dir)
     results["bins"] = bin_table(frames, bins)
     results["hard"] = hard_table(frames, results["onset"])
+    results["coverage"] = coverage_table(frames, bins)
     write_json(out / "results.json", results)
     plot_error_vs_pressure(out / "error_vs_pressure.png", frames)
     size = tuple(results["config"]["full_size"])

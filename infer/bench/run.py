@@ -35,7 +35,8 @@ def run_bench(
 
     Returns:
         The content of ``results.json``: header keys, ``config``, ``records`` (one per method
-        and frame), ``onset``, ``timing``, ``bins`` and ``hard``.
+        and frame, with the stated ``area_interval_px`` and ``covered``), ``onset``, ``timing``,
+        ``bins``, ``hard`` and ``coverage`` (per method and pressure bin).
 
     Raises:
         ValueError: unusable dataset folder (the message names the file).

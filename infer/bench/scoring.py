@@ -36,6 +36,7 @@ class ScoredFrame:
     mm_per_px: float | None = None  # mm/px, for errors in mm²
     onset_kpa: float | None = None  # kPa, the session's true onset
     hard: bool = False  # the session was drawn from the hard ranges
+    area_interval_px: tuple[float, float] | None = None  # px, the stated interval; None: none
 
     @property
     def true_contact(self) -> bool:
@@ -48,6 +49,14 @@ class ScoredFrame:
         if not self.true_contact:
             raise ValueError(f"{self.frame}: relative error is undefined without true contact")
         return (self.area_px - self.true_area_px) / self.true_area_px
+
+    @property
+    def covered(self) -> bool | None:
+        """The stated interval contains the true area (None without an interval)."""
+        if self.area_interval_px is None:
+            return None
+        lower, upper = self.area_interval_px
+        return lower <= self.true_area_px <= upper
 
 
 def median_or_none(values: Sequence[float]) -> float | None:
@@ -82,6 +91,25 @@ def bin_row(frames: Sequence[ScoredFrame]) -> dict[str, float | int | None]:
         "contact_recall": _fraction([f.contact for f in cont]),
         "no_contact_frames": len(none),
         "no_contact_accuracy": _fraction([not f.contact for f in none]),
+    }
+
+
+def coverage_row(frames: Sequence[ScoredFrame]) -> dict[str, float | int | None]:
+    """Coverage of the stated interval over some frames (one method that states one).
+
+    Keys: ``frames`` (with an interval), ``coverage`` (all of them), ``contact_frames``,
+    ``contact_coverage`` (frames with true contact), ``median_rel_width`` (interval width over
+    the true area, true-contact frames); None where a quantity has no frames.
+    """
+    stated = [f for f in frames if f.area_interval_px is not None]
+    cont = [f for f in stated if f.true_contact]
+    widths = [(f.area_interval_px[1] - f.area_interval_px[0]) / f.true_area_px for f in cont]
+    return {
+        "frames": len(stated),
+        "coverage": _fraction([bool(f.covered) for f in stated]),
+        "contact_frames": len(cont),
+        "contact_coverage": _fraction([bool(f.covered) for f in cont]),
+        "median_rel_width": median_or_none(widths),
     }
 
 

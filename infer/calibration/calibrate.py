@@ -8,14 +8,17 @@ from dataclasses import dataclass, replace
 from pathlib import Path
 
 from contactcal.infer.calibration.curve import MM2, PX, Curve
-from contactcal.infer.calibration.fit import CurveConfig, fit_monotone
+from contactcal.infer.calibration.fit import CurveConfig
+from contactcal.infer.calibration.phases import LOADING
 from contactcal.infer.calibration.points import CalibrationPoint
-from contactcal.infer.calibration.record import Provenance, input_digests, write_calibration
+from contactcal.infer.calibration.provenance import Provenance, input_digests
+from contactcal.infer.calibration.record import write_calibration
+from contactcal.infer.calibration.session import SessionFit, fit_session
 from contactcal.infer.calibration.table import format_table
 from contactcal.infer.errors import RunError
 from contactcal.infer.files.atomic import OutputSet, run_outputs
 from contactcal.infer.methods.registry import make_method
-from contactcal.infer.pipeline.manifest import Frame, read_manifest
+from contactcal.infer.pipeline.manifest import Frame, read_session
 from contactcal.infer.pipeline.measure import Measured, measure_files
 from contactcal.infer.pipeline.scale import PixelScale
 
@@ -25,10 +28,11 @@ class CalibrationReport:
     """What a calibration run produced."""
 
     table: str  # the short text table the CLI prints
-    frames: list[Frame]  # manifest rows, sorted by pressure
+    frames: list[Frame]  # manifest rows, sorted by phase (loading first), pressure, row
     measured: list[Measured]  # per frame, same order
-    curve: Curve
+    curve: Curve  # the inverted phase's curve (fit.curve)
     files: dict[str, Path]  # "json", "csv", "png"
+    fit: SessionFit  # every phase's steps, curve and band; hysteresis
 
 
 def calibrate_session(
@@ -43,13 +47,20 @@ def calibrate_session(
     device_id: str | None = None,
     outputs: OutputSet | None = None,
     bit_depth: int | None = None,
+    inverse_phase: str = LOADING,
+    manifest_as: str | os.PathLike[str] | None = None,
 ) -> CalibrationReport:
     """Calibrate the session listed in ``manifest`` and write its outputs into ``out_dir``.
 
-    The lowest-pressure frame is the session's reference (ROI for the classical method).
+    (Over 60 lines only by its arguments and their documentation: the body is ~25 lines.)
+
+    The lowest-pressure frame of the loading pass is the session's reference (ROI for the
+    classical method). Repeated frames of a pressure step are aggregated by their median area;
+    each phase (loading, unloading) gets its own curve and band (`fit_session`).
 
     Args:
-        manifest: CSV with columns ``file,pressure_kpa`` (paths relative to the manifest).
+        manifest: CSV with columns ``file,pressure_kpa`` and optionally ``phase`` and others
+            (:mod:`contactcal.infer.pipeline.manifest`; paths relative to the manifest).
         out_dir: folder for ``calibration.json``, ``calibration.csv`` and ``curve.png``.
         method_name: ``"classical"`` (or ``"unet"`` where available).
         model: ONNX model path for learned methods (None → the shipped one).
@@ -61,61 +72,82 @@ def calibrate_session(
         outputs: the enclosing run's outputs to stage into (None: this call is the run). The
             manifest and its frames are protected: no output may replace them.
         bit_depth: significant bits of 16-bit frames (``--bit-depth``); None → from the files.
+        inverse_phase: the phase whose curve is inverted (``--inverse-phase``).
+        manifest_as: the path recorded for the manifest: its final place when the manifest
+            itself is an output staged in this run (video input); None → ``manifest``.
 
     Returns:
         The :class:`CalibrationReport` (table, measurements, curve, written files).
 
     Raises:
         ManifestError / ImageError: bad manifest or frame (nothing written).
-        ValueError: an invalid ``device_id``, or an output that would replace an input.
+        ValueError: an invalid ``device_id``, an output that would replace an input, or an
+            ``inverse_phase`` the session does not have.
         RunError: no contact in any frame (nothing written).
     """
     manifest = Path(manifest)
     provenance = Provenance(argv=None if argv is None else list(argv), device_id=device_id)
-    frames = read_manifest(manifest)
+    session = read_session(manifest)
+    frames, files = session.frames, [f.file for f in session.frames]
     method = make_method(method_name, None if model is None else str(model), outline=outline)
-    files = [f.file for f in frames]
     measured = measure_files(files, method, frames[0].file, scale, bit_depth=bit_depth)
-    results = _points(manifest, frames, measured)
+    results = _points(manifest, frames, measured, scale)
     if not any(r.contact for r in results):
         raise RunError(
             f"{manifest}: no contact detected in any of its {len(results)} frames "
             f"(method {method.name}); check the frames, the pressure range or the method"
         )
-    use_mm = scale is not None
-    areas = [r.area_mm2 if use_mm else r.area_px for r in results]
-    curve = fit_monotone(
-        [r.pressure_kpa for r in results],
-        areas,
-        [r.contact for r in results],
-        curve_config or CurveConfig(),
-        area_unit=MM2 if use_mm else PX,
-    )
-    extra = {
-        "manifest": str(manifest.resolve()),
-        "mm_per_px": None if scale is None else scale.mm_per_px,
-        "scale_image_width_px": None if scale is None else scale.image_width_px,
-    }
+    unit = PX if scale is None else MM2
+    fit = fit_session(results, unit, curve_config, inverse_phase, session.phase_source)
+    recorded = Path(manifest_as if manifest_as is not None else manifest).resolve()
+    extra = _extra(recorded, scale)
     provenance = replace(
-        provenance, method_config=method.describe(), inputs=input_digests(manifest, files)
+        provenance, method_config=method.describe(), inputs=input_digests(manifest, files, recorded)
     )
     with run_outputs([manifest, model, *files], join=outputs) as outs:
-        paths = write_calibration(out_dir, results, curve, method.name, extra, provenance, outs)
-    return CalibrationReport(format_table(results, curve), frames, measured, curve, paths)
+        paths = write_calibration(out_dir, results, fit, method.name, extra, provenance, outs)
+    table = format_table(results, fit)
+    return CalibrationReport(table, frames, measured, fit.curve, paths, fit)
+
+
+def _interval(
+    m: Measured, scale: PixelScale | None
+) -> tuple[tuple[float, float] | None, tuple[float, float] | None]:
+    """The method's stated area interval of a frame, in px and mm² (None where absent)."""
+    iv = getattr(m.result, "area_interval_px", None)
+    if iv is None:
+        return None, None
+    px = (float(iv[0]), float(iv[1]))
+    if scale is None:
+        return px, None
+    return px, (scale.area_mm2(px[0], m.width), scale.area_mm2(px[1], m.width))
 
 
 def _points(
-    manifest: Path, frames: list[Frame], measured: list[Measured]
+    manifest: Path, frames: list[Frame], measured: list[Measured], scale: PixelScale | None
 ) -> list[CalibrationPoint]:
     """The session's points, file names relative to the manifest's folder."""
     return [
         CalibrationPoint(
-            file=os.path.relpath(m.file, manifest.parent),
-            pressure_kpa=f.pressure_kpa,
-            contact=m.result.contact,
-            area_px=float(m.result.area_px),
-            area_mm2=m.area_mm2,
-            note=m.result.note,
+            os.path.relpath(m.file, manifest.parent),
+            f.pressure_kpa,
+            m.result.contact,
+            float(m.result.area_px),
+            m.area_mm2,
+            m.result.note,
+            f.phase,
+            f.step,
+            f.extras,
+            *_interval(m, scale),
         )
         for f, m in zip(frames, measured, strict=True)
     ]
+
+
+def _extra(manifest: Path, scale: PixelScale | None) -> dict[str, object]:
+    """The record's ``extra``: the manifest's path and the pixel scale used."""
+    return {
+        "manifest": str(manifest),
+        "mm_per_px": None if scale is None else scale.mm_per_px,
+        "scale_image_width_px": None if scale is None else scale.image_width_px,
+    }

@@ -1,16 +1,23 @@
 """The calibration curve: fitted contact area vs pressure, evaluated and inverted (pure numpy).
 
 `Curve` evaluates the fit (`Curve.area_at`) and inverts it for the controller
-(`Curve.pressure_for_area`, `Curve.inverse_table`); :mod:`contactcal.infer.calibration.fit`
-makes it from a session's points.
+(`Curve.pressure_for_area`, `Curve.inverse_table`; with its uncertainty band
+`Curve.pressure_interval_for_area`, `Curve.inverse_table_with_interval`).
+:mod:`contactcal.infer.calibration.fit` makes the isotonic curve, :mod:`.parametric` the
+saturating one (``model``), :mod:`.bootstrap` the band.
 """
 
 from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from typing import TYPE_CHECKING
 
 import numpy as np
+
+if TYPE_CHECKING:
+    from contactcal.infer.calibration.band import Band
+    from contactcal.infer.calibration.parametric import Saturating
 
 #: Area units of a curve: mm² with a pixel scale, else input pixels.
 MM2 = "mm²"
@@ -29,6 +36,10 @@ class Curve:
         area_unit: ``"mm²"`` or ``"px"``.
         table_step: default area step of `inverse_table` (area_unit), or None for automatic.
         table_max_rows: row target of the automatic step.
+        model: the parametric form when the curve is the saturating fit (then ``fit_area`` holds
+            its values at ``pressures_kpa`` and evaluation and inverse use the form), or None for
+            the piecewise-linear isotonic fit.
+        band: the curve's uncertainty band, or None (e.g. read from a format 1-2 record).
     """
 
     pressures_kpa: np.ndarray
@@ -37,6 +48,8 @@ class Curve:
     area_unit: str = MM2
     table_step: float | None = None
     table_max_rows: int = 100
+    model: Saturating | None = None
+    band: Band | None = None
 
     def __post_init__(self) -> None:
         p = np.array(self.pressures_kpa, dtype=np.float64).reshape(-1)
@@ -79,6 +92,9 @@ class Curve:
         if self.onset_kpa is None:
             return p.copy(), f.copy()
         on = self.onset_kpa
+        if self.model is not None:  # the smooth form, sampled (for plots and the area range)
+            x = np.linspace(on, float(p[-1]), 257)
+            return x, self.model.area(x)
         at = p == on
         if np.any(at) and float(f[at][0]) > 0:
             keep = p >= on
@@ -97,6 +113,8 @@ class Curve:
         x, y = self.knots()
         if q < x[0]:
             return 0.0
+        if self.model is not None:
+            return float(self.model.area(min(q, float(x[-1]))))
         return float(np.interp(q, x, y))
 
     def area_range(self) -> tuple[float, float]:
@@ -137,9 +155,30 @@ class Curve:
                 )
                 return float(x[0]), msg
             return float(x[0]), None
-        k = int(np.searchsorted(y, a, side="left"))  # y[k-1] < a <= y[k]
-        t = (a - y[k - 1]) / (y[k] - y[k - 1])
-        return float(x[k - 1] + t * (x[k] - x[k - 1])), None
+        if self.model is not None:
+            return min(self.model.pressure(a), float(x[-1])), None
+        return lowest_reaching(x, y, a), None
+
+    def pressure_interval_for_area(self, area: float) -> tuple[float, float, float, str | None]:
+        """``(p, p_lo, p_hi, warning)``: `pressure_for_area` with the band's interval, kPa.
+
+        ``p_lo`` is where the band's upper edge reaches ``area``, ``p_hi`` where its lower
+        edge does (so ``p_lo <= p <= p_hi``; each non-decreasing in ``area``). The warning
+        joins the curve's and the band's (an end of the interval clamped to the calibrated
+        range), or is None.
+
+        Raises:
+            ValueError: as `pressure_for_area`, or a curve without a band.
+        """
+        p, warning = self.pressure_for_area(area)
+        if self.band is None:
+            raise ValueError(
+                "this calibration has no uncertainty band (written before format 3); "
+                "re-run contactcal calibrate, or use pressure_for_area"
+            )
+        lo, hi, band_warning = self.band.pressure_bounds(float(area))
+        notes = [w for w in (warning, band_warning) if w]
+        return p, min(lo, p), max(hi, p), "; ".join(notes) or None
 
     def default_table_step(self) -> float:
         """The inverse-table step used when none is given (area_unit)."""
@@ -173,6 +212,30 @@ class Curve:
             )
         areas = [lo, *(k * s for k in range(first, last + 1)), hi]
         return [(float(a), self.pressure_for_area(a)[0]) for a in areas]
+
+    def inverse_table_with_interval(
+        self, step: float | None = None
+    ) -> list[tuple[float, float, float, float]]:
+        """``[(area, p, p_lo, p_hi), ...]``: `inverse_table` with the band's interval, kPa."""
+        rows = self.inverse_table(step)
+        return [(a, *self.pressure_interval_for_area(a)[:3]) for a, _ in rows]
+
+
+def lowest_reaching(x: np.ndarray, y: np.ndarray, a: float) -> float:
+    """Lowest ``x`` at which the piecewise-linear, non-decreasing ``y(x)`` reaches ``a``.
+
+    Args:
+        x: ``(N,)`` increasing abscissae (kPa).
+        y: ``(N,)`` non-decreasing values.
+        a: target; ``x[0]`` when ``a <= y[0]``, ``x[-1]`` when ``a > y[-1]`` (callers warn).
+    """
+    if a <= y[0]:
+        return float(x[0])
+    if a > y[-1]:
+        return float(x[-1])
+    k = int(np.searchsorted(y, a, side="left"))  # y[k-1] < a <= y[k]
+    t = (a - y[k - 1]) / (y[k] - y[k - 1])
+    return float(x[k - 1] + t * (x[k] - x[k - 1]))
 
 
 def _nice_step(raw: float) -> float:

@@ -17,7 +17,12 @@ from numpy.typing import ArrayLike
 from contactcal.infer.calibration.curve import MM2, Curve
 from contactcal.infer.calibration.isotonic import despike, isotonic_fit
 from contactcal.infer.calibration.onset import onset_index, refine_onset
+from contactcal.infer.calibration.parametric import fit_saturating
 from contactcal.infer.calibration.points import prepare_points
+
+#: Curve models: the isotonic fit, the saturating parametric one, or chosen per session by
+#: cross-validation (:mod:`contactcal.infer.calibration.select`).
+CURVE_MODELS = ("auto", "isotonic", "parametric")
 
 
 @dataclass(frozen=True)
@@ -32,8 +37,22 @@ class CurveConfig:
     table_step: float | None = None
     # rows: size target of the automatic inverse-table step (readability vs resolution).
     table_max_rows: int = 100
+    # "auto" picks the model with the lower leave-one-step-out error; "isotonic" follows any
+    # monotone shape, "parametric" (onset + saturation) is smooth but assumes that shape.
+    curve_model: str = "auto"
+    # bootstrap resamples of the band: its 5th/95th percentiles wobble by ~1/sqrt(n) of the
+    # spread (200: edges stable to ~10 %, ~0.5 s a phase with parametric refits; 50 for a look).
+    n_bootstrap: int = 200
+    # seed of the bootstrap's numpy Generator: the same seed gives the same band.
+    seed: int = 0
 
     def __post_init__(self) -> None:
+        if self.curve_model not in CURVE_MODELS:
+            raise ValueError(
+                f"curve_model: expected one of {CURVE_MODELS}, got {self.curve_model!r}"
+            )
+        if self.n_bootstrap < 20:
+            raise ValueError(f"n_bootstrap: expected >= 20 (a 90 % band), got {self.n_bootstrap}")
         if self.median_window < 1 or self.median_window % 2 == 0:
             raise ValueError(
                 f"median_window: expected an odd integer >= 1, got {self.median_window}"
@@ -130,3 +149,36 @@ def fit_monotone(
         fit[s:] = np.interp(p[s:], p[idx], iso)
         onset = refine_onset(p, fit, idx)
     return Curve(p, fit, onset, area_unit, cfg.table_step, cfg.table_max_rows)
+
+
+def fit_parametric(
+    pressures_kpa: ArrayLike,
+    areas: ArrayLike,
+    contact: ArrayLike | None = None,
+    config: CurveConfig | None = None,
+    *,
+    area_unit: str = MM2,
+) -> Curve | None:
+    """Least-squares saturating fit (:mod:`.parametric`) of the contact range's points.
+
+    The contact range is found as in `fit_monotone`; its contact points are fitted with the
+    onset bounded to ``[pressure at s - 1, pressure at s]`` (``s``: first frame of the range;
+    without a frame below it, one step lower, >= 0 kPa). Arguments as `fit_monotone`.
+
+    Returns:
+        The `Curve` with its ``model``, or None with fewer than 3 contact points in the range.
+    """
+    cfg = config or CurveConfig()
+    p, a, c = prepare_points(pressures_kpa, areas, contact)
+    s = onset_index(c)
+    if s is None:
+        return None
+    idx = np.flatnonzero(c[s:]) + s
+    # onset range: between the last frame without contact and the first with; with none
+    # below, one step below the first frame but not below 0 kPa (no suction onset).
+    lo = float(p[s - 1]) if s > 0 else max(0.0, float(2 * p[0] - p[1]))
+    model = fit_saturating(p[idx], a[idx], (lo, float(p[s])))
+    if model is None:
+        return None
+    fit = model.area(p)
+    return Curve(p, fit, model.p0_kpa, area_unit, cfg.table_step, cfg.table_max_rows, model=model)

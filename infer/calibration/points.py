@@ -7,6 +7,9 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import ArrayLike
 
+from contactcal.infer.calibration.curve import PX
+from contactcal.infer.calibration.phases import LOADING
+
 
 @dataclass(frozen=True)
 class CalibrationPoint:
@@ -19,6 +22,11 @@ class CalibrationPoint:
         area_px: contact area, px (0 without contact).
         area_mm2: contact area, mm², or None without a pixel scale.
         note: free text (e.g. why a frame is doubtful).
+        phase: ``"loading"`` or ``"unloading"``.
+        step: 0-based pressure step within the phase (frames of one step share its pressure).
+        extras: the manifest row's other columns, ``(name, cell)`` pairs.
+        area_interval_px: the method's stated 90 % interval of the area, px, or None.
+        area_interval_mm2: the same in mm², or None (no interval or no pixel scale).
     """
 
     file: str
@@ -27,6 +35,21 @@ class CalibrationPoint:
     area_px: float
     area_mm2: float | None
     note: str = ""
+    phase: str = LOADING
+    step: int = 0
+    extras: tuple[tuple[str, str], ...] = ()
+    area_interval_px: tuple[float, float] | None = None
+    area_interval_mm2: tuple[float, float] | None = None
+
+    def area(self, unit: str) -> float | None:
+        """The frame's area in ``unit`` (px, else mm²; None without a scale)."""
+        if unit == PX:
+            return float(self.area_px)
+        return None if self.area_mm2 is None else float(self.area_mm2)
+
+    def interval(self, unit: str) -> tuple[float, float] | None:
+        """The frame's stated area interval in ``unit``, or None."""
+        return self.area_interval_px if unit == PX else self.area_interval_mm2
 
 
 def prepare_points(

@@ -6,148 +6,148 @@ completely into a staging folder and moved into place only when all succeeded,
 If anything fails, no new file appears (files from an earlier run are left as they were).
 A reader should therefore treat ``calibration.json`` as the record of a complete run.
 
-``calibration.json`` (format version 2) records what the run used: the method and its
-configuration (for the U-Net the model file, its sha256 and its training ``data_digest``), the
-sha256 of the manifest and of every frame, the command line, the display's ``device_id`` and the
-package versions. :func:`load_curve` reads versions 1 and 2.
+``calibration.json`` (format version 3) holds the per-frame ``points`` (with phase, step, extra
+manifest columns and the method's area interval), the per-step aggregates ``steps`` (median,
+spread, frame count), one fit per phase under ``phases`` (model chosen by cross-validation,
+parametric parameters, 90 % bootstrap band, inverse table with intervals), ``hysteresis``, and
+at the top level the inverted phase's onset, fit and inverse as in version 2. It records what
+the run used (:mod:`.provenance`). :func:`~contactcal.infer.calibration.load.load_curve` reads
+versions 1 to 3.
 """
 
 from __future__ import annotations
 
-import contextlib
 import csv
 import io
-import json
 import os
-from collections.abc import Sequence
-from dataclasses import dataclass
 from datetime import datetime, timezone
-from importlib import metadata
 from pathlib import Path
 from typing import Any
 
-import numpy as np
-
 from contactcal.infer.calibration.curve import Curve
+from contactcal.infer.calibration.load import FORMAT, FORMAT_VERSION, load_curve
 from contactcal.infer.calibration.plot import plot_curve
 from contactcal.infer.calibration.points import CalibrationPoint
+from contactcal.infer.calibration.provenance import (
+    Provenance,
+    check_device_id,
+    input_digests,
+    package_versions,
+)
+from contactcal.infer.calibration.session import PhaseFit, SessionFit
 from contactcal.infer.files.atomic import OutputSet, run_outputs, write_synced
-from contactcal.infer.files.digest import sha256_file
 from contactcal.infer.files.jsonable import finite_or_none, json_text, jsonable
 
 # plot_curve is looked up here at call time, so tests can replace it.
+__all__ = ["Provenance", "check_device_id", "input_digests", "load_curve", "write_calibration"]
 
-FORMAT = "contactcal.calibration"
-FORMAT_VERSION = 2
-#: Versions :func:`load_curve` reads (2 added the run's provenance; the curve is unchanged).
-READABLE_VERSIONS = (1, 2)
-#: Longest accepted ``--device-id``, characters.
-DEVICE_ID_MAX = 100
-CSV_COLUMNS = ("file", "pressure_kpa", "contact", "area_px", "area_mm2", "fit_area")
-# Distribution names probed for versions (first installed one wins); metadata only, no import.
-_DISTRIBUTIONS: dict[str, tuple[str, ...]] = {
-    "contactcal": ("contactcal",),
-    "numpy": ("numpy",),
-    "opencv": (
-        "opencv-contrib-python-headless",
-        "opencv-python-headless",
-        "opencv-contrib-python",
-        "opencv-python",
-    ),
-    "onnxruntime": ("onnxruntime", "onnxruntime-gpu"),
-}
+CSV_COLUMNS = (
+    "phase",
+    "step",
+    "pressure_kpa",
+    "n_frames",
+    "contact",
+    "median_area",
+    "min_area",
+    "q25_area",
+    "q75_area",
+    "max_area",
+    "fit_area",
+    "band_lo",
+    "band_hi",
+    "area_unit",
+)
 
 
-def package_versions() -> dict[str, str | None]:
-    """Installed versions of contactcal, numpy, opencv, onnxruntime (None if absent)."""
-    out: dict[str, str | None] = {}
-    for key, dists in _DISTRIBUTIONS.items():
-        out[key] = None
-        for dist in dists:
-            with contextlib.suppress(metadata.PackageNotFoundError):
-                out[key] = metadata.version(dist)
-                break
-    return out
-
-
-def check_device_id(device_id: str | None) -> str | None:
-    """Validate a display identifier: None, or 1-100 printable characters.
-
-    Raises:
-        ValueError: empty, too long or with control characters (the message says which).
-    """
-    if device_id is None:
-        return None
-    if not device_id or not device_id.isprintable() or len(device_id) > DEVICE_ID_MAX:
-        shown = device_id if len(device_id) <= 40 else device_id[:40] + "…"
-        raise ValueError(
-            f"--device-id {shown!r}: expected 1-{DEVICE_ID_MAX} printable characters (e.g. the "
-            f"display's serial number), got {len(device_id)} characters"
-            + ("" if device_id.isprintable() else " including control characters")
-        )
-    return device_id
-
-
-def input_digests(manifest: Path, files: Sequence[Path]) -> dict[str, Any]:
-    """sha256 of the manifest and of each frame (frame names relative to the manifest's folder).
-
-    Raises:
-        OSError: an unreadable file.
-    """
+def _point(r: CalibrationPoint, curve: Curve) -> dict[str, Any]:
     return {
-        "manifest": {"file": str(manifest.resolve()), "sha256": sha256_file(manifest)},
-        "frames": [
-            {"file": os.path.relpath(f, manifest.parent), "sha256": sha256_file(f)} for f in files
-        ],
+        "file": r.file,
+        "pressure_kpa": r.pressure_kpa,
+        "phase": r.phase,
+        "step": r.step,
+        "contact": bool(r.contact),
+        "area_px": r.area_px,
+        "area_mm2": r.area_mm2,
+        "area_interval_px": r.area_interval_px,
+        "area_interval_mm2": r.area_interval_mm2,
+        "fit_area": curve.area_at(r.pressure_kpa),
+        "note": r.note,
+        "extras": dict(r.extras),
     }
 
 
-@dataclass(frozen=True)
-class Provenance:
-    """What a calibration run used, recorded in ``calibration.json``."""
+def _steps(fit: SessionFit) -> list[dict[str, Any]]:
+    rows = []
+    for ph in fit.phases.values():
+        band = ph.curve.band
+        for s in ph.steps:
+            rows.append(
+                {
+                    "phase": s.phase,
+                    "step": s.step,
+                    "pressure_kpa": s.pressure_kpa,
+                    "n_frames": s.n,
+                    "contact": s.contact,
+                    "median_area": s.median,
+                    "spread": s.spread(),
+                    "fit_area": ph.curve.area_at(s.pressure_kpa),
+                    "band": None if band is None else list(band.at(s.pressure_kpa)),
+                }
+            )
+    return rows
 
-    method_config: dict[str, Any] | None = None  # Method.describe() (None: not recorded)
-    inputs: dict[str, Any] | None = None  # input_digests() (None: not recorded)
-    argv: list[str] | None = None  # the command line's arguments (None: not run from the CLI)
-    device_id: str | None = None  # the calibrated display's identifier (1-100 printable chars)
 
-    def __post_init__(self) -> None:
-        check_device_id(self.device_id)
+def _phase(ph: PhaseFit) -> dict[str, Any]:
+    c = ph.curve
+    inverse = area_range = None
+    if c.has_contact:
+        step = c.default_table_step()
+        rows = c.inverse_table_with_interval(step)
+        inverse = {"step": step, **dict(zip(_INV, map(list, zip(*rows, strict=True)), strict=True))}
+        area_range = list(c.area_range())
+    m, b = c.model, c.band
+    return {
+        "model": ph.selection["model"],
+        "selection": ph.selection,
+        "onset_kpa": c.onset_kpa,
+        "calibrated_range": {
+            "pressure_kpa": [float(c.pressures_kpa[0]), float(c.pressures_kpa[-1])],
+            "area": area_range,
+        },
+        "fit": {"pressure_kpa": c.pressures_kpa, "area": c.fit_area},
+        "parametric": None
+        if m is None
+        else {"p0_kpa": m.p0_kpa, "k_kpa": m.k_kpa, "a_max": m.a_max},
+        "band": None
+        if b is None
+        else {
+            "level": b.level,
+            "n_resamples": b.n_resamples,
+            "seed": b.seed,
+            "pressure_kpa": b.pressures_kpa,
+            "lo": b.lo,
+            "hi": b.hi,
+        },
+        "inverse": inverse,
+    }
+
+
+_INV = ("area", "pressure_kpa", "pressure_lo_kpa", "pressure_hi_kpa")
 
 
 def calibration_record(
     results: list[CalibrationPoint],
-    curve: Curve,
+    fit: SessionFit,
     method: str,
     extra: dict[str, Any],
     provenance: Provenance | None = None,
 ) -> dict[str, Any]:
     """The content of ``calibration.json`` (JSON-safe: no NaN, None for missing values)."""
     prov = provenance or Provenance()
-    ordered = sorted(results, key=lambda r: r.pressure_kpa)
-    points = [
-        {
-            "file": r.file,
-            "pressure_kpa": r.pressure_kpa,
-            "contact": bool(r.contact),
-            "area_px": r.area_px,
-            "area_mm2": r.area_mm2,
-            "fit_area": curve.area_at(r.pressure_kpa),
-            "note": r.note,
-        }
-        for r in ordered
-    ]
-    if curve.has_contact:
-        step = curve.default_table_step()
-        table = curve.inverse_table(step)
-        inverse: dict[str, Any] | None = {
-            "step": step,
-            "area": [a for a, _ in table],
-            "pressure_kpa": [p for _, p in table],
-        }
-        area_range: list[float] | None = list(curve.area_range())
-    else:
-        inverse, area_range = None, None
+    order = {ph: i for i, ph in enumerate(fit.phases)}
+    ordered = sorted(results, key=lambda r: (order.get(r.phase, 9), r.pressure_kpa))
+    phases = {name: _phase(ph) for name, ph in fit.phases.items()}
+    main = phases[fit.inverse_phase]
     record = {
         "format": FORMAT,
         "format_version": FORMAT_VERSION,
@@ -156,15 +156,17 @@ def calibration_record(
         "method_config": prov.method_config,
         "device_id": prov.device_id,
         "argv": prov.argv,
-        "area_unit": curve.area_unit,
-        "onset_kpa": curve.onset_kpa,
-        "calibrated_range": {
-            "pressure_kpa": [float(curve.pressures_kpa[0]), float(curve.pressures_kpa[-1])],
-            "area": area_range,
-        },
-        "points": points,
-        "fit": {"pressure_kpa": curve.pressures_kpa, "area": curve.fit_area},
-        "inverse": inverse,
+        "area_unit": fit.curve.area_unit,
+        "inverse_phase": fit.inverse_phase,
+        "phase_source": fit.phase_source,
+        "onset_kpa": main["onset_kpa"],
+        "calibrated_range": main["calibrated_range"],
+        "points": [_point(r, fit.phases[r.phase].curve) for r in ordered],
+        "steps": _steps(fit),
+        "fit": main["fit"],
+        "inverse": main["inverse"],
+        "phases": phases,
+        "hysteresis": fit.hysteresis,
         "inputs": prov.inputs,
         "versions": package_versions(),
         "extra": extra,
@@ -172,7 +174,7 @@ def calibration_record(
     return jsonable(record)
 
 
-def _csv_text(results: list[CalibrationPoint], curve: Curve) -> str:
+def _csv_text(fit: SessionFit) -> str:
     buf = io.StringIO()
     writer = csv.writer(buf, lineterminator="\n")
     writer.writerow(CSV_COLUMNS)
@@ -181,15 +183,18 @@ def _csv_text(results: list[CalibrationPoint], curve: Curve) -> str:
         v = finite_or_none(x)
         return "" if v is None else f"{v:.10g}"
 
-    for r in sorted(results, key=lambda r: r.pressure_kpa):
+    for row in _steps(fit):
+        sp, band = row["spread"], row["band"] or [None, None]
         writer.writerow(
             [
-                r.file,
-                num(r.pressure_kpa),
-                "true" if r.contact else "false",
-                num(r.area_px),
-                num(r.area_mm2),
-                num(curve.area_at(r.pressure_kpa)),
+                row["phase"],
+                row["step"],
+                num(row["pressure_kpa"]),
+                row["n_frames"],
+                "true" if row["contact"] else "false",
+                *(num(v) for v in (row["median_area"], sp["min"], sp["q25"], sp["q75"], sp["max"])),
+                *(num(v) for v in (row["fit_area"], *band)),
+                fit.curve.area_unit,
             ]
         )
     return buf.getvalue()
@@ -198,7 +203,7 @@ def _csv_text(results: list[CalibrationPoint], curve: Curve) -> str:
 def write_calibration(
     out_dir: str | os.PathLike[str],
     results: list[CalibrationPoint],
-    curve: Curve,
+    fit: SessionFit,
     method: str,
     extra: dict[str, Any] | None = None,
     provenance: Provenance | None = None,
@@ -211,7 +216,7 @@ def write_calibration(
     Args:
         out_dir: output folder (created if missing).
         results: per-frame measurements, any order.
-        curve: the fitted curve (its ``area_unit`` decides which area is plotted).
+        fit: the fitted session (its curves' ``area_unit`` decides which area is plotted).
         method: name of the measuring method (recorded and shown in the plot title).
         extra: free, JSON-able metadata (e.g. mm_per_px, model path); NaN becomes null.
         provenance: what the run used (method configuration, input digests, argv, device).
@@ -227,39 +232,11 @@ def write_calibration(
         "png": out / "curve.png",
     }
     # Serialise first: a content error fails before anything touches the disk.
-    record = calibration_record(results, curve, method, extra or {}, provenance)
+    record = calibration_record(results, fit, method, extra or {}, provenance)
     text = json_text(record, ensure_ascii=False)
-    csv_text = _csv_text(results, curve)
+    csv_text = _csv_text(fit)
     with run_outputs(join=outputs) as outs:
-        plot_curve(outs.stage(paths["png"]), results, curve, method)
+        plot_curve(outs.stage(paths["png"]), results, fit, method)
         write_synced(outs.stage(paths["csv"]), csv_text)
         write_synced(outs.stage(paths["json"]), text)  # staged last, so moved last
     return paths
-
-
-def load_curve(path: str | os.PathLike[str]) -> Curve:
-    """Read the fitted `Curve` back from a ``calibration.json`` (for the controller).
-
-    Raises:
-        ValueError: unreadable file or not a contactcal calibration.
-    """
-    try:
-        data = json.loads(Path(path).read_text(encoding="utf-8"))
-        if data.get("format") != FORMAT:
-            raise ValueError(f"format {data.get('format')!r}, expected {FORMAT!r}")
-        if data.get("format_version") not in READABLE_VERSIONS:
-            raise ValueError(
-                f"format_version {data.get('format_version')!r}, expected one of "
-                f"{', '.join(map(str, READABLE_VERSIONS))} (written by a newer contactcal?)"
-            )
-        fit = data["fit"]
-        step = (data.get("inverse") or {}).get("step")
-        return Curve(
-            np.asarray(fit["pressure_kpa"], dtype=np.float64),
-            np.asarray(fit["area"], dtype=np.float64),
-            data["onset_kpa"],
-            data["area_unit"],
-            step,
-        )
-    except (OSError, ValueError, KeyError, TypeError, AttributeError) as exc:
-        raise ValueError(f"{path}: not a readable contactcal calibration ({exc})") from exc

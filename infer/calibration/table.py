@@ -1,45 +1,74 @@
-"""The text table ``contactcal calibrate`` prints: pressure, area, fit, contact, note."""
+"""The text table ``contactcal calibrate`` prints: one row per pressure step, then the fits."""
 
 from __future__ import annotations
 
-from contactcal.infer.calibration.curve import Curve
 from contactcal.infer.calibration.points import CalibrationPoint
-from contactcal.infer.files.jsonable import finite_or_none
+from contactcal.infer.calibration.session import SessionFit
 
 
-def format_table(results: list[CalibrationPoint], curve: Curve) -> str:
-    """Aligned text table: pressure (kPa), area (mm² if every frame has it, else px), fit
-    (curve unit), contact yes/no, and a note column when any frame has a note."""
-    ordered = sorted(results, key=lambda r: r.pressure_kpa)
-    use_mm2 = bool(ordered) and all(finite_or_none(r.area_mm2) is not None for r in ordered)
-    head = [
-        "pressure (kPa)",
-        "area (mm²)" if use_mm2 else "area (px)",
-        f"fit ({curve.area_unit})",
-        "contact",
-    ]
-    notes = any(r.note for r in ordered)
-    if notes:
-        head.append("note")
+def _rows(results: list[CalibrationPoint], fit: SessionFit) -> list[list[str]]:
+    notes: dict[tuple[str, float], list[str]] = {}
+    for r in results:
+        if r.note and r.note not in notes.setdefault((r.phase, r.pressure_kpa), []):
+            notes[(r.phase, r.pressure_kpa)].append(r.note)
     rows = []
-    for r in ordered:
-        area = r.area_mm2 if use_mm2 else r.area_px
-        row = [
-            f"{r.pressure_kpa:.2f}",
-            f"{float(area):.1f}",
-            f"{curve.area_at(r.pressure_kpa):.1f}",
-            "yes" if r.contact else "no",
-        ]
-        if notes:
-            row.append(r.note)
-        rows.append(row)
+    for ph in fit.phases.values():
+        band = ph.curve.band
+        for s in ph.steps:
+            sp = s.spread()
+            lo, hi = band.at(s.pressure_kpa) if band is not None else (None, None)
+            rows.append(
+                [
+                    s.phase,
+                    f"{s.pressure_kpa:.2f}",
+                    str(s.n),
+                    f"{s.median:.1f}",
+                    f"{sp['min']:.1f}-{sp['max']:.1f}" if s.n > 1 else "",
+                    f"{sp['q75'] - sp['q25']:.1f}" if s.n > 1 else "",
+                    f"{ph.curve.area_at(s.pressure_kpa):.1f}",
+                    "" if lo is None else f"{lo:.1f}-{hi:.1f}",
+                    "yes" if s.contact else "no",
+                    "; ".join(notes.get((s.phase, s.pressure_kpa), [])),
+                ]
+            )
+    return rows
+
+
+def _summary(fit: SessionFit) -> list[str]:
+    """One line per phase (model, CV errors, onset), and the hysteresis."""
+    unit = fit.curve.area_unit
+    lines = [f"phases: {fit.phase_source}; inverse: {fit.inverse_phase} curve"]
+    for name, ph in fit.phases.items():
+        cv = ph.selection["cv_rmse"]
+        shown = ", ".join(f"{k} {'–' if v is None else f'{v:.2f}'}" for k, v in cv.items())
+        onset = ph.curve.onset_kpa
+        at = "no contact" if onset is None else f"onset {onset:.2f} kPa"
+        lines.append(f"{name}: {ph.selection['model']} fit ({at}; CV RMSE {unit}: {shown})")
+    h = fit.hysteresis
+    if h is not None and h["max_abs_difference"] is not None:
+        lines.append(
+            f"hysteresis (unloading - loading): mean {h['mean_difference']:.1f} {unit}, max |.| "
+            f"{h['max_abs_difference']:.1f} {unit} at {h['max_abs_at_kpa']:g} kPa"
+        )
+    return lines
+
+
+def format_table(results: list[CalibrationPoint], fit: SessionFit) -> str:
+    """Aligned text table of the steps: phase, pressure (kPa), frames, median area, spread
+    (min-max and interquartile range, with repeated frames), fit and its 90 % band (curve
+    unit), contact, notes; then each phase's model, CV errors and onset, and the hysteresis."""
+    u = fit.curve.area_unit
+    head = ["phase", "pressure (kPa)", "n", f"median ({u})", "min-max", "IQR", f"fit ({u})"]
+    head += ["90 % band", "contact", "note"]
+    rows = _rows(results, fit)
     widths = [max([len(h), *(len(row[i]) for row in rows)]) for i, h in enumerate(head)]
 
     def line(cells: list[str]) -> str:
         out = [
-            c.rjust(w) if i < 3 else c.ljust(w)
+            c.rjust(w) if 0 < i < 8 else c.ljust(w)
             for i, (c, w) in enumerate(zip(cells, widths, strict=True))
         ]
         return "  ".join(out).rstrip()
 
-    return "\n".join([line(head), line(["-" * w for w in widths]), *(line(r) for r in rows)])
+    body = [line(head), line(["-" * w for w in widths]), *(line(r) for r in rows)]
+    return "\n".join([*body, "", *_summary(fit)])

@@ -20,21 +20,36 @@ from contactcal.infer.image.read import load_image
 
 @dataclass(frozen=True)
 class AreaResult:
-    """One frame's outcome."""
+    """One frame's outcome.
+
+    ``area_interval_px`` is the method's stated interval of the contact area (input pixels; for
+    the U-Net a 90 % interval calibrated on validation data, level in the model's metadata). It
+    always contains ``area_px``; without contact it is ``(0, upper)``. None when the method states
+    none (the classical routine states none).
+    """
 
     contact: bool
     area_px: float  # in pixels of the input file; 0.0 when no contact
     note: str  # "" or why there is no contact
     contour: np.ndarray | None  # (N, 1, 2) int32 outline in input pixels, for overlays
     soft_area_px: float | None = None  # U-Net: sum of probabilities over the region (sub-pixel)
+    area_interval_px: tuple[float, float] | None = None  # (lower, upper) px; None: none stated
 
     def upscaled(self, k: int) -> AreaResult:
-        """The same result for an image ``k`` times larger per side (areas × k²)."""
+        """The same result for an image ``k`` times larger per side (areas and interval × k²)."""
         if k == 1:
             return self
         soft = None if self.soft_area_px is None else self.soft_area_px * k * k
         contour = None if self.contour is None else self.contour * k
-        return replace(self, area_px=self.area_px * k * k, contour=contour, soft_area_px=soft)
+        iv = self.area_interval_px
+        interval = None if iv is None else (iv[0] * k * k, iv[1] * k * k)
+        return replace(
+            self,
+            area_px=self.area_px * k * k,
+            contour=contour,
+            soft_area_px=soft,
+            area_interval_px=interval,
+        )
 
 
 class Method(Protocol):

@@ -204,7 +204,10 @@ class ClassicalMethod:
         self.roi = None if reference is None else find_roi(reference, self.config)
 
     def measure(self, image: np.ndarray) -> AreaResult:
-        """Run the routine; the contour is the fitted ellipse."""
+        """Run the routine; the contour is the fitted ellipse.
+
+        The routine states no interval of its area: ``area_interval_px`` is None.
+        """
         res = measure_classical(image, self.roi, self.config)
         contour = None
         if res.ellipse is not None:

@@ -1,33 +1,46 @@
-"""Session manifest: which image was taken at which pressure.
+"""Session manifest: which image was taken at which pressure, in which pass.
 
-Format: a UTF-8 CSV (a byte-order mark is tolerated) whose header is exactly ``file,pressure_kpa``
-(whitespace around the names is tolerated), then one row per frame::
+Format: a UTF-8 CSV (a byte-order mark is tolerated) with a header naming its columns (whitespace
+around the names is tolerated), then one row per frame::
 
-    file,pressure_kpa
-    p00.0kpa.png,0.0
-    p02.0kpa.png,2.0
+    file,pressure_kpa,phase,time_s
+    p00.0kpa_a.png,0.0,loading,0.0
+    p00.0kpa_b.png,0.0,loading,0.1
+    p02.0kpa_a.png,2.0,loading,3.0
+    p00.0kpa_c.png,0.0,unloading,9.0
 
-``file`` is an image path, relative to the manifest's folder or absolute, each image on one row
-only; ``pressure_kpa`` is the chamber gauge pressure in kPa (0 to :data:`MAX_PRESSURE_KPA`), one
-frame per pressure step. Blank lines are skipped.
-Rows may be in any order: `read_manifest` returns the frames sorted by pressure, and the
-lowest-pressure frame is the session's reference frame (normally 0 kPa, membrane at rest, no
-contact).
+Required columns: ``file`` (an image path, relative to the manifest's folder or absolute, each
+image on one row only) and ``pressure_kpa`` (chamber gauge pressure, kPa, 0 to
+:data:`MAX_PRESSURE_KPA`). Optional ``phase``: ``loading`` or ``unloading`` (case-insensitive).
+Any other column (e.g. ``timestamp``) is kept per frame (:attr:`Frame.extras`). A pressure may
+repeat: the frames of one phase at one pressure are one pressure *step*. Without a ``phase``
+column the passes are read from the row order (rising then falling: the rows after the maximum
+are the unloading pass; see :func:`~contactcal.infer.calibration.phases.phases_from_order`).
+Blank lines are skipped. `read_manifest` returns the frames sorted by phase (loading first), then
+pressure, then row; the first one, the lowest-pressure frame of the loading pass, is the session's
+reference frame (normally 0 kPa, membrane at rest, no contact).
 """
 
 from __future__ import annotations
 
 import csv
-import itertools
 import math
 import os
 from dataclasses import dataclass
 from pathlib import Path
 
-__all__ = ["EXPECTED_COLUMNS", "MAX_PRESSURE_KPA", "Frame", "ManifestError", "read_manifest"]
+from contactcal.infer.calibration.phases import (
+    FROM_COLUMN,
+    LOADING,
+    PHASES,
+    parse_phase,
+    phases_from_order,
+)
 
-EXPECTED_COLUMNS: tuple[str, ...] = ("file", "pressure_kpa")
-_HEADER = ",".join(EXPECTED_COLUMNS)
+REQUIRED_COLUMNS: tuple[str, ...] = ("file", "pressure_kpa")
+PHASE_COLUMN = "phase"
+_KNOWN = (*REQUIRED_COLUMNS, PHASE_COLUMN)
+_HEADER = ",".join(REQUIRED_COLUMNS)
 _MAX_LISTED = 5
 #: Highest plausible chamber gauge pressure, kPa. The display works at 0-20 kPa; 200 kPa is ten
 #: times that, so a larger value is a unit slip (Pa for kPa) or a typo, not a calibration step.
@@ -47,21 +60,40 @@ class Frame:
         file: absolute image path (relative paths are resolved against the manifest's folder).
         pressure_kpa: chamber gauge pressure, kPa, >= 0.
         row: 1-based data row number in the manifest (header and blank lines not counted).
+        phase: ``"loading"`` or ``"unloading"``.
+        step: 0-based index of the frame's pressure step within its phase (ascending pressure).
+        extras: the row's other columns as ``(name, cell)`` pairs, in header order.
     """
 
     file: Path
     pressure_kpa: float
     row: int
+    phase: str = LOADING
+    step: int = 0
+    extras: tuple[tuple[str, str], ...] = ()
+
+
+@dataclass(frozen=True)
+class Session:
+    """A read manifest: its frames and how their phases were determined."""
+
+    frames: list[Frame]  # sorted by phase (loading first), pressure, row; [0] is the reference
+    phase_source: str  # phases.FROM_COLUMN, FROM_ORDER or SINGLE_PASS
 
 
 def read_manifest(path: str | os.PathLike[str]) -> list[Frame]:
+    """The frames of a session manifest (see `read_session`); ``frames[0]`` is the reference."""
+    return read_session(path).frames
+
+
+def read_session(path: str | os.PathLike[str]) -> Session:
     """Read and validate a session manifest.
 
     Args:
         path: the manifest CSV.
 
     Returns:
-        The frames sorted by pressure (ascending); ``frames[0]`` is the reference frame.
+        The :class:`Session`: frames sorted by phase (loading first), pressure and row.
 
     Raises:
         ManifestError: with the manifest path, the row, what was expected and how to fix it.
@@ -75,21 +107,28 @@ def read_manifest(path: str | os.PathLike[str]) -> list[Frame]:
             "followed by one 'image,pressure' row per frame"
         )
     header_line, header = rows[0]
-    _check_header(where, header_line, header)
-    col = {name: i for i, name in enumerate(h.strip() for h in header)}
+    names = _check_header(where, header_line, header)
     data = rows[1:]
     if not data:
         raise ManifestError(
             f"{where}: the manifest has a header but no frames; add one row "
             "'image,pressure_kpa' per frame (a calibration needs >= 2 pressure steps)"
         )
-
     frames = [
-        _parse_row(where, mpath, col, row_no, line_no, cells, len(header))
+        _parse_row(where, mpath, names, row_no, line_no, cells)
         for row_no, (line_no, cells) in enumerate(data, start=1)
     ]
-    _check_frames(where, frames, mpath.resolve().parent)
-    return frames
+    source = FROM_COLUMN
+    if PHASE_COLUMN not in names:
+        phases, source = phases_from_order([f.pressure_kpa for f in frames])
+        frames = [_with(f, phase=ph) for f, ph in zip(frames, phases, strict=True)]
+    frames = _number_steps(where, frames)
+    _check_files(where, frames, mpath.resolve().parent)
+    return Session(frames, source)
+
+
+def _with(frame: Frame, **changes: object) -> Frame:
+    return Frame(**{**frame.__dict__, **changes})  # type: ignore[arg-type]
 
 
 def _read_rows(mpath: Path) -> list[tuple[int, list[str]]]:
@@ -125,7 +164,8 @@ def _read_rows(mpath: Path) -> list[tuple[int, list[str]]]:
     return rows
 
 
-def _check_header(where: str, line_no: int, header: list[str]) -> None:
+def _check_header(where: str, line_no: int, header: list[str]) -> list[str]:
+    """The stripped column names; required columns present, no name twice or empty."""
     names = [h.strip() for h in header]
     at = f"{where}: header (line {line_no})"
     hint = ""
@@ -133,21 +173,26 @@ def _check_header(where: str, line_no: int, header: list[str]) -> None:
         hint = "; the manifest must be comma-separated"
     dups = sorted({n for n in names if names.count(n) > 1})
     if dups:
-        raise ManifestError(f"{at}: column(s) {dups} appear twice; expected exactly '{_HEADER}'")
-    for name in names:
-        if name not in EXPECTED_COLUMNS:
-            near = [e for e in EXPECTED_COLUMNS if e.lower() == name.lower()]
+        raise ManifestError(
+            f"{at}: column(s) {dups} appear twice; expected each column once (required: "
+            f"'{_HEADER}')"
+        )
+    for i, name in enumerate(names, start=1):
+        near = [k for k in _KNOWN if k.lower() == name.lower() and k != name]
+        if not name or near:
+            what = f"column {i} has no name" if not name else f"column '{name}'"
             did = f" (did you mean '{near[0]}'? names are case-sensitive)" if near else ""
             raise ManifestError(
-                f"{at}: unknown column '{name}'{did}; expected exactly the columns "
-                f"{list(EXPECTED_COLUMNS)} ('{_HEADER}'){hint}"
+                f"{at}: {what}{did}; expected the columns {list(REQUIRED_COLUMNS)}, optionally "
+                f"'{PHASE_COLUMN}' and other named columns{hint}"
             )
-    for name in EXPECTED_COLUMNS:
+    for name in REQUIRED_COLUMNS:
         if name not in names:
             raise ManifestError(
-                f"{at}: missing required column '{name}'; the header must be '{_HEADER}', got "
-                f"{','.join(names)!r}{hint}"
+                f"{at}: missing required column '{name}'; the header must name '{_HEADER}' "
+                f"(other columns are kept), got {','.join(names)!r}{hint}"
             )
+    return names
 
 
 def _parse_pressure(at: str, cell: str) -> float:
@@ -173,50 +218,63 @@ def _parse_pressure(at: str, cell: str) -> float:
 
 
 def _parse_row(
-    where: str,
-    mpath: Path,
-    col: dict[str, int],
-    row_no: int,
-    line_no: int,
-    cells: list[str],
-    n_cols: int,
+    where: str, mpath: Path, names: list[str], row_no: int, line_no: int, cells: list[str]
 ) -> Frame:
     """One data row → a :class:`Frame` (path resolved against the manifest's folder)."""
     at = f"{where}: row {row_no} (line {line_no})"
-    if len(cells) != n_cols:
+    if len(cells) != len(names):
         raise ManifestError(
-            f"{at}: expected {n_cols} cells ({_HEADER}), got {len(cells)}: {cells!r}; "
-            "quote file names that contain commas"
+            f"{at}: expected {len(names)} cells ({','.join(names)}), got {len(cells)}: "
+            f"{cells!r}; quote cells that contain commas"
         )
-    file_cell = cells[col["file"]].strip()
-    p_cell = cells[col["pressure_kpa"]].strip()
-    if not file_cell:
+    row = dict(zip(names, (c.strip() for c in cells), strict=True))
+    if not row["file"]:
         raise ManifestError(
             f"{at}: empty 'file' cell; expected an image path relative to the manifest's folder"
         )
-    pressure = _parse_pressure(at, p_cell)
-    file = Path(file_cell).expanduser()
+    pressure = _parse_pressure(at, row["pressure_kpa"])
+    phase = LOADING
+    if PHASE_COLUMN in row:
+        parsed = parse_phase(row[PHASE_COLUMN])
+        if parsed is None:
+            raise ManifestError(
+                f"{at}: phase {row[PHASE_COLUMN]!r}; expected one of {', '.join(PHASES)} "
+                "(case-insensitive)"
+            )
+        phase = parsed
+    file = Path(row["file"]).expanduser()
     if not file.is_absolute():
         file = mpath.resolve().parent / file
-    return Frame(file=file.resolve(), pressure_kpa=pressure, row=row_no)
+    extras = tuple((n, row[n]) for n in names if n not in _KNOWN)
+    return Frame(file.resolve(), pressure, row_no, phase, 0, extras)
 
 
-def _check_frames(where: str, frames: list[Frame], base: Path) -> None:
-    """Sort by pressure in place; reject repeated pressures or files, < 2 frames, missing files."""
-    frames.sort(key=lambda f: f.pressure_kpa)
-    for a, b in itertools.pairwise(frames):
-        if a.pressure_kpa == b.pressure_kpa:
-            first, second = sorted((a, b), key=lambda f: f.row)
-            raise ManifestError(
-                f"{where}: rows {first.row} ({first.file.name}) and {second.row} "
-                f"({second.file.name}) have the same pressure {a.pressure_kpa:g} kPa; expected "
-                "one frame per pressure step: remove one row or correct its pressure"
-            )
-    if len(frames) < 2:
-        raise ManifestError(
-            f"{where}: only {len(frames)} frame; a calibration needs >= 2 "
-            "pressure steps (including the 0 kPa reference)"
+def _number_steps(where: str, frames: list[Frame]) -> list[Frame]:
+    """Sort by phase, pressure and row; number each phase's steps; >= 2 steps per phase."""
+    out: list[Frame] = []
+    for phase in PHASES:
+        mine = sorted(
+            (f for f in frames if f.phase == phase), key=lambda f: (f.pressure_kpa, f.row)
         )
+        levels = sorted({f.pressure_kpa for f in mine})
+        if phase == LOADING and not mine:
+            raise ManifestError(
+                f"{where}: no loading frame; expected a loading pass (its lowest-pressure frame "
+                "is the session's reference): mark its rows 'loading'"
+            )
+        if mine and len(levels) < 2:
+            raise ManifestError(
+                f"{where}: the {phase} pass has {len(mine)} frame(s) at {len(levels)} pressure; "
+                f"a calibration needs >= 2 pressure steps per pass (including the 0 kPa "
+                f"reference); rows {', '.join(str(f.row) for f in mine[:_MAX_LISTED])}; give "
+                "each row its pass in a 'phase' column (loading/unloading)"
+            )
+        out += [_with(f, step=levels.index(f.pressure_kpa)) for f in mine]
+    return out
+
+
+def _check_files(where: str, frames: list[Frame], base: Path) -> None:
+    """Reject missing image files and one image on two rows."""
     missing = [f for f in sorted(frames, key=lambda f: f.row) if not f.file.is_file()]
     if missing:
         listed = "; ".join(f"row {f.row}: {f.file}" for f in missing[:_MAX_LISTED])

@@ -50,11 +50,14 @@ class Measured:
     area_mm2: float | None
 
     def to_json(self, method: str) -> dict[str, Any]:
-        """The CLI contract's per-image object."""
+        """The CLI contract's per-image object (``area_interval_px``: ``[lower, upper]`` input
+        pixels, the method's stated interval of the area, or None when it states none)."""
+        iv = self.result.area_interval_px
         return {
             "file": str(self.file),
             "contact": self.result.contact,
             "area_px": float(self.result.area_px),
+            "area_interval_px": None if iv is None else [float(iv[0]), float(iv[1])],
             "area_mm2": self.area_mm2,
             "method": method,
             "width": self.width,

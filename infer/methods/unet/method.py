@@ -83,16 +83,21 @@ class UnetMethod:
         self.reduction = reduction
 
     def measure(self, image: np.ndarray) -> AreaResult:
-        """Segment; the contour is the kept region's outline in input pixels."""
+        """Segment; the contour is the kept region's outline in input pixels.
+
+        The result carries the model's stated interval of the area (``area_interval_px``,
+        :func:`~contactcal.infer.methods.unet.postprocess.boundary_band`).
+        """
         seg = self.segmenter.segment(image, self.reference)
         if not seg.contact:
-            return AreaResult(False, 0.0, "no contact", None)
+            res = AreaResult(False, 0.0, "no contact", None, area_interval_px=seg.interval_px)
+            return res.upscaled(self.reduction)
         contour = None
         if self.outline:
             mask = mask_in_input(seg, image.shape[:2]).astype(np.uint8)
             contours, _ = cv2.findContours(mask, cv2.RETR_EXTERNAL, cv2.CHAIN_APPROX_SIMPLE)
             contour = max(contours, key=cv2.contourArea) if contours else None
-        res = AreaResult(True, seg.area_px, "", contour, seg.soft_area_px)
+        res = AreaResult(True, seg.area_px, "", contour, seg.soft_area_px, seg.interval_px)
         return res.upscaled(self.reduction)
 
     def describe(self) -> dict[str, Any]:
@@ -108,5 +113,6 @@ class UnetMethod:
                 "preprocess": dataclasses.asdict(spec.preprocess),
                 "threshold": spec.threshold,
                 "min_contact_area_px": spec.min_contact_area_px,
+                "interval": None if spec.interval is None else dataclasses.asdict(spec.interval),
             },
         }

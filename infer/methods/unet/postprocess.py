@@ -1,7 +1,7 @@
-"""The U-Net's decision: from a probability map to contact / no contact and an area.
+"""The U-Net's decision: from a probability map to contact / no contact, an area and its interval.
 
-One function for validation during training, threshold tuning, export checks and deployment, so
-that the model is selected on the decision it ships with.
+One function for validation during training, threshold tuning, export checks, interval
+calibration and deployment, so that the model is selected on the decision it ships with.
 """
 
 from __future__ import annotations
@@ -12,7 +12,52 @@ import cv2
 import numpy as np
 
 from contactcal.infer.methods.unet.prepare import CropBox, from_network, valid_window
-from contactcal.infer.methods.unet.spec import ModelSpec
+from contactcal.infer.methods.unet.spec import IntervalSpec, ModelSpec
+
+
+@dataclass(frozen=True)
+class Band:
+    """A frame's boundary band, in network pixels: what the area's interval is built from."""
+
+    area: float  # the kept region (0 without contact)
+    strict: float  # the kept region's pixels with p >= threshold_high (<= area)
+    loose: float  # the region at p >= threshold_low around it (>= area); see boundary_band
+    edge: float  # half the kept region's boundary pixels: ±½ pixel across its outline
+
+    def interval(self, widen: float) -> tuple[float, float]:
+        """``(lower, upper)`` network pixels; contains ``area`` for any ``widen >= 0``."""
+        lower = max(0.0, self.area - widen * (self.area - self.strict + self.edge))
+        return lower, self.area + widen * (self.loose - self.area + self.edge)
+
+
+def boundary_band(
+    prob: np.ndarray, keep: np.ndarray, interval: IntervalSpec, min_area: float
+) -> Band:
+    """Measure the kept region at the interval's stricter and looser thresholds.
+
+    Args:
+        prob: ``(S, S) float32`` probabilities (0 outside the image).
+        keep: ``(S, S) bool`` kept region (empty: the frame is called "no contact").
+        interval: the two thresholds.
+        min_area: network pixels, the spec's minimum contact area.
+
+    Returns:
+        The band. With a kept region, ``loose`` is the connected region at ``threshold_low``
+        that contains it. Without one (no contact, area 0), ``loose`` is the largest region at
+        ``threshold_low`` if it covers at least ``min_area`` (and one pixel), else 0: the
+        interval is then ``(0, widen·loose)``, i.e. ``(0, 0)`` when nothing looser is found.
+    """
+    n, labels, stats, _ = cv2.connectedComponentsWithStats(
+        (prob >= interval.threshold_low).astype(np.uint8), connectivity=8
+    )
+    area = float(keep.sum())
+    if area == 0.0:
+        big = float(stats[1:, cv2.CC_STAT_AREA].max()) if n > 1 else 0.0
+        return Band(0.0, 0.0, big if big >= max(min_area, 1.0) else 0.0, 0.0)
+    loose = float(stats[int(labels[keep][0]), cv2.CC_STAT_AREA])  # keep lies in one component
+    strict = float((keep & (prob >= interval.threshold_high)).sum())
+    inner = cv2.erode(keep.astype(np.uint8), np.ones((3, 3), np.uint8), borderValue=0)
+    return Band(area, strict, max(loose, area), 0.5 * (area - float(inner.sum())))
 
 
 @dataclass(frozen=True)
@@ -26,6 +71,8 @@ class Segmentation:
     prob: np.ndarray  # (S, S) float32 probabilities in network pixels (0 outside the image)
     mask_net: np.ndarray  # (S, S) bool, the kept region in network pixels
     box: CropBox  # crop that maps network pixels to input pixels
+    #: The stated interval of the area, input pixels (None when the spec has no interval).
+    interval_px: tuple[float, float] | None = None
 
 
 def postprocess(
@@ -36,7 +83,9 @@ def postprocess(
     Network pixels whose centres fall outside the image are ignored (a crop that barely overlaps
     the image may have none inside: then no contact, area 0). Ring reflections and
     sparkle give small or detached specks: only the largest region counts, and only if it covers
-    at least ``spec.min_contact_area_px`` network pixels.
+    at least ``spec.min_contact_area_px`` network pixels. When the spec states an interval, the
+    area's interval comes from the region's :func:`boundary_band` (``(0, upper)`` or ``(0, 0)``
+    without contact).
 
     Args:
         prob: ``(S, S)`` probabilities in network pixels.
@@ -45,7 +94,8 @@ def postprocess(
         spec: threshold and minimum area.
 
     Returns:
-        The segmentation; areas in input pixels (network pixels × the crop's scale²).
+        The segmentation; areas and interval in input pixels (network pixels × the crop's
+        scale²).
     """
     inside = np.zeros(prob.shape, bool)
     inside[valid_window(box, shape, prob.shape[0])] = True
@@ -57,12 +107,20 @@ def postprocess(
         keep = np.zeros_like(binary, dtype=bool)
     else:
         keep = labels == 1 + int(np.argmax(stats[1:, cv2.CC_STAT_AREA]))
-    area_net = float(keep.sum())
-    if area_net < spec.min_contact_area_px or area_net == 0.0:
-        return Segmentation(False, 0.0, 0.0, area_net, prob, np.zeros_like(keep), box)
+    region_net = float(keep.sum())
+    if region_net < spec.min_contact_area_px or region_net == 0.0:
+        keep = np.zeros_like(keep)
+    interval = None
+    if spec.interval is not None:
+        band = boundary_band(prob, keep, spec.interval, spec.min_contact_area_px)
+        lower, upper = band.interval(spec.interval.widen)
+        interval = (lower * px_per_net, upper * px_per_net)
+    if not keep.any():
+        return Segmentation(False, 0.0, 0.0, region_net, prob, keep, box, interval)
     near = cv2.dilate(keep.astype(np.uint8), np.ones((5, 5), np.uint8)).astype(bool)
     soft = float(prob[near].sum())
-    return Segmentation(True, area_net * px_per_net, soft * px_per_net, area_net, prob, keep, box)
+    area = region_net * px_per_net
+    return Segmentation(True, area, soft * px_per_net, region_net, prob, keep, box, interval)
 
 
 def mask_in_input(seg: Segmentation, shape: tuple[int, int]) -> np.ndarray:

@@ -14,6 +14,7 @@ import math
 from collections.abc import Mapping
 from dataclasses import dataclass
 from pathlib import Path
+from typing import Any
 
 from contactcal.infer.methods.unet.config import PreprocessConfig
 
@@ -23,7 +24,7 @@ class ModelError(ValueError):
 
 
 #: Metadata keys that define the pre- and post-processing (all required).
-SPEC_KEYS = ("channels", "preprocess", "threshold", "min_contact_area_px", "output")
+SPEC_KEYS = ("channels", "preprocess", "threshold", "min_contact_area_px", "output", "interval")
 #: Metadata keys that describe the model's provenance (all required; recorded, not interpreted).
 PROVENANCE_KEYS = (
     "data_digest",
@@ -36,6 +37,38 @@ PROVENANCE_KEYS = (
 
 
 @dataclass(frozen=True)
+class IntervalSpec:
+    """The stated interval of a frame's area, calibrated on validation data (metadata ``interval``).
+
+    The interval is built from the kept region's boundary band
+    (:func:`contactcal.infer.methods.unet.postprocess.area_interval`): the region measured at a
+    stricter (``threshold_high``) and a looser (``threshold_low``) probability threshold, plus half
+    a network pixel across its boundary, each side widened by ``widen``. ``widen`` is chosen by
+    ``contactcal export`` (:mod:`contactcal.train.interval`) so that the interval covers the true
+    area in ``level`` of the calibration frames.
+    """
+
+    level: float  # stated coverage, e.g. 0.9
+    threshold_low: float  # probability; the looser threshold (< the decision threshold)
+    threshold_high: float  # probability; the stricter threshold (> the decision threshold)
+    widen: float  # >= 0; factor on the band's half-widths (calibrated)
+    frames: int  # calibration frames the factor was chosen on (provenance)
+
+    def __post_init__(self) -> None:
+        if not 0.0 < self.level < 1.0:
+            raise ValueError(f"interval level must be in (0, 1), got {self.level}")
+        if not 0.0 < self.threshold_low < self.threshold_high < 1.0:
+            raise ValueError(
+                "interval thresholds must satisfy 0 < threshold_low < threshold_high < 1, got "
+                f"{self.threshold_low}, {self.threshold_high}"
+            )
+        if not (math.isfinite(self.widen) and self.widen >= 0.0):
+            raise ValueError(f"interval widen must be finite and >= 0, got {self.widen}")
+        if isinstance(self.frames, bool) or not isinstance(self.frames, int) or self.frames < 1:
+            raise ValueError(f"interval frames must be an integer >= 1, got {self.frames!r}")
+
+
+@dataclass(frozen=True)
 class ModelSpec:
     """What the model's metadata says about its input and output."""
 
@@ -43,6 +76,8 @@ class ModelSpec:
     preprocess: PreprocessConfig  # crop, input size and normalisation used in training
     threshold: float  # probability above which a network pixel is contact
     min_contact_area_px: float  # network pixels; smaller predicted regions are "no contact"
+    #: None only before calibration (training's validation); every exported model states one.
+    interval: IntervalSpec | None = None
 
     def __post_init__(self) -> None:
         if self.channels not in (1, 2):
@@ -53,27 +88,56 @@ class ModelSpec:
             raise ValueError(
                 f"min_contact_area_px must be finite and >= 0, got {self.min_contact_area_px}"
             )
+        iv = self.interval
+        if iv is not None and not iv.threshold_low < self.threshold < iv.threshold_high:
+            raise ValueError(
+                f"interval thresholds ({iv.threshold_low}, {iv.threshold_high}) must enclose the "
+                f"threshold {self.threshold}"
+            )
 
     def to_metadata(self) -> dict[str, str]:
-        """The :data:`SPEC_KEYS` part of the metadata (what ``contactcal export`` writes)."""
+        """The :data:`SPEC_KEYS` part of the metadata (what ``contactcal export`` writes).
+
+        Raises:
+            ValueError: the interval is not calibrated yet (``interval`` is None).
+        """
+        if self.interval is None:
+            raise ValueError("the spec has no calibrated interval; calibrate it before export")
         return {
             "channels": str(self.channels),
             "preprocess": json.dumps(dataclasses.asdict(self.preprocess)),
             "threshold": repr(self.threshold),
             "min_contact_area_px": repr(self.min_contact_area_px),
             "output": "logits",
+            "interval": json.dumps(dataclasses.asdict(self.interval)),
         }
 
 
-def _preprocess(text: str) -> PreprocessConfig:
+def _fields(key: str, text: str, cls: type) -> dict[str, Any]:
+    """The JSON object of metadata ``key``, with exactly the fields of dataclass ``cls``."""
     values = json.loads(text)
     if not isinstance(values, dict):
-        raise ValueError("preprocess: expected a JSON object")
-    names = {f.name for f in dataclasses.fields(PreprocessConfig)}
+        raise ValueError(f"{key}: expected a JSON object")
+    names = {f.name for f in dataclasses.fields(cls)}
     unknown, missing = sorted(set(values) - names), sorted(names - set(values))
     if unknown or missing:
-        raise ValueError(f"preprocess: unknown key(s) {unknown}, missing key(s) {missing}")
-    return PreprocessConfig(**values)
+        raise ValueError(f"{key}: unknown key(s) {unknown}, missing key(s) {missing}")
+    return values
+
+
+def _preprocess(text: str) -> PreprocessConfig:
+    return PreprocessConfig(**_fields("preprocess", text, PreprocessConfig))
+
+
+def _interval(text: str) -> IntervalSpec:
+    values = _fields("interval", text, IntervalSpec)
+    floats = sorted(set(values) - {"frames"})
+    bad = [
+        k for k in floats if isinstance(values[k], bool) or not isinstance(values[k], int | float)
+    ]
+    if bad:
+        raise ValueError(f"interval: key(s) {bad} must be numbers")
+    return IntervalSpec(**{**values, **{k: float(values[k]) for k in floats}})
 
 
 def read_spec(meta: Mapping[str, str], path: str | Path) -> ModelSpec:
@@ -105,6 +169,7 @@ def read_spec(meta: Mapping[str, str], path: str | Path) -> ModelSpec:
             preprocess=_preprocess(meta["preprocess"]),
             threshold=float(meta["threshold"]),
             min_contact_area_px=float(meta["min_contact_area_px"]),
+            interval=_interval(meta["interval"]),
         )
     except (ValueError, TypeError) as exc:
         raise ModelError(f"{path}: invalid model metadata: {exc}; {fix}") from exc

@@ -1,0 +1,33 @@
+"""The ``bench`` subcommand."""
+
+from __future__ import annotations
+
+import argparse
+from pathlib import Path
+
+
+def add_parsers(sub: argparse._SubParsersAction) -> None:
+    """Add ``bench`` to the ``contactcal`` subcommands."""
+    b = sub.add_parser("bench", help="accuracy and speed of every method on rendered sessions")
+    b.add_argument("--data", type=Path, required=True, help="dataset folder (index.csv)")
+    b.add_argument("--out", type=Path, required=True, help="report folder")
+    b.add_argument("--model", type=Path, help="ONNX model (default: shipped)")
+    b.add_argument("--repeats", type=int, default=5, help="timing runs; median (default 5)")
+    b.add_argument("--timing-frames", type=int, default=6, help="frames per timing run")
+    b.set_defaults(func=_cmd_bench)
+
+
+def _cmd_bench(args: argparse.Namespace) -> int:
+    from contactcal.infer.bench.config import BenchConfig
+    from contactcal.infer.bench.run import run_bench
+
+    if args.repeats < 1 or args.timing_frames < 1:
+        raise ValueError("--repeats and --timing-frames must be >= 1")
+    cfg = BenchConfig(repeats=args.repeats, timing_frames=args.timing_frames)
+    res = run_bench(args.data, args.out, None if args.model is None else str(args.model), cfg)
+    for row in res["bins"]:
+        err = row["median_abs_rel_error"]
+        shown = "–" if err is None else f"{100 * err:6.2f} %"
+        print(f"{row['method']:>16s} {row['bin_kpa']:>6s} kPa  median |rel err| {shown}")
+    print(f"report: {args.out / 'report.md'}")
+    return 0

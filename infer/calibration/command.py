@@ -1,0 +1,68 @@
+"""The ``calibrate`` subcommand (still frames listed in a manifest; video and camera input
+through :mod:`contactcal.infer.video.command`)."""
+
+from __future__ import annotations
+
+import argparse
+from pathlib import Path
+
+from contactcal.infer.pipeline.args import (
+    method_args,
+    overlay_runs,
+    resolve_scale,
+    run_inputs,
+    scale_args,
+)
+
+
+def add_parsers(sub: argparse._SubParsersAction) -> None:
+    """Add ``calibrate`` to the ``contactcal`` subcommands."""
+    from contactcal.infer.video.command import add_video_args
+
+    c = sub.add_parser("calibrate", help="calibrate a session: area vs pressure and its inverse")
+    c.add_argument("manifest", type=Path, nargs="?", metavar="MANIFEST.csv")
+    method_args(c)
+    c.add_argument("--out", type=Path, required=True, help="output folder")
+    c.add_argument(
+        "--inverse-phase",
+        choices=("loading", "unloading"),
+        default="loading",
+        help="pass whose curve is inverted (default %(default)s)",
+    )
+    scale_args(c)
+    add_video_args(c)
+    c.set_defaults(func=_cmd_calibrate)
+
+
+def _cmd_calibrate(args: argparse.Namespace) -> int:
+    from contactcal.infer.calibration.calibrate import calibrate_session
+    from contactcal.infer.calibration.record import check_device_id
+    from contactcal.infer.files.atomic import run_outputs
+    from contactcal.infer.pipeline.overlay import write_overlays
+    from contactcal.infer.video.command import calibrate_video, is_video_run
+
+    check_device_id(args.device_id)
+    if is_video_run(args):  # --video / --camera: contactcal.infer.video.command
+        return calibrate_video(args, resolve_scale(args))
+    scale = resolve_scale(args, args.manifest.parent / "rig.json")
+    with run_outputs(run_inputs(args)) as outs:
+        rep = calibrate_session(
+            args.manifest,
+            args.out,
+            args.method,
+            args.model,
+            scale,
+            outline=args.overlay is not None,
+            argv=args.argv,
+            device_id=args.device_id,
+            outputs=outs,
+            bit_depth=args.bit_depth,
+            inverse_phase=args.inverse_phase,
+        )
+        if args.overlay is not None:
+            files = [f.file for f in rep.frames]
+            runs = overlay_runs(args, rep.measured, files, files[0])
+            titles = [f"{f.pressure_kpa:g} kPa, {f.phase}" for f in rep.frames]
+            write_overlays(runs, args.overlay, titles, outputs=outs, bit_depth=args.bit_depth)
+    print(rep.table)
+    return 0

@@ -1,0 +1,79 @@
+"""Reading a calibration back: :func:`load_curve` (for a controller), format versions 1 to 3."""
+
+from __future__ import annotations
+
+import json
+import os
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from contactcal.infer.calibration.band import Band
+from contactcal.infer.calibration.curve import Curve
+from contactcal.infer.calibration.parametric import Saturating
+from contactcal.infer.calibration.phases import LOADING
+
+FORMAT = "contactcal.calibration"
+FORMAT_VERSION = 3
+#: Versions :func:`load_curve` reads: 2 added the run's provenance; 3 phases (loading and
+#: unloading), steps of repeated frames, the parametric model, the band and hysteresis.
+READABLE_VERSIONS = (1, 2, 3)
+
+
+def _curve(fit: dict[str, Any], onset: Any, unit: Any, inverse: Any, **more: Any) -> Curve:
+    return Curve(
+        np.asarray(fit["pressure_kpa"], dtype=np.float64),
+        np.asarray(fit["area"], dtype=np.float64),
+        onset,
+        unit,
+        (inverse or {}).get("step"),
+        **more,
+    )
+
+
+def _phase_curve(data: dict[str, Any], phase: str | None) -> Curve:
+    """The curve of ``phase`` (None: the recorded inverse phase) from a version 3 record."""
+    name = phase or data["inverse_phase"]
+    if name not in data["phases"]:
+        raise ValueError(f"no {name} phase (the record has {', '.join(data['phases'])})")
+    ph = data["phases"][name]
+    m, b = ph.get("parametric"), ph.get("band")
+    model = None if m is None else Saturating(m["p0_kpa"], m["k_kpa"], m["a_max"])
+    band = None
+    if b is not None:
+        band = Band(b["pressure_kpa"], b["lo"], b["hi"], b["level"], b["n_resamples"], b["seed"])
+    return _curve(
+        ph["fit"], ph["onset_kpa"], data["area_unit"], ph["inverse"], model=model, band=band
+    )
+
+
+def load_curve(path: str | os.PathLike[str], phase: str | None = None) -> Curve:
+    """Read a fitted `Curve` back from a ``calibration.json`` (for the controller).
+
+    Args:
+        path: the record.
+        phase: ``"loading"`` or ``"unloading"``; None → the phase the run inverted (versions
+            1 and 2 hold the loading pass only). A version 3 curve carries its parametric model
+            and its band (`Curve.pressure_interval_for_area`); older ones have no band.
+
+    Raises:
+        ValueError: unreadable file, not a contactcal calibration, or no such phase.
+    """
+    try:
+        data = json.loads(Path(path).read_text(encoding="utf-8"))
+        if data.get("format") != FORMAT:
+            raise ValueError(f"format {data.get('format')!r}, expected {FORMAT!r}")
+        version = data.get("format_version")
+        if version not in READABLE_VERSIONS:
+            raise ValueError(
+                f"format_version {version!r}, expected one of "
+                f"{', '.join(map(str, READABLE_VERSIONS))} (written by a newer contactcal?)"
+            )
+        if version == 3:
+            return _phase_curve(data, phase)
+        if phase not in (None, LOADING):
+            raise ValueError(f"format_version {version} holds the loading pass only, not {phase}")
+        return _curve(data["fit"], data["onset_kpa"], data["area_unit"], data.get("inverse"))
+    except (OSError, ValueError, KeyError, TypeError, AttributeError) as exc:
+        raise ValueError(f"{path}: not a readable contactcal calibration ({exc})") from exc

@@ -1,0 +1,97 @@
+"""Fitting a whole session: per phase its steps, the chosen curve and its band; hysteresis."""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from dataclasses import dataclass, replace
+from typing import Any
+
+import numpy as np
+
+from contactcal.infer.calibration.bootstrap import bootstrap_band
+from contactcal.infer.calibration.curve import Curve
+from contactcal.infer.calibration.fit import CurveConfig
+from contactcal.infer.calibration.hysteresis import hysteresis
+from contactcal.infer.calibration.phases import LOADING, PHASES, UNLOADING
+from contactcal.infer.calibration.points import CalibrationPoint
+from contactcal.infer.calibration.select import choose_model, fit_model
+from contactcal.infer.calibration.steps import Step, group_steps
+
+
+@dataclass(frozen=True, eq=False)
+class PhaseFit:
+    """One pass of a session: its steps, its curve (with band) and how the model was chosen."""
+
+    phase: str
+    steps: list[Step]
+    curve: Curve
+    selection: dict[str, Any]  # select.choose_model's record
+
+
+@dataclass(frozen=True, eq=False)
+class SessionFit:
+    """A fitted session."""
+
+    phases: dict[str, PhaseFit]  # loading, and unloading when recorded
+    inverse_phase: str  # the phase whose curve is inverted for the controller
+    phase_source: str  # how the phases were determined (phases.FROM_COLUMN, ...)
+    hysteresis: dict[str, Any] | None  # hysteresis.hysteresis, None without an unloading pass
+
+    @property
+    def curve(self) -> Curve:
+        """The curve used for the inverse."""
+        return self.phases[self.inverse_phase].curve
+
+
+def fit_phase(steps: list[Step], cfg: CurveConfig, unit: str) -> PhaseFit:
+    """Choose and fit the curve of one phase's steps, with its bootstrap band."""
+    p = np.asarray([s.pressure_kpa for s in steps], dtype=np.float64)
+    a = np.asarray([s.median for s in steps], dtype=np.float64)
+    c = np.asarray([s.contact for s in steps], dtype=bool)
+    curve, selection = choose_model(p, a, c, cfg, unit)
+    if curve.has_contact:
+        kind = selection["model"]
+
+        def refit(pp: np.ndarray, aa: np.ndarray, cc: np.ndarray) -> Curve | None:
+            return fit_model(kind, pp, aa, cc, cfg, unit)
+
+        band = bootstrap_band(steps, curve, refit, cfg.n_bootstrap, cfg.seed)
+        curve = replace(curve, band=band)
+    return PhaseFit(steps[0].phase, steps, curve, selection)
+
+
+def fit_session(
+    points: Sequence[CalibrationPoint],
+    unit: str,
+    config: CurveConfig | None = None,
+    inverse_phase: str = LOADING,
+    phase_source: str = "as given with the points",
+) -> SessionFit:
+    """Group the points into steps, fit each phase, compare the phases.
+
+    Args:
+        points: per-frame measurements (with phase and pressure), any order.
+        unit: the curve's area unit.
+        config: fit settings (None: defaults).
+        inverse_phase: ``"loading"`` (default) or ``"unloading"``: the curve to invert.
+        phase_source: how the phases were determined, recorded.
+
+    Raises:
+        ValueError: an unknown ``inverse_phase`` or one the session does not have, or points
+            without an area in ``unit``.
+    """
+    cfg = config or CurveConfig()
+    if inverse_phase not in PHASES:
+        raise ValueError(f"inverse phase {inverse_phase!r}: expected one of {', '.join(PHASES)}")
+    grouped = group_steps(points, unit)
+    if inverse_phase not in grouped:
+        raise ValueError(
+            f"--inverse-phase {inverse_phase}: the session has no {inverse_phase} pass (it has "
+            f"{', '.join(grouped)}); use --inverse-phase {LOADING}"
+        )
+    phases = {ph: fit_phase(steps, cfg, unit) for ph, steps in grouped.items()}
+    hyst = None
+    if UNLOADING in phases and LOADING in phases:
+        up, down = phases[LOADING], phases[UNLOADING]
+        hyst = hysteresis((up.steps, up.curve), (down.steps, down.curve))
+    return SessionFit(phases, inverse_phase, phase_source, hyst)

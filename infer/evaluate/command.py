@@ -1,0 +1,40 @@
+"""The ``evaluate`` subcommand."""
+
+from __future__ import annotations
+
+import argparse
+from pathlib import Path
+
+from contactcal.infer.methods.registry import METHODS
+from contactcal.infer.pipeline.args import bit_depth_arg
+
+
+def add_parsers(sub: argparse._SubParsersAction) -> None:
+    """Add ``evaluate`` to the ``contactcal`` subcommands."""
+    e = sub.add_parser("evaluate", help="score the methods on your own hand-labelled frames")
+    e.add_argument("manifest", type=Path, metavar="MANIFEST.csv")
+    e.add_argument(
+        "--labels",
+        type=Path,
+        required=True,
+        help="folder of <frame stem>.png masks, or an ImageJ ellipse CSV "
+        "(file,cx,cy,major,minor,angle_deg; see docs/evaluate.md)",
+    )
+    e.add_argument("--out", type=Path, required=True, help="output folder")
+    e.add_argument(
+        "--method", choices=(*METHODS, "both"), default=METHODS[0], help="default %(default)s"
+    )
+    e.add_argument("--model", type=Path, help="ONNX model for the U-Net (default: shipped)")
+    bit_depth_arg(e)
+    e.set_defaults(func=_cmd_evaluate)
+
+
+def _cmd_evaluate(args: argparse.Namespace) -> int:
+    from contactcal.infer.evaluate.run import evaluate_session
+
+    rep = evaluate_session(
+        args.manifest, args.labels, args.out, args.method, args.model, args.bit_depth
+    )
+    print(rep.table)
+    print(f"evaluation: {rep.files['json']}, {rep.files['png']}")
+    return 0

@@ -1,0 +1,82 @@
+"""Command-line options shared by the core subcommands, and what they resolve to."""
+
+from __future__ import annotations
+
+import argparse
+from pathlib import Path
+from typing import TYPE_CHECKING
+
+from contactcal.infer.methods.registry import METHODS
+
+if TYPE_CHECKING:
+    from contactcal.infer.pipeline.measure import Measured
+    from contactcal.infer.pipeline.scale import PixelScale
+
+
+def scale_args(p: argparse.ArgumentParser) -> None:
+    """``--mm-per-px`` | ``--rig``, and ``--bit-depth``."""
+    g = p.add_mutually_exclusive_group()
+    g.add_argument("--mm-per-px", type=float, help="pixel scale at the contact plane (mm/px)")
+    g.add_argument("--rig", type=Path, help="rig config JSON with mm_per_px and image_width_px")
+    bit_depth_arg(p)
+
+
+def bit_depth_arg(p: argparse.ArgumentParser) -> None:
+    """``--bit-depth N``: significant bits of 16-bit frames."""
+    p.add_argument(
+        "--bit-depth",
+        type=int,
+        metavar="N",
+        help="significant bits of 16-bit images (e.g. 12 for a 12-bit camera's PNGs holding "
+        "0-4095; 16 for full-range); default: the PNG sBIT chunk, else required when ambiguous",
+    )
+
+
+def method_args(p: argparse.ArgumentParser) -> None:
+    """``--method``, ``--model``, ``--threads``, ``--overlay``, ``--device-id``."""
+    p.add_argument("--method", choices=METHODS, default=METHODS[0], help="default %(default)s")
+    p.add_argument("--model", type=Path, help="ONNX model for --method unet (default: shipped)")
+    p.add_argument("--threads", type=int, default=1, help="onnxruntime threads (default 1)")
+    p.add_argument(
+        "--overlay",
+        type=Path,
+        metavar="DIR",
+        help="also write each frame with the learned and classical outlines to DIR",
+    )
+    p.add_argument(
+        "--device-id", help="identifier of the display (1-100 printable characters), recorded"
+    )
+
+
+def resolve_scale(args: argparse.Namespace, default_rig: Path | None = None) -> PixelScale | None:
+    """The pixel scale the options (or a ``rig.json`` at ``default_rig``) give; None: none."""
+    from contactcal.infer.pipeline.scale import PixelScale, load_rig_config
+
+    if args.mm_per_px is not None:
+        return PixelScale(args.mm_per_px, None)
+    if args.rig is not None:
+        return load_rig_config(args.rig)
+    if default_rig is not None and default_rig.is_file():
+        return load_rig_config(default_rig)
+    return None
+
+
+def run_inputs(args: argparse.Namespace) -> list[Path]:
+    """The files a run reads besides its images: no output may replace them."""
+    names = ("reference", "model", "rig", "manifest")
+    return [p for p in (getattr(args, n, None) for n in names) if p is not None]
+
+
+def overlay_runs(
+    args: argparse.Namespace, primary: list[Measured], files: list[Path], reference: Path | None
+) -> dict[str, list[Measured]]:
+    """Measurements of every method for the overlays (the primary run is reused)."""
+    from contactcal.infer.methods.registry import make_method
+    from contactcal.infer.pipeline.measure import measure_files
+
+    runs = {args.method: primary}
+    for name in METHODS:
+        if name not in runs:
+            method = make_method(name, args.model, args.threads, outline=True)
+            runs[name] = measure_files(files, method, reference, bit_depth=args.bit_depth)
+    return runs

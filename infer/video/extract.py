@@ -1,0 +1,215 @@
+"""Frames of a video (or camera) in steady pressure steps → a session folder with a manifest.
+
+Each frame is decided once the pressure log has passed its time (:mod:`.steps` is causal, so a
+growing log gives the same decisions as the complete one): kept frames are written as
+``frames/f<index>.png`` (lossless: the calibration measures what the camera gave), the rest
+(ramps, settling, before or after the log) are skipped. ``frames/manifest.csv`` lists the kept
+frames with columns ``file,pressure_kpa,phase,time_s``, several rows per step (repeats), the
+reference step (:func:`.steps.reference_step`) first.
+"""
+
+from __future__ import annotations
+
+import math
+import os
+import sys
+from collections.abc import Callable, Iterator
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import cv2
+import numpy as np
+
+from contactcal.infer.image.write import write_image
+from contactcal.infer.video.log import PressureLog
+from contactcal.infer.video.steps import Step, StepConfig, detect_steps, reference_step, step_at
+
+#: The manifest's columns.
+MANIFEST_COLUMNS = ("file", "pressure_kpa", "phase", "time_s")
+#: PNG encoding of the kept frames: compression 1 (fast) writes a 5 MP frame several times faster
+#: than the default 3 for ~10 % larger files, to keep up with a camera during live capture.
+PNG_PARAMS = (cv2.IMWRITE_PNG_COMPRESSION, 1)
+
+
+def open_video(path: str | os.PathLike[str]) -> tuple[cv2.VideoCapture, float]:
+    """Open a video file; its capture and frame rate (frames/s).
+
+    Raises:
+        ValueError: missing file, not a video OpenCV can decode, or no usable frame rate.
+    """
+    p = Path(path)
+    if not p.is_file():
+        raise ValueError(f"{p}: video not found (expected a video file, e.g. .avi or .mp4)")
+    cap = cv2.VideoCapture(str(p))
+    fps = cap.get(cv2.CAP_PROP_FPS) if cap.isOpened() else 0.0
+    if not cap.isOpened():
+        raise ValueError(f"{p}: cannot be read as a video; expected a video file OpenCV decodes")
+    if not (math.isfinite(fps) and fps > 0):
+        cap.release()
+        raise ValueError(f"{p}: the video states no frame rate (got {fps}); re-encode it")
+    return cap, fps
+
+
+def video_frames(
+    capture: cv2.VideoCapture, fps: float, path: Path
+) -> Iterator[tuple[float, np.ndarray]]:
+    """``(time_s, (H, W, 3) uint8 BGR frame)`` of an opened video file; time = index / fps.
+
+    Raises:
+        ValueError: no frame in the video (naming ``path``).
+    """
+    try:
+        index = 0
+        while True:
+            ok, frame = capture.read()
+            if not ok:
+                break
+            yield index / fps, frame
+            index += 1
+        if index == 0:
+            raise ValueError(f"{path}: the video has no decodable frame")
+    finally:
+        capture.release()
+
+
+@dataclass(frozen=True)
+class Decision:
+    """One frame's outcome."""
+
+    index: int  # frame number in the video or capture, from 0
+    time_s: float
+    frame: np.ndarray  # (H, W, 3) uint8 BGR
+    step: Step | None  # None: skipped (ramp, settling, outside the log)
+
+
+@dataclass
+class Extractor:
+    """Decides on frames as the log passes their time and stages the kept ones.
+
+    Args:
+        cfg: the steadiness settings.
+        frames_dir: the destination folder of the frames (``DIR/frames``).
+        stage: maps a destination path to the path to write (``OutputSet.stage``).
+    """
+
+    cfg: StepConfig
+    frames_dir: Path
+    stage: Callable[[Path], Path]
+    log: PressureLog | None = None
+    steps: list[Step] = field(default_factory=list)
+    kept: dict[int, list[tuple[str, float]]] = field(default_factory=dict)  # step → (file, t)
+    last_time_s: float = -math.inf
+    _log_end: float = -math.inf
+    _pending: list[tuple[int, float, np.ndarray]] = field(default_factory=list)
+
+    def update_log(self, log: PressureLog) -> None:
+        """Use the log as it is now (the complete log, or a live one read again)."""
+        self.log, self.steps = log, detect_steps(log, self.cfg)
+        self._log_end = float(log.times_s[-1]) if len(log.times_s) else -math.inf
+
+    def add(self, index: int, time_s: float, frame: np.ndarray) -> list[Decision]:
+        """Queue a frame; return the decisions now possible (frames the log has passed)."""
+        if time_s <= self.last_time_s:
+            raise ValueError(f"frame {index}: time {time_s:g} s is not after the previous frame")
+        self.last_time_s = time_s
+        self._pending.append((index, time_s, frame))
+        return self._decide(lambda t: t < self._log_end)
+
+    def finish(self) -> list[Decision]:
+        """Decide on the frames still queued, against the log as it is now."""
+        return self._decide(lambda t: True)
+
+    def _decide(self, ready: Callable[[float], bool]) -> list[Decision]:
+        out = []
+        while self._pending and ready(self._pending[0][1]):
+            index, t, frame = self._pending.pop(0)
+            step = step_at(self.steps, t)
+            if step is not None:
+                name = f"f{index:06d}.png"
+                write_image(self.stage(self.frames_dir / name), frame, PNG_PARAMS)
+                self.kept.setdefault(step.index, []).append((name, t))
+            out.append(Decision(index, t, frame, step))
+        return out
+
+    def manifest_text(self) -> str:
+        """``frames/manifest.csv``: the reference step first, then the steps in time order."""
+        ref = reference_step([s for s in self.steps if s.index in self.kept])
+        order = [ref, *(s for s in self.steps if s.index in self.kept and s is not ref)]
+        lines = [",".join(MANIFEST_COLUMNS)]
+        for s in order:
+            lines += [f"{f},{s.pressure_kpa:g},{s.phase},{t:.4f}" for f, t in self.kept[s.index]]
+        return "\n".join(lines) + "\n"
+
+    def summary(self) -> str:
+        """Per step: pressure, phase, frames kept and their time span (the CLI prints it)."""
+        lines = ["step  pressure (kPa)  phase      frames  time (s)"]
+        for s in self.steps:
+            kept = self.kept.get(s.index, [])
+            span = f"{kept[0][1]:.2f}-{kept[-1][1]:.2f}" if kept else "-"
+            lines.append(
+                f"{s.index:4d}  {s.pressure_kpa:14.3f}  {s.phase:9s}  {len(kept):6d}  {span}"
+            )
+        return "\n".join(lines)
+
+
+def check_coverage(extractor: Extractor, video: Path | None) -> None:
+    """Every step of the log must hold a frame of the video (else the session is incomplete).
+
+    Args:
+        extractor: after :func:`extract_frames`.
+        video: the video file; None for a live capture, where the steps the capture ended
+            before (the log went on) are left out, said on stderr.
+
+    Raises:
+        ValueError: naming the log, the first uncovered step and the video's time span.
+    """
+    log = extractor.log
+    where = "the log" if log is None else str(log.path)
+    if not extractor.steps:
+        raise ValueError(
+            f"{where}: no steady pressure step found (each step must hold within the "
+            "tolerance for longer than the settle time); check the log or --tolerance-kpa"
+        )
+    source = "the capture" if video is None else f"the video {video}"
+    for s in extractor.steps:
+        if s.index in extractor.kept:
+            continue
+        if video is None and s.start_s > extractor.last_time_s:
+            print(f"note: step {s.label()} began after the capture ended", file=sys.stderr)
+            continue
+        raise ValueError(
+            f"{where}: step {s.label()} has no frame in {source} (frames from 0 to "
+            f"{extractor.last_time_s:.2f} s); expected frames covering every step of the log "
+            "(trim the log, give the full video, or lower --settle-s for short steps)"
+        )
+
+
+def extract_frames(
+    frames: Iterator[tuple[float, np.ndarray]],
+    extractor: Extractor,
+    log_feed: Callable[[], PressureLog | None],
+    observe: Callable[[Decision], None] = lambda d: None,
+    stop: Callable[[Extractor, float], bool] = lambda e, t: False,
+) -> None:
+    """Run frames through the extractor: the one loop of ``--video`` and ``--camera``.
+
+    Args:
+        frames: ``(time_s, BGR frame)`` in time order (:func:`video_frames`, or a camera).
+        extractor: decides and stages.
+        log_feed: the log when it changed since the last call, else None (called per frame).
+        observe: called with each decision, in frame order (progress, preview).
+        stop: called after each frame with the extractor and the frame's time; True ends it.
+    """
+    for index, (t, frame) in enumerate(frames):
+        log = log_feed()
+        if log is not None:
+            extractor.update_log(log)
+        for d in extractor.add(index, t, frame):
+            observe(d)
+        if stop(extractor, t):
+            break
+    log = log_feed()
+    if log is not None:
+        extractor.update_log(log)
+    for d in extractor.finish():
+        observe(d)

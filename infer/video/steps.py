@@ -1,0 +1,129 @@
+"""Steady pressure steps in a pressure log: which frames of a video to calibrate with.
+
+A log sample is *steady* when every sample over the ``settle_s`` before it (and the last sample
+at or before that window's start, so the window is covered) lies in a band of ``2 ×
+tolerance_kpa``: the chamber has held its pressure long enough for the membrane to settle. A
+*step* is a run of consecutive steady samples whose pressures stay within that band (a slow
+drift starts a new step); frames taken from its first to its last steady sample are kept, the
+others (ramps, settling) are skipped. A step's pressure is the median of its samples. Steps
+before the highest-pressure step, and that step, are the loading pass; those after it unloading.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from contactcal.infer.video.log import PressureLog
+
+LOADING, UNLOADING = "loading", "unloading"
+
+
+@dataclass(frozen=True)
+class StepConfig:
+    """How steady pressure must be for a frame to be kept."""
+
+    # kPa, half-width of the band a step's samples stay in. A tenth of the usual 1 kPa spacing
+    # of calibration steps (neighbouring steps never mix) and twice a regulator's typical
+    # ±0.05 kPa sensor noise (a held step is not split); raise it for a noisier controller.
+    tolerance_kpa: float = 0.1
+    # s the pressure must have been steady before a frame is kept: the membrane's response to a
+    # step (~0.1-0.3 s for the silicone membrane) has died out; longer keeps fewer frames.
+    settle_s: float = 0.5
+
+    def __post_init__(self) -> None:
+        for option, value in (
+            ("--tolerance-kpa", self.tolerance_kpa),
+            ("--settle-s", self.settle_s),
+        ):
+            if not (math.isfinite(value) and value >= 0):
+                raise ValueError(f"{option}: expected a number >= 0, got {value}")
+
+
+@dataclass(frozen=True)
+class Step:
+    """One steady step.
+
+    Attributes:
+        index: 0-based, in time order.
+        pressure_kpa: median of the step's log samples, kPa (a median below 0, gauge noise at
+            rest, is given as 0.0).
+        start_s, end_s: first and last steady sample, s since the video's first frame; frames
+            with ``start_s <= t <= end_s`` belong to the step.
+        phase: :data:`LOADING` or :data:`UNLOADING`.
+    """
+
+    index: int
+    pressure_kpa: float
+    start_s: float
+    end_s: float
+    phase: str
+
+    def label(self) -> str:
+        """Short description for messages, e.g. ``4 kPa (loading, 3.50-5.00 s)``."""
+        return f"{self.pressure_kpa:g} kPa ({self.phase}, {self.start_s:.2f}-{self.end_s:.2f} s)"
+
+
+def steady_mask(log: PressureLog, cfg: StepConfig) -> np.ndarray:
+    """``(N,) bool``: whether each sample has been steady for ``cfg.settle_s`` (see module)."""
+    t, p = log.times_s, log.pressures_kpa
+    starts = np.searchsorted(t, t - cfg.settle_s, side="right") - 1
+    out = np.zeros(len(t), bool)
+    for i, lo in enumerate(starts):
+        if lo >= 0:  # the log covers the whole settle window
+            out[i] = np.ptp(p[lo : i + 1]) <= 2 * cfg.tolerance_kpa
+    return out
+
+
+def _runs(log: PressureLog, steady: np.ndarray, band: float) -> list[tuple[int, int]]:
+    """``(first, last)`` sample indices of runs of steady samples within ``band`` kPa."""
+    runs: list[tuple[int, int]] = []
+    first, lo, hi = -1, 0.0, 0.0
+    for i, (ok, p) in enumerate(zip(steady, log.pressures_kpa, strict=True)):
+        if ok and first >= 0 and max(hi, p) - min(lo, p) <= band:
+            lo, hi = min(lo, p), max(hi, p)
+            continue
+        if first >= 0:
+            runs.append((first, i - 1))
+        first, lo, hi = (i, p, p) if ok else (-1, 0.0, 0.0)
+    if first >= 0:
+        runs.append((first, len(steady) - 1))
+    return [(a, b) for a, b in runs if b > a]  # one sample spans no time: no frames
+
+
+def detect_steps(log: PressureLog, cfg: StepConfig) -> list[Step]:
+    """The log's steady steps in time order, with their phases (see the module docstring).
+
+    Causal: steps ending before the log's last sample do not change as the log grows, so a live
+    capture can decide on each frame once the log has passed its time.
+    """
+    steady = steady_mask(log, cfg)
+    runs = _runs(log, steady, 2 * cfg.tolerance_kpa)
+    pressures = [max(float(np.median(log.pressures_kpa[a : b + 1])), 0.0) for a, b in runs]
+    top = int(np.argmax(pressures)) if pressures else 0
+    return [
+        Step(
+            index=k,
+            pressure_kpa=round(pressures[k], 3),
+            start_s=float(log.times_s[a]),
+            end_s=float(log.times_s[b]),
+            phase=LOADING if k <= top else UNLOADING,
+        )
+        for k, (a, b) in enumerate(runs)
+    ]
+
+
+def step_at(steps: list[Step], time_s: float) -> Step | None:
+    """The step a frame taken at ``time_s`` belongs to, or None (ramp, settling, outside)."""
+    for s in steps:
+        if s.start_s <= time_s <= s.end_s:
+            return s
+    return None
+
+
+def reference_step(steps: list[Step]) -> Step:
+    """The session's reference: the lowest-pressure loading step (normally 0 kPa, earliest)."""
+    loading = [s for s in steps if s.phase == LOADING]
+    return min(loading, key=lambda s: (s.pressure_kpa, s.index))

@@ -1,0 +1,104 @@
+"""Sessions as a rig records them: repeated frames per step, loading and unloading passes."""
+
+from __future__ import annotations
+
+import csv
+import json
+import shutil
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from contactcal.infer.calibration.phases import FROM_COLUMN, FROM_ORDER
+from contactcal.infer.calibration.points import CalibrationPoint
+from contactcal.infer.calibration.record import load_curve
+from contactcal.infer.calibration.steps import group_steps
+from contactcal.infer.cli import main
+from contactcal.infer.pipeline.examples import example_manifest
+
+STEPS = (0.0, 2.0, 4.0, 8.0, 14.0, 20.0)
+
+
+def _rig_session(tmp_path: Path, phase_column: bool = False) -> Path:
+    """Copies of example frames: two per loading step, one per unloading step (reversed)."""
+    src = example_manifest().parent
+    s = tmp_path / "s"
+    s.mkdir()
+    shutil.copy(src / "rig.json", s / "rig.json")
+    rows = []
+    for rep in ("a", "b"):
+        for p in STEPS:
+            rows.append((f"p{p:04.1f}_{rep}.jpg", p, "loading"))
+    rows.sort(key=lambda r: r[1])
+    rows += [(f"p{p:04.1f}_u.jpg", p, "Unloading") for p in reversed(STEPS[:-1])]
+    for name, p, _ in rows:
+        shutil.copy(src / f"p{p:04.1f}kpa.jpg", s / name)
+    head = "file,pressure_kpa,time_s" + (",phase" if phase_column else "")
+    lines = [
+        f"{n},{p},{i * 0.5}" + (f",{ph}" if phase_column else "")
+        for i, (n, p, ph) in enumerate(rows)
+    ]
+    (s / "manifest.csv").write_text("\n".join([head, *lines]) + "\n", encoding="utf-8")
+    return s / "manifest.csv"
+
+
+@pytest.mark.parametrize("phase_column", [False, True])
+def test_rig_session_with_repeats_and_unloading(tmp_path: Path, phase_column: bool) -> None:
+    manifest = _rig_session(tmp_path, phase_column)
+    assert main(["calibrate", str(manifest), "--out", str(tmp_path / "out")]) == 0
+    rec = json.loads((tmp_path / "out" / "calibration.json").read_text(encoding="utf-8"))
+    assert rec["phase_source"] == (FROM_COLUMN if phase_column else FROM_ORDER)
+    assert set(rec["phases"]) == {"loading", "unloading"} and rec["inverse_phase"] == "loading"
+    steps = {(s["phase"], s["pressure_kpa"]): s for s in rec["steps"]}
+    assert [steps[("loading", p)]["n_frames"] for p in STEPS] == [2] * len(STEPS)
+    assert [steps[("unloading", p)]["n_frames"] for p in STEPS[:-1]] == [1] * (len(STEPS) - 1)
+    sp = steps[("loading", 8.0)]["spread"]  # two copies of one frame: no spread
+    assert sp["min"] == sp["max"] == steps[("loading", 8.0)]["median_area"]
+    # the same images on both passes: no hysteresis
+    h = rec["hysteresis"]
+    assert h["pressures_kpa"] == list(STEPS[:-1]) and h["max_abs_difference"] == 0.0
+    assert h["onset_kpa"]["loading"] is not None and h["onset_kpa"]["unloading"] is not None
+    pts = rec["points"]
+    assert pts[0]["file"] == "p00.0_a.jpg" and pts[0]["phase"] == "loading"  # the reference
+    assert all("time_s" in pt["extras"] for pt in pts) and len(pts) == 17
+    assert all(pt["area_interval_mm2"] is not None for pt in pts)  # the U-Net states one
+    with open(tmp_path / "out" / "calibration.csv", newline="", encoding="utf-8") as fh:
+        assert len(list(csv.DictReader(fh))) == len(steps)
+    down = load_curve(tmp_path / "out" / "calibration.json", phase="unloading")
+    assert down.band is not None and down.has_contact
+    p, lo, hi, _ = load_curve(tmp_path / "out" / "calibration.json").pressure_interval_for_area(50)
+    assert lo <= p <= hi
+
+
+def test_inverse_phase_option(tmp_path: Path) -> None:
+    manifest = _rig_session(tmp_path)
+    out = tmp_path / "out"
+    assert (
+        main(["calibrate", str(manifest), "--inverse-phase", "unloading", "--out", str(out)]) == 0
+    )
+    rec = json.loads((out / "calibration.json").read_text(encoding="utf-8"))
+    assert rec["inverse_phase"] == "unloading"
+    assert rec["fit"] == rec["phases"]["unloading"]["fit"]
+
+
+def test_inverse_phase_missing_is_an_error(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    manifest = example_manifest()
+    out = tmp_path / "out"
+    code = main(["calibrate", str(manifest), "--inverse-phase", "unloading", "--out", str(out)])
+    assert code == 2 and not out.exists()
+    assert "no unloading pass" in capsys.readouterr().err
+
+
+def test_steps_aggregate_by_median() -> None:
+    pts = [
+        CalibrationPoint(f"f{i}.png", 5.0, a > 0, a, None) for i, a in enumerate((10.0, 12.0, 90.0))
+    ] + [CalibrationPoint("z.png", 0.0, False, 0.0, None)]
+    steps = group_steps(pts, "px")["loading"]
+    assert [s.pressure_kpa for s in steps] == [0.0, 5.0]
+    s = steps[1]
+    assert s.n == 3 and s.median == 12.0 and s.contact
+    assert s.spread() == {"min": 10.0, "q25": 11.0, "q75": 51.0, "max": 90.0}
+    assert np.isclose(steps[0].median, 0.0)

@@ -1,0 +1,274 @@
+"""``calibrate --video/--camera``: pressure log, steady steps, frame extraction, live capture.
+
+The videos are made here from the example session's stills: each step's still held, with ramps
+between steps (consecutive stills blended), and a pressure log sampled at 20 Hz with noise well
+within the tolerance. Frames are written with FFV1 (lossless in this OpenCV build), so a kept
+frame is pixel-identical to its still.
+"""
+
+from __future__ import annotations
+
+import csv
+import itertools
+import json
+from collections.abc import Sequence
+from pathlib import Path
+
+import cv2
+import numpy as np
+import pytest
+
+from contactcal.infer.cli import main
+from contactcal.infer.files.atomic import run_outputs
+from contactcal.infer.video.extract import (
+    Extractor,
+    check_coverage,
+    extract_frames,
+    open_video,
+    video_frames,
+)
+from contactcal.infer.video.live import LogPoller, capture_frames, returned_to_zero
+from contactcal.infer.video.log import PressureLogError, read_pressure_log
+from contactcal.infer.video.steps import LOADING, UNLOADING, StepConfig, detect_steps
+
+EXAMPLE = Path(__file__).resolve().parents[1] / "examples" / "session"
+FPS = 10.0
+LOG_HZ = 20.0
+NOISE_KPA = 0.03  # the log's noise on a held step: well within the default ±0.1 kPa
+CFG = StepConfig(settle_s=0.3)
+
+
+def _still(kpa: int) -> np.ndarray:
+    return cv2.imread(str(EXAMPLE / f"p{kpa:04.1f}kpa.jpg"), cv2.IMREAD_COLOR)
+
+
+def _segments(kpas: Sequence[int], hold_s: float, ramp_s: float) -> list[tuple[float, int]]:
+    """Start time of each hold, in order; hold k lasts hold_s, then a ramp of ramp_s."""
+    return [(k * (hold_s + ramp_s), p) for k, p in enumerate(kpas)]
+
+
+def _pressure_at(
+    t: float, kpas: Sequence[int], hold_s: float, ramp_s: float
+) -> tuple[float, int, float]:
+    """True pressure at t, the hold it follows and the ramp fraction (0 while held)."""
+    period = hold_s + ramp_s
+    k = min(int(t // period), len(kpas) - 1)
+    into = t - k * period
+    if into <= hold_s or k == len(kpas) - 1:
+        return float(kpas[k]), k, 0.0
+    a = (into - hold_s) / ramp_s
+    return (1 - a) * kpas[k] + a * kpas[k + 1], k, a
+
+
+def make_video(
+    path: Path, kpas: Sequence[int], hold_s: float = 1.2, ramp_s: float = 0.5, fourcc: str = "FFV1"
+) -> list[tuple[float, float]]:
+    """Write the video; return each frame's (time, true pressure)."""
+    stills = {p: _still(p) for p in set(kpas)}
+    h, w = next(iter(stills.values())).shape[:2]
+    writer = cv2.VideoWriter(str(path), cv2.VideoWriter_fourcc(*fourcc), FPS, (w, h))
+    assert writer.isOpened()
+    n = round(len(kpas) * (hold_s + ramp_s) * FPS)
+    frames = []
+    for i in range(n):
+        t = i / FPS
+        p, k, a = _pressure_at(t, kpas, hold_s, ramp_s)
+        img = stills[kpas[k]]
+        if a > 0:
+            img = cv2.addWeighted(img, 1 - a, stills[kpas[k + 1]], a, 0.0)
+        writer.write(img)
+        frames.append((t, p))
+    writer.release()
+    return frames
+
+
+def make_log(
+    path: Path,
+    kpas: Sequence[int],
+    rng: np.random.Generator,
+    hold_s: float = 1.2,
+    ramp_s: float = 0.5,
+    extra_s: float = 0.0,
+) -> None:
+    """The controller's log of the same run (samples offset from the frames by 1/40 s)."""
+    end = len(kpas) * (hold_s + ramp_s) + extra_s
+    lines = ["time_s,pressure_kpa,setpoint_kpa"]
+    for t in np.arange(0.025, end, 1 / LOG_HZ):
+        p, k, _ = _pressure_at(float(t), kpas, hold_s, ramp_s)
+        lines.append(f"{t:.4f},{p + rng.uniform(-NOISE_KPA, NOISE_KPA):.4f},{kpas[k]}")
+    path.write_text("\n".join(lines) + "\n")
+
+
+def _extract(video: Path, log: Path, out: Path, cfg: StepConfig = CFG) -> Extractor:
+    with run_outputs([video, log]) as outs:
+        ex = Extractor(cfg, out / "frames", outs.stage)
+        cap, fps = open_video(video)
+        logs = iter([read_pressure_log(log)])
+        extract_frames(video_frames(cap, fps, video), ex, lambda: next(logs, None))
+        check_coverage(ex, video)
+        (out / "frames").mkdir(parents=True, exist_ok=True)
+        (out / "frames" / "manifest.csv").write_text(ex.manifest_text())
+    return ex
+
+
+def test_log_validation(tmp_path: Path) -> None:
+    bad = {
+        "time_s,pressure\n0,1\n": "lacks column",
+        "time_s,pressure_kpa\n0,1\n1,nan\n": "row 2: pressure_kpa 'nan'",
+        "time_s,pressure_kpa\n0,1\n2,1\n1,1\n": "row 3: time_s 1 is not after",
+        "time_s,pressure_kpa\n0,1\n1,1500\n": "row 2: pressure_kpa 1500 is outside",
+        "time_s,pressure_kpa\n": "no samples",
+    }
+    for k, (text, expected) in enumerate(bad.items()):
+        path = tmp_path / f"log{k}.csv"
+        path.write_text(text)
+        with pytest.raises(PressureLogError, match=expected) as err:
+            read_pressure_log(path)
+        assert str(path) in str(err.value)
+
+
+def test_steps_up_and_down(tmp_path: Path, rng: np.random.Generator) -> None:
+    kpas = [0, 2, 4, 6, 4, 2, 0]
+    make_log(tmp_path / "log.csv", kpas, rng)
+    steps = detect_steps(read_pressure_log(tmp_path / "log.csv"), CFG)
+    assert [round(s.pressure_kpa) for s in steps] == kpas
+    assert [s.phase for s in steps] == [LOADING] * 4 + [UNLOADING] * 3
+    for k, (s, (start, _)) in enumerate(zip(steps, _segments(kpas, 1.2, 0.5), strict=True)):
+        assert abs(s.pressure_kpa - round(s.pressure_kpa)) <= NOISE_KPA
+        # settling skipped: the ramp enters the step's band (2 × tolerance) just before the hold
+        slope = abs(kpas[k] - kpas[k - 1]) / 0.5 if k else np.inf
+        assert s.start_s >= start - 2 * CFG.tolerance_kpa / slope + CFG.settle_s
+
+
+def test_extraction_groups_steps(tmp_path: Path, rng: np.random.Generator) -> None:
+    kpas = [0, 5, 10, 5, 0]
+    truth = make_video(tmp_path / "v.avi", kpas)
+    make_log(tmp_path / "log.csv", kpas, rng)
+    ex = _extract(tmp_path / "v.avi", tmp_path / "log.csv", tmp_path / "out")
+    with open(tmp_path / "out" / "frames" / "manifest.csv", newline="") as fh:
+        rows = list(csv.DictReader(fh))
+    assert list(rows[0]) == ["file", "pressure_kpa", "phase", "time_s"]
+    by_step = [
+        list(g) for _, g in itertools.groupby(rows, key=lambda r: r["pressure_kpa"] + r["phase"])
+    ]
+    phases = [LOADING] * 3 + [UNLOADING] * 2
+    assert [(round(float(g[0]["pressure_kpa"])), g[0]["phase"]) for g in by_step] == list(
+        zip(kpas, phases, strict=True)
+    )
+    for group, (start, kpa) in zip(by_step, _segments(kpas, 1.2, 0.5), strict=True):
+        times = [float(r["time_s"]) for r in group]
+        # every kept frame: after the settle time, at a true pressure within the tolerance
+        assert min(times) >= start + CFG.settle_s
+        for t in times:
+            true = truth[round(t * FPS)][1]
+            assert abs(true - kpa) <= CFG.tolerance_kpa + NOISE_KPA
+        held = [t for t, p in truth if start + CFG.settle_s <= t <= start + 1.2]
+        assert len(group) >= len(held) - 2  # at most one lost at each end to the log sampling
+        still = _still(kpa)
+        pure = [r for r in group if float(r["time_s"]) <= start + 1.2]
+        for r in pure:  # lossless: the kept frame is the still
+            assert np.array_equal(cv2.imread(str(tmp_path / "out" / "frames" / r["file"])), still)
+    assert sum(len(v) for v in ex.kept.values()) == len(rows)
+
+
+def test_live_capture_matches_file(tmp_path: Path, rng: np.random.Generator) -> None:
+    """The camera path, fed a video file and a fake clock, keeps the file path's frames and
+    stops once the log is back at 0 kPa (the video's trailing frames are not read)."""
+    kpas = [0, 4, 8, 4, 0, 0, 0]  # a long final rest: the capture stops before its end
+    make_video(tmp_path / "v.avi", kpas)
+    make_log(tmp_path / "log.csv", kpas, rng)
+    by_file = _extract(tmp_path / "v.avi", tmp_path / "log.csv", tmp_path / "file")
+    ticks = itertools.count()
+    clock = lambda: next(ticks) / FPS  # noqa: E731  (frame i arrives at i / FPS)
+    with run_outputs() as outs:
+        live = Extractor(CFG, tmp_path / "live" / "frames", outs.stage)
+        frames = capture_frames(cv2.VideoCapture(str(tmp_path / "v.avi")), clock)
+        extract_frames(frames, live, LogPoller(tmp_path / "log.csv"), stop=returned_to_zero)
+    assert live.last_time_s < by_file.last_time_s - 1.0  # stopped early
+    for step, kept in live.kept.items():
+        assert kept == by_file.kept[step][: len(kept)]
+        assert len(kept) == len(by_file.kept[step]) or step == max(live.kept)
+    last = live.kept[max(live.kept)]
+    assert live.steps[max(live.kept)].pressure_kpa < CFG.tolerance_kpa
+    assert last[-1][1] - last[0][1] >= CFG.settle_s
+
+
+def _run(argv: list[str], capsys: pytest.CaptureFixture[str]) -> tuple[int, str]:
+    code = main(argv)
+    return code, capsys.readouterr().err
+
+
+def test_bad_inputs_exit_2(
+    tmp_path: Path, rng: np.random.Generator, capsys: pytest.CaptureFixture[str]
+) -> None:
+    kpas = [0, 5, 10]
+    make_video(tmp_path / "v.avi", kpas)
+    make_log(tmp_path / "log.csv", kpas, rng)
+    (tmp_path / "bad.avi").write_bytes(b"not a video")
+    lines = (tmp_path / "log.csv").read_text().splitlines()
+    (tmp_path / "nocol.csv").write_text("\n".join(["time_s,kpa", *lines[1:]]) + "\n")
+    (tmp_path / "unsorted.csv").write_text("\n".join([*lines[:3], lines[2], *lines[3:]]) + "\n")
+    make_log(tmp_path / "long.csv", [*kpas, 5], rng)  # a step after the video's end
+    out = tmp_path / "out"
+    cases = {
+        ("bad.avi", "log.csv"): "bad.avi: cannot be read as a video",
+        ("missing.avi", "log.csv"): "missing.avi: video not found",
+        ("v.avi", "nocol.csv"): "lacks column(s) ['pressure_kpa']",
+        ("v.avi", "unsorted.csv"): "row 3: time_s",
+        ("v.avi", "long.csv"): "step 5 kPa (unloading",
+    }
+    for (video, log), expected in cases.items():
+        argv = [
+            "calibrate",
+            "--video",
+            str(tmp_path / video),
+            "--pressure-log",
+            str(tmp_path / log),
+        ]
+        code, err = _run([*argv, "--out", str(out), "--method", "classical"], capsys)
+        assert code == 2 and expected in err and err.count("\n") == 1, err
+        assert not out.exists()
+    for argv in (
+        ["calibrate", str(EXAMPLE / "manifest.csv"), "--video", str(tmp_path / "v.avi")],
+        ["calibrate", "--video", str(tmp_path / "v.avi")],
+        ["calibrate", "--pressure-log", str(tmp_path / "log.csv")],
+    ):
+        code, err = _run([*argv, "--out", str(out)], capsys)
+        assert code == 2 and err.startswith("contactcal: error: calibrate:"), err
+    assert not out.exists()
+
+
+def test_video_areas_equal_stills(
+    tmp_path: Path, rng: np.random.Generator, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """The video path measures exactly what ``calibrate MANIFEST`` measures on the stills: FFV1
+    is lossless, so every kept frame's area equals its still's (relative difference 0)."""
+    kpas = [0, 3, 6, 12, 20]
+    make_video(tmp_path / "v.avi", kpas, hold_s=0.8)
+    make_log(tmp_path / "log.csv", kpas, rng, hold_s=0.8)
+    stills = tmp_path / "stills.csv"
+    stills.write_text(
+        "file,pressure_kpa\n" + "".join(f"{EXAMPLE}/p{p:04.1f}kpa.jpg,{p}\n" for p in kpas)
+    )
+    rig = ["--rig", str(EXAMPLE / "rig.json")]
+    assert main(["calibrate", str(stills), "--out", str(tmp_path / "st"), *rig]) == 0
+    argv = ["--video", str(tmp_path / "v.avi"), "--pressure-log", str(tmp_path / "log.csv")]
+    out = tmp_path / "vid"
+    assert (
+        main(["calibrate", *argv, "--settle-s", "0.3", "--preview", "--out", str(out), *rig]) == 0
+    )
+    assert "frames" in capsys.readouterr().out
+    still_area = {
+        round(p["pressure_kpa"]): p["area_px"]
+        for p in json.loads((tmp_path / "st" / "calibration.json").read_text())["points"]
+    }
+    record = json.loads((out / "calibration.json").read_text())
+    points = record["points"]
+    final = (out / "frames" / "manifest.csv").resolve()  # recorded where it stays, not staged
+    assert record["extra"]["manifest"] == str(final) == record["inputs"]["manifest"]["file"]
+    assert final.is_file()
+    assert {round(p["pressure_kpa"]) for p in points} == set(kpas) and len(points) > 3 * len(kpas)
+    for p in points:
+        assert p["area_px"] == still_area[round(p["pressure_kpa"])]
+    cap = cv2.VideoCapture(str(next(out.glob("preview.*"))))
+    assert cap.isOpened() and cap.read()[0]

@@ -1,0 +1,250 @@
+"""Calibrate the U-Net's stated interval of the contact area on validation data.
+
+A frame's interval comes from its kept region's boundary band
+(:func:`contactcal.infer.methods.unet.postprocess.boundary_band`): the region at a stricter and a
+looser probability threshold, plus half a network pixel across its outline, widened by a factor.
+Here the thresholds (symmetric in logits around the decision threshold, one of
+:data:`LOGIT_MARGINS`) and the factor are chosen on validation frames, never on the benchmark:
+
+* for each candidate pair, every frame gets the smallest factor whose interval covers its true
+  area (:func:`required_widen`); the factor is the split-conformal quantile of these, the
+  ``ceil((n + 1)·level)``-th smallest of n (capped at n), so that the interval covers about
+  ``level`` of such frames;
+* frames with neither true nor called contact are left out: their interval, ``(0, …)``, covers
+  the true area 0 whatever the factor;
+* of the candidates, the one with the narrowest median relative width on true-contact frames wins.
+
+``contactcal export`` calibrates on the run's validation fingers (:func:`calibrate_run`);
+``python -m contactcal.train.interval`` recalibrates an exported model's ``interval`` metadata on
+rendered data (:func:`recalibrate_model`; the weights are copied untouched).
+"""
+
+from __future__ import annotations
+
+import argparse
+import dataclasses
+import json
+import math
+import os
+import tempfile
+from collections.abc import Sequence
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from contactcal.infer.bench.dataset import read_index, sessions_of
+from contactcal.infer.files.atomic import atomic_open
+from contactcal.infer.image.read import load_image
+from contactcal.infer.methods.unet.postprocess import Band, Segmentation, boundary_band
+from contactcal.infer.methods.unet.spec import IntervalSpec, ModelSpec, read_spec
+
+#: Stated coverage of the interval.
+LEVEL = 0.9
+#: Candidate half-widths of the threshold pair, logits around the decision threshold (1 → 0.27
+#: and 0.73 at a threshold of 0.5; 3 → 0.047 and 0.95): narrower pairs need a larger factor.
+LOGIT_MARGINS = (0.5, 1.0, 2.0, 3.0)
+
+
+def required_widen(band: Band, truth_net: float) -> float:
+    """The smallest factor whose interval covers ``truth_net`` (network px); inf if none does."""
+    if truth_net >= band.area:
+        gap, room = truth_net - band.area, band.loose - band.area + band.edge
+    else:
+        gap, room = band.area - truth_net, band.area - band.strict + band.edge
+    if gap <= 0.0:
+        return 0.0
+    return gap / room if room > 0.0 else math.inf
+
+
+def _pair(spec: ModelSpec, margin: float, level: float) -> IntervalSpec:
+    logit = math.log(spec.threshold / (1.0 - spec.threshold))
+
+    def sig(z: float) -> float:
+        return 1.0 / (1.0 + math.exp(-z))
+
+    return IntervalSpec(level, sig(logit - margin), sig(logit + margin), 0.0, 1)
+
+
+def _try(
+    pair: IntervalSpec, segs: Sequence[Segmentation], truths: np.ndarray, spec: ModelSpec
+) -> tuple[float, float, int]:
+    """``(factor, median relative width on true-contact frames, frames used)`` of one pair."""
+    bands = [boundary_band(s.prob, s.mask_net, pair, spec.min_contact_area_px) for s in segs]
+    ppn = np.array([s.box.scale(s.prob.shape[0]) ** 2 for s in segs])
+    used = [i for i, b in enumerate(bands) if b.area > 0 or truths[i] > 0]
+    if not used:
+        return math.inf, math.inf, 0
+    need = np.sort([required_widen(bands[i], truths[i] / ppn[i]) for i in used])
+    rank = min(math.ceil((len(used) + 1) * pair.level), len(used))
+    widen = float(need[rank - 1])
+    if not math.isfinite(widen):
+        return widen, math.inf, len(used)
+    spans = [(bands[i].interval(widen), ppn[i] / truths[i]) for i in used if truths[i] > 0]
+    widths = [(hi - lo) * scale for (lo, hi), scale in spans]
+    return widen, float(np.median(widths)) if widths else 0.0, len(used)
+
+
+def calibrate(
+    segs: Sequence[Segmentation], truths: Sequence[float], spec: ModelSpec, level: float = LEVEL
+) -> tuple[IntervalSpec, dict[str, Any]]:
+    """Choose the interval's thresholds and factor on calibration frames.
+
+    Args:
+        segs: each frame's :func:`~contactcal.infer.methods.unet.postprocess.postprocess` result
+            under ``spec`` (probabilities, kept region, crop).
+        truths: each frame's true contact area, input pixels (mask pixel count).
+        spec: the model's spec (threshold, minimum area).
+        level: the stated coverage.
+
+    Returns:
+        ``(interval, summary)``; the summary lists each candidate's factor and median width.
+
+    Raises:
+        ValueError: no usable frames, or no candidate reaches ``level`` (more frames than
+            ``1 - level`` have true contact but no region at any looser threshold).
+    """
+    t = np.asarray(truths, dtype=np.float64)
+    if len(segs) != len(t) or not len(t):
+        raise ValueError(f"expected one true area per frame, got {len(t)} for {len(segs)} frames")
+    tried = {m: _try(_pair(spec, m, level), segs, t, spec) for m in LOGIT_MARGINS}
+    ok = {m: v for m, v in tried.items() if math.isfinite(v[0]) and v[2] > 0}
+    if not ok:
+        raise ValueError(
+            f"the area interval cannot reach {level:.0%} coverage on {len(t)} calibration frames "
+            "(too many missed contacts or no contact frames); calibrate on more frames"
+        )
+    margin = min(ok, key=lambda m: (ok[m][1], m))
+    widen, width, used = ok[margin]
+    pair = _pair(spec, margin, level)
+    interval = dataclasses.replace(pair, widen=widen, frames=used)
+    summary = {
+        "frames": len(t),
+        "frames_used": used,
+        "candidates": {str(m): {"widen": v[0], "median_rel_width": v[1]} for m, v in tried.items()},
+        "margin_logit": margin,
+        "median_rel_width": width,
+        "interval": dataclasses.asdict(interval),
+    }
+    return interval, summary
+
+
+def calibrate_run(
+    model: Any, spec: ModelSpec, info: dict, val_fraction: float, seed: int
+) -> tuple[IntervalSpec, dict[str, Any]]:
+    """Calibrate on a training run's validation fingers with its torch model (eval mode).
+
+    Raises:
+        ValueError: the run has no validation fingers, or :func:`calibrate` fails.
+    """
+    import torch
+
+    from contactcal.infer.bench.dataset import read_datasets
+    from contactcal.infer.methods.unet.postprocess import postprocess
+    from contactcal.train.data import build_cache, split_by_finger
+
+    _, val = split_by_finger(read_datasets(info.get("data_dirs") or []), val_fraction, seed)
+    if not val:
+        raise ValueError("the run has no validation fingers to calibrate the area interval on")
+    cache = build_cache(val, spec.preprocess, spec.channels)
+    segs = []
+    with torch.no_grad():
+        for i in range(0, len(cache), 16):
+            prob = torch.sigmoid(model(cache.x[i : i + 16].float()))[:, 0].numpy()
+            for k, p in enumerate(prob):
+                segs.append(postprocess(p, cache.boxes[i + k], cache.shapes[i + k], spec))
+    return calibrate(segs, cache.area_px.numpy().tolist(), spec)
+
+
+def _segment_dataset(
+    model: Path, data_dirs: Sequence[Path]
+) -> tuple[list[Segmentation], list[float], ModelSpec]:
+    """Every frame of the datasets through the deployment runner (each session's lowest-pressure
+    frame is its reference), the true areas, and the model's spec without its interval (the
+    model's own ``interval`` key, if any, is not used)."""
+    import onnx
+
+    from contactcal.infer.methods.unet.prepare import session_reference
+    from contactcal.infer.methods.unet.runner import OnnxSegmenter
+
+    proto = onnx.load(str(model))
+    meta = {p.key: p.value for p in proto.metadata_props}
+    # Any valid interval lets the strict reader accept a model exported before intervals.
+    meta["interval"] = json.dumps(dataclasses.asdict(IntervalSpec(LEVEL, 1e-6, 1 - 1e-6, 1.0, 1)))
+    onnx.helper.set_model_props(proto, meta)
+    segs, truths = [], []
+    with tempfile.TemporaryDirectory() as tmp:
+        onnx.save(proto, os.path.join(tmp, "model.onnx"))
+        runner = OnnxSegmenter(os.path.join(tmp, "model.onnx"))
+        for d in data_dirs:
+            for rows in sessions_of(read_index(d)).values():
+                ref = session_reference(load_image(rows[0].frame), runner.spec.preprocess)
+                for r in rows:
+                    segs.append(runner.segment(load_image(r.frame), ref))
+                    truths.append(r.area_px)
+    return segs, truths, dataclasses.replace(runner.spec, interval=None)
+
+
+def recalibrate_model(
+    model: str | os.PathLike[str],
+    data_dirs: Sequence[str | os.PathLike[str]],
+    out: str | os.PathLike[str],
+) -> dict[str, Any]:
+    """Write ``model`` with its ``interval`` metadata calibrated on ``data_dirs`` to ``out``.
+
+    Only the metadata changes (the graph and weights are copied); the result passes
+    ``onnx.checker`` (full check) and deployment's ``read_spec`` before it is written (atomic).
+
+    Args:
+        model: an exported ``.onnx`` model (with or without an ``interval`` key).
+        data_dirs: ``contactcal synth`` datasets that are neither its training, its benchmark
+            nor any held-out check data.
+        out: the new ``.onnx`` file; must not be ``model`` (inputs are never overwritten).
+
+    Returns:
+        The calibration summary (:func:`calibrate`).
+    """
+    import onnx
+
+    src, dst = Path(model), Path(out)
+    if dst.suffix.lower() != ".onnx":
+        raise ValueError(f"{dst}: expected an output file name ending in .onnx")
+    if dst.exists() and dst.resolve() == src.resolve():
+        raise ValueError(f"{dst}: the output must not be the input model {src}")
+    segs, truths, base = _segment_dataset(src, [Path(d) for d in data_dirs])
+    interval, summary = calibrate(segs, truths, base)
+    proto = onnx.load(str(src))
+    meta = {p.key: p.value for p in proto.metadata_props}
+    spec = dataclasses.replace(base, interval=interval)
+    onnx.helper.set_model_props(proto, {**meta, "interval": spec.to_metadata()["interval"]})
+    onnx.checker.check_model(proto, full_check=True)
+    if read_spec({p.key: p.value for p in proto.metadata_props}, dst) != spec:
+        raise RuntimeError(f"{dst}: the metadata does not read back as the calibrated spec")
+    with atomic_open(dst, "wb") as fh:
+        fh.write(proto.SerializeToString())
+    return summary
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    """``python -m contactcal.train.interval MODEL --data DIR... --out NEW.onnx``."""
+    ap = argparse.ArgumentParser(
+        prog="python -m contactcal.train.interval",
+        description="Recalibrate an exported model's area interval (metadata only) on "
+        "validation renders.",
+    )
+    ap.add_argument("model", type=Path, help="exported .onnx model")
+    ap.add_argument("--data", type=Path, nargs="+", required=True, help="dataset folder(s)")
+    ap.add_argument("--out", type=Path, required=True, help="new .onnx file")
+    args = ap.parse_args(argv)
+    try:
+        summary = recalibrate_model(args.model, args.data, args.out)
+    except (ValueError, OSError) as exc:
+        print(f"error: {exc}")
+        return 2
+    print(json.dumps(summary, indent=1))
+    print(f"wrote {args.out}")
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())
