@@ -14,7 +14,8 @@ from pathlib import Path
 import cv2
 
 from contactcal.infer.files.atomic import write_text
-from contactcal.synth.dataset import DatasetConfig, build_dataset, parse_pressures
+from contactcal.synth.dataset import DatasetConfig, build_dataset
+from contactcal.synth.layout import parse_pressures
 from contactcal.synth.session import RenderConfig
 
 OUT = Path(__file__).resolve().parent / "session"

@@ -32,13 +32,8 @@ SYNTH_MODULES = ("mitsuba", "drjit")
 def _cmd_synth(args: argparse.Namespace) -> int:
     require_extra("synth", "synth", SYNTH_MODULES)
     from contactcal.infer.files.atomic import write_json
-    from contactcal.synth.dataset import (
-        DatasetConfig,
-        build_dataset,
-        parse_pressures,
-        parse_shard,
-        parse_size,
-    )
+    from contactcal.synth.dataset import DatasetConfig, build_dataset, parse_shard
+    from contactcal.synth.layout import parse_pressures, parse_size
     from contactcal.synth.session import RenderConfig
 
     if args.workers < 1:

@@ -25,13 +25,9 @@ import numpy as np
 from contactcal.infer.files.atomic import remove_stale_temporaries, write_json, write_text
 from contactcal.infer.files.jsonable import jsonable
 from contactcal.infer.image.write import write_image
+from contactcal.synth.layout import INDEX_COLUMNS, check_frame_names, frame_name, index_row
 from contactcal.synth.randomize import SessionParams, sample_session
 from contactcal.synth.session import FrameOutput, RenderConfig, render_session
-
-INDEX_COLUMNS = tuple(
-    "finger session frame mask pressure_kpa contact area_px area_mm2 area_mm2_projected"
-    " mm_per_px onset_kpa width height hard".split()
-)
 
 
 @dataclass(frozen=True)
@@ -56,31 +52,6 @@ class DatasetConfig:
             raise ValueError(f"--hard-fraction must be in [0, 1], got {self.hard_fraction}")
 
 
-def frame_name(p: float) -> str:
-    """File stem of the frame at ``p`` kPa, e.g. ``p05.0kpa`` (0.1 kPa resolution)."""
-    return f"p{p:04.1f}kpa"
-
-
-def check_frame_names(pressures_kpa: tuple[float, ...]) -> None:
-    """Refuse pressures whose frames would share a file name (names have 0.1 kPa resolution).
-
-    Raises:
-        ValueError: names the two pressures and the shared name (before anything is written).
-    """
-    seen: dict[str, float] = {}
-    for p in pressures_kpa:
-        name = frame_name(p)
-        if name in seen and seen[name] == p:
-            raise ValueError(f"--pressures: {p:g} kPa is given twice; pressures must be distinct")
-        if name in seen:
-            raise ValueError(
-                f"--pressures: {seen[name]:g} and {p:g} kPa would both be saved as {name}.png "
-                "(frame names have 0.1 kPa resolution); give pressures that differ when rounded "
-                "to 0.1 kPa"
-            )
-        seen[name] = p
-
-
 def session_params(config: DatasetConfig, finger: int) -> SessionParams:
     """The deterministic parameters of finger ``finger``."""
     rng = np.random.default_rng([config.seed, finger])
@@ -88,26 +59,12 @@ def session_params(config: DatasetConfig, finger: int) -> SessionParams:
     return sample_session(rng, hard=hard)
 
 
-def _truth(out: FrameOutput, finger: int, session: str, hard: bool) -> dict[str, Any]:
-    name = frame_name(out.pressure_kpa)
-    area_px = int(out.mask.sum())
-    h, w = out.mask.shape
-    return {
-        "finger": finger,
-        "session": session,
-        "frame": f"{session}/frames/{name}.png",
-        "mask": f"{session}/masks/{name}.png",
-        "pressure_kpa": out.pressure_kpa,
-        "contact": int(area_px > 0),
-        "area_px": area_px,
-        "area_mm2": round(out.state.area_mm2, 6),
-        "area_mm2_projected": round(area_px * out.mm_per_px**2, 6),
-        "mm_per_px": round(out.mm_per_px, 8),
-        "onset_kpa": round(out.state.onset_kpa, 6),
-        "width": w,
-        "height": h,
-        "hard": int(hard),
-    }
+def _truth(out: FrameOutput, finger: int, hard: bool) -> dict[str, Any]:
+    """The frame's ``index.csv`` row (written next to it; the index is built from these)."""
+    s = out.state
+    return index_row(
+        finger, out.pressure_kpa, out.mask, s.area_mm2, out.mm_per_px, s.onset_kpa, hard
+    )
 
 
 def stop_if_orphaned(parent_pid: int | None) -> None:
@@ -157,7 +114,7 @@ def render_finger(
                 folder / "frames" / f"{stem}.png", np.ascontiguousarray(out.frame[:, :, ::-1])
             )
             write_image(folder / "masks" / f"{stem}.png", out.mask.astype(np.uint8) * 255)
-            write_json(tpath, _truth(out, finger, name, params.hard))
+            write_json(tpath, _truth(out, finger, params.hard))
             made += 1
             stop_if_orphaned(parent_pid)  # before the next render
     rows = [json.loads(t.read_text()) for t in truth_paths]
@@ -245,35 +202,6 @@ def _check_config_matches(root: Path, config: DatasetConfig) -> None:
             )
         return
     write_json(path, data)
-
-
-def parse_pressures(text: str) -> tuple[float, ...]:
-    """``"0:20:1"`` (start:stop:step, stop included) or ``"0,2.5,5"`` → kPa tuple."""
-    try:
-        if ":" in text:
-            start, stop, step = (float(v) for v in text.split(":"))
-            if step <= 0 or stop < start:
-                raise ValueError
-            n = int(np.floor((stop - start) / step + 1e-9)) + 1
-            return tuple(round(start + k * step, 6) for k in range(n))
-        return tuple(float(v) for v in text.split(","))
-    except ValueError:
-        raise ValueError(
-            f"--pressures: expected start:stop:step (e.g. 0:20:1) or a comma list, got {text!r}"
-        ) from None
-
-
-def parse_size(text: str) -> tuple[int, int]:
-    """``"320x240"`` or ``"320"`` (4:3 implied) → (width, height)."""
-    try:
-        if "x" in text:
-            w, h = (int(v) for v in text.lower().split("x"))
-        else:
-            w = int(text)
-            h = round(w * 3 / 4)
-    except ValueError:
-        raise ValueError(f"--size: expected W or WxH (4:3, e.g. 320x240), got {text!r}") from None
-    return w, h
 
 
 def parse_shard(text: str) -> tuple[int, int]:

@@ -15,8 +15,9 @@ from test_outputs import copy_session
 
 from contactcal.infer.calibration import record as calibration_io
 from contactcal.infer.calibration.fit import CurveConfig
+from contactcal.infer.calibration.load import load_curve
 from contactcal.infer.calibration.points import CalibrationPoint
-from contactcal.infer.calibration.record import load_curve, write_calibration
+from contactcal.infer.calibration.record import write_calibration
 from contactcal.infer.calibration.session import SessionFit, fit_session
 from contactcal.infer.calibration.table import format_table
 from contactcal.infer.cli import main

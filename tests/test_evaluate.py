@@ -166,8 +166,9 @@ GOOD = ["p10.0kpa.jpg", "200.5", "150.5", "90", "70", "15"]
     ("header", "row", "expected"),
     [
         (["file", "cx", "cy", "major", "minor"], GOOD[:5], "missing column(s) angle_deg"),
-        (None, [*GOOD[:3], "0", *GOOD[4:]], "major 0 is not positive"),
-        (None, [*GOOD[:4], "-3", GOOD[5]], "minor -3 is not positive"),
+        (None, [*GOOD[:3], "0", *GOOD[4:]], "major 0 is not in (0, 100000]"),
+        (None, [*GOOD[:4], "-3", GOOD[5]], "minor -3 is not in (0, 100000]"),
+        (None, [*GOOD[:3], "1e308", "1e308", GOOD[5]], "major 1e+308 is not in (0, 100000]"),
         (None, ["p99.0kpa.jpg", *GOOD[1:]], "'p99.0kpa.jpg' is not a frame of the manifest"),
         (None, [*GOOD[:2], "abc", *GOOD[3:]], "cy 'abc' is not a finite number"),
         (None, [GOOD[0], "900", *GOOD[2:]], "lies outside the 400×300 px frame"),
@@ -217,3 +218,42 @@ def test_mask_naming_no_frame_exits_2(tmp_path: Path, capsys: pytest.CaptureFixt
     assert _evaluate(tmp_path / "out", masks) == 2
     err = capsys.readouterr().err
     assert err.count("\n") == 1 and "frame_5.png" in err and "no frame of the manifest" in err
+
+
+def test_corrupt_mask_exits_2(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    """A damaged mask PNG is refused like a damaged frame (strict decoding), not read wrong."""
+    masks = tmp_path / "masks"
+    masks.mkdir()
+    ok, buf = cv2.imencode(".png", (np.arange(300 * 400) % 7 == 0).reshape(300, 400) * 255)
+    assert ok
+    bad = bytearray(buf.tobytes())
+    bad[len(bad) // 2 : len(bad) // 2 + 40] = b"\x00" * 40
+    (masks / "p10.0kpa.png").write_bytes(bytes(bad))
+    out = tmp_path / "out"
+    assert _evaluate(out, masks, "--method", "classical") == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "p10.0kpa.png" in err
+    assert not out.exists()
+
+
+def test_onset_with_repeated_pressures(tmp_path: Path) -> None:
+    """Repeats at a pressure are pooled into one step; the onset is still compared."""
+    frames = [(EXAMPLE_SESSION / f"p{p:04.1f}kpa.jpg", p) for p in (0, 2, 4, 6, 8)]
+    copies = []
+    for f, p in frames:
+        for k in range(2):
+            c = tmp_path / f"r{k}_{f.name}"
+            shutil.copy(f, c)
+            copies.append((c, p))
+    (tmp_path / "m.csv").write_text(
+        "file,pressure_kpa\n" + "".join(f"{c.name},{p}\n" for c, p in copies), encoding="utf-8"
+    )
+    masks = tmp_path / "masks"
+    masks.mkdir()
+    for c, p in copies:
+        shutil.copy(EXAMPLE_SESSION / "masks" / f"p{p:04.1f}kpa.png", masks / f"{c.stem}.png")
+    out = tmp_path / "out"
+    assert _evaluate(out, masks, "--method", "unet", manifest=tmp_path / "m.csv") == 0
+    onset = json.loads((out / "evaluation.json").read_text())["summary"]["onset"]
+    assert onset["labels_onset_kpa"] is not None and "pooled" in onset["note"]
+    assert abs(onset["methods"]["unet"]["error_kpa"]) < 0.5

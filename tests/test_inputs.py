@@ -210,3 +210,34 @@ def test_12bit_session_with_reference(tmp_path: Path, name: str) -> None:
     got = measure_files([f12], make_method(name), ref12, bit_depth=12)[0].result
     want = measure_files([f8], make_method(name), ref8)[0].result
     assert got.area_px == want.area_px > 0 and got.note == want.note == ""
+
+
+def _with_chunk(png: bytes, kind: bytes, data: bytes) -> bytes:
+    """``png`` with a chunk inserted right after IHDR (CRC computed)."""
+    import struct
+    import zlib
+
+    ihdr_end = 8 + 4 + 4 + 13 + 4
+    chunk = struct.pack(">I", len(data)) + kind + data
+    chunk += struct.pack(">I", zlib.crc32(kind + data) & 0xFFFFFFFF)
+    return png[:ihdr_end] + chunk + png[ihdr_end:]
+
+
+def test_colour_metadata_warning_is_not_corruption(
+    tmp_path: Path, capfd: pytest.CaptureFixture[str]
+) -> None:
+    """A bad iCCP chunk makes libpng warn, but the pixels are intact: warned, not refused."""
+    img = cv2.imread(str(EXAMPLE / "p12.0kpa.jpg"), cv2.IMREAD_GRAYSCALE)
+    ok, buf = cv2.imencode(".png", img)
+    assert ok
+    path = tmp_path / "iccp.png"
+    path.write_bytes(_with_chunk(buf.tobytes(), b"iCCP", b"x"))
+    capfd.readouterr()
+    np.testing.assert_array_equal(load_image(path), img)
+    assert "iCCP" in capfd.readouterr().err
+    # while damage to the pixel data stays an error
+    bad = bytearray(buf.tobytes())
+    bad[len(bad) // 2 : len(bad) // 2 + 40] = b"\x00" * 40
+    (tmp_path / "bad.png").write_bytes(bytes(bad))
+    with pytest.raises(ImageError):
+        load_image(tmp_path / "bad.png")

@@ -8,12 +8,7 @@ from pathlib import Path
 import pytest
 
 from contactcal.infer.calibration.phases import FROM_COLUMN, FROM_ORDER, SINGLE_PASS
-from contactcal.infer.pipeline.manifest import (
-    Frame,
-    ManifestError,
-    read_manifest,
-    read_session,
-)
+from contactcal.infer.pipeline.manifest import Frame, ManifestError, read_manifest, read_session
 
 
 def _session(tmp_path: Path, text: str, images: tuple[str, ...] = ("a.png", "b.png", "c.png")):

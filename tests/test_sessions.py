@@ -10,9 +10,9 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from contactcal.infer.calibration.load import load_curve
 from contactcal.infer.calibration.phases import FROM_COLUMN, FROM_ORDER
 from contactcal.infer.calibration.points import CalibrationPoint
-from contactcal.infer.calibration.record import load_curve
 from contactcal.infer.calibration.steps import group_steps
 from contactcal.infer.cli import main
 from contactcal.infer.pipeline.examples import example_manifest
@@ -102,3 +102,25 @@ def test_steps_aggregate_by_median() -> None:
     assert s.n == 3 and s.median == 12.0 and s.contact
     assert s.spread() == {"min": 10.0, "q25": 11.0, "q75": 51.0, "max": 90.0}
     assert np.isclose(steps[0].median, 0.0)
+
+
+def test_hysteresis_matches_steps_of_a_noisy_log() -> None:
+    """Steps from a logged sweep sit a few 0.01 kPa off the set points: still compared."""
+    from contactcal.infer.calibration.curve import PX, Curve
+    from contactcal.infer.calibration.hysteresis import hysteresis
+    from contactcal.infer.calibration.steps import Step
+
+    def steps(phase: str, pressures: list[float], areas: list[float]) -> list[Step]:
+        return [
+            Step(phase, k, p, np.array([a]), np.array([a > 0]), (None,))
+            for k, (p, a) in enumerate(zip(pressures, areas, strict=True))
+        ]
+
+    curve = Curve([0.0, 4.0, 6.0], [0.0, 10.0, 20.0], 2.0, PX)
+    up = steps("loading", [0.0, 4.00, 6.0], [0.0, 10.0, 20.0])
+    down = steps("unloading", [5.97, 4.01, 0.02], [22.0, 13.0, 0.0])
+    h = hysteresis((up, curve), (down, curve))
+    assert h["pressures_kpa"] == [0.0, 4.0, 6.0]
+    assert h["difference"] == [0.0, 3.0, 2.0] and h["max_abs_at_kpa"] == 4.0
+    far = steps("unloading", [5.5, 3.0], [22.0, 13.0])
+    assert hysteresis((up, curve), (far, curve))["max_abs_difference"] is None

@@ -19,13 +19,12 @@ from contactcal.infer.cli import main
 from contactcal.synth.dataset import (
     DatasetConfig,
     build_dataset,
-    parse_pressures,
     parse_shard,
-    parse_size,
     render_finger,
     shard_fingers,
     stop_if_orphaned,
 )
+from contactcal.synth.layout import parse_pressures, parse_size
 from contactcal.synth.session import RenderConfig
 
 pytestmark = pytest.mark.slow

@@ -18,6 +18,7 @@ import cv2
 import numpy as np
 import pytest
 
+from contactcal.infer.calibration.phases import LOADING, UNLOADING
 from contactcal.infer.cli import main
 from contactcal.infer.files.atomic import run_outputs
 from contactcal.infer.video.extract import (
@@ -29,7 +30,7 @@ from contactcal.infer.video.extract import (
 )
 from contactcal.infer.video.live import LogPoller, capture_frames, returned_to_zero
 from contactcal.infer.video.log import PressureLogError, read_pressure_log
-from contactcal.infer.video.steps import LOADING, UNLOADING, StepConfig, detect_steps
+from contactcal.infer.video.steps import StepConfig, detect_steps
 
 EXAMPLE = Path(__file__).resolve().parents[1] / "examples" / "session"
 FPS = 10.0

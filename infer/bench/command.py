@@ -10,6 +10,14 @@ def add_parsers(sub: argparse._SubParsersAction) -> None:
     """Add ``bench`` to the ``contactcal`` subcommands."""
     b = sub.add_parser("bench", help="accuracy and speed of every method on rendered sessions")
     b.add_argument("--data", type=Path, required=True, help="dataset folder (index.csv)")
+    b.add_argument(
+        "--crosscheck",
+        type=Path,
+        action="append",
+        default=[],
+        metavar="DIR",
+        help="another dataset scored beside --data (e.g. `contactcal procedural`); repeatable",
+    )
     b.add_argument("--out", type=Path, required=True, help="report folder")
     b.add_argument("--model", type=Path, help="ONNX model (default: shipped)")
     b.add_argument("--repeats", type=int, default=5, help="timing runs; median (default 5)")
@@ -24,10 +32,18 @@ def _cmd_bench(args: argparse.Namespace) -> int:
     if args.repeats < 1 or args.timing_frames < 1:
         raise ValueError("--repeats and --timing-frames must be >= 1")
     cfg = BenchConfig(repeats=args.repeats, timing_frames=args.timing_frames)
-    res = run_bench(args.data, args.out, None if args.model is None else str(args.model), cfg)
+    model = None if args.model is None else str(args.model)
+    res = run_bench(args.data, args.out, model, cfg, args.crosscheck)
     for row in res["bins"]:
-        err = row["median_abs_rel_error"]
-        shown = "–" if err is None else f"{100 * err:6.2f} %"
-        print(f"{row['method']:>16s} {row['bin_kpa']:>6s} kPa  median |rel err| {shown}")
+        print(f"{row['method']:>16s} {row['bin_kpa']:>6s} kPa  median |rel err| {_pct(row)}")
+    for c in res.get("crosscheck", []):
+        for row in c["bins"]:
+            method, kpa = row["method"], row["bin_kpa"]
+            print(f"[{c['label']}] {method:>16s} {kpa:>6s} kPa  median |rel err| {_pct(row)}")
     print(f"report: {args.out / 'report.md'}")
     return 0
+
+
+def _pct(row: dict[str, object]) -> str:
+    err = row["median_abs_rel_error"]
+    return "–" if not isinstance(err, float) else f"{100 * err:6.2f} %"

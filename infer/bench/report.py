@@ -187,11 +187,25 @@ def report_text(results: Mapping[str, Any]) -> str:
     return "\n\n".join(sections) + "\n"
 
 
+def accuracy_tables(
+    frames: Sequence[ScoredFrame],
+    onset: Sequence[Mapping[str, Any]],
+    bins: Sequence[tuple[float, float]],
+) -> dict[str, list[dict[str, Any]]]:
+    """The ``bins``, ``hard`` and ``coverage`` tables of one dataset's scored frames."""
+    return {
+        "bins": bin_table(frames, bins),
+        "hard": hard_table(frames, onset),
+        "coverage": coverage_table(frames, bins),
+    }
+
+
 def write_report(
     out_dir: str | os.PathLike[str],
     results: dict[str, Any],
     frames: Sequence[ScoredFrame],
     bins: Sequence[tuple[float, float]],
+    extra_text: str = "",
 ) -> None:
     """Add the ``bins``, ``hard`` and ``coverage`` tables to ``results``; write ``results.json``,
     the figures (``error_vs_pressure.png``, ``pareto.png``) and ``report.md`` into ``out_dir``,
@@ -203,13 +217,13 @@ def write_report(
             the ``frames`` as JSON, plus ``onset``, ``timing``, ``config`` and the header keys).
         frames: the scored frames.
         bins: pressure bins, kPa, ``[lo, hi)``.
+        extra_text: Markdown sections appended to ``report.md`` (the cross-check datasets).
     """
     out = Path(out_dir)
-    results["bins"] = bin_table(frames, bins)
-    results["hard"] = hard_table(frames, results["onset"])
-    results["coverage"] = coverage_table(frames, bins)
+    results.update(accuracy_tables(frames, results["onset"], bins))
     write_json(out / "results.json", results)
     plot_error_vs_pressure(out / "error_vs_pressure.png", frames)
     size = tuple(results["config"]["full_size"])
     plot_pareto(out / "pareto.png", results["bins"], results["timing"], (size[0], size[1]))
-    write_text(out / "report.md", report_text(results))
+    text = report_text(results)
+    write_text(out / "report.md", text + ("\n" + extra_text if extra_text else ""))

@@ -9,11 +9,19 @@ has the tables, ``results.json`` and the figures.
 from __future__ import annotations
 
 import os
+from collections.abc import Sequence
 from pathlib import Path
 from typing import Any
 
 from contactcal.infer.bench.accuracy import evaluate, onset_errors, to_record
 from contactcal.infer.bench.config import BenchConfig
+from contactcal.infer.bench.crosscheck import (
+    crosscheck_text,
+    labels,
+    read_sessions,
+    score_dataset,
+    side_by_side,
+)
 from contactcal.infer.bench.dataset import read_index, sessions_of
 from contactcal.infer.bench.report import write_report
 from contactcal.infer.bench.timing import timing
@@ -24,6 +32,7 @@ def run_bench(
     out_dir: str | os.PathLike[str],
     model: str | os.PathLike[str] | None = None,
     config: BenchConfig | None = None,
+    crosscheck: Sequence[str | os.PathLike[str]] = (),
 ) -> dict[str, Any]:
     """Run the accuracy and speed benchmarks; write ``report.md``, ``results.json`` and plots.
 
@@ -32,17 +41,23 @@ def run_bench(
         out_dir: report folder (created if missing).
         model: ONNX model (None → the shipped one).
         config: what to measure (default :class:`BenchConfig`).
+        crosscheck: further dataset folders scored the same way (no timing), reported beside
+            ``data`` (:mod:`~contactcal.infer.bench.crosscheck`).
 
     Returns:
         The content of ``results.json``: header keys, ``config``, ``records`` (one per method
         and frame, with the stated ``area_interval_px`` and ``covered``), ``onset``, ``timing``,
-        ``bins``, ``hard`` and ``coverage`` (per method and pressure bin).
+        ``bins``, ``hard`` and ``coverage`` (per method and pressure bin); with ``crosscheck``
+        also ``crosscheck`` (one results object per dataset, with its ``label``) and
+        ``side_by_side`` (per method and bin, every dataset's error, recall and no-contact
+        accuracy).
 
     Raises:
         ValueError: unusable dataset folder (the message names the file).
     """
     config = config or BenchConfig()
     sessions = sessions_of(read_index(data))
+    others = [read_sessions(c) for c in crosscheck]  # every folder checked before any work
     frames = evaluate(sessions, model)
     onset = onset_errors(frames)
     results: dict[str, Any] = {
@@ -59,5 +74,15 @@ def run_bench(
         "onset": onset,
         "timing": timing(sessions, model, config),
     }
-    write_report(out_dir, results, frames, config.bins)
+    extra = ""
+    if crosscheck:
+        names = labels([data, *crosscheck])
+        scored = {names[0]: frames}
+        results["crosscheck"] = []
+        for name, folder, sess in zip(names[1:], crosscheck, others, strict=True):
+            res, scored[name] = score_dataset(name, folder, sess, model, config.bins)
+            results["crosscheck"].append(res)
+        results["side_by_side"] = side_by_side(scored, config.bins)
+        extra = crosscheck_text(results, names[0])
+    write_report(out_dir, results, frames, config.bins, extra)
     return results

@@ -36,7 +36,7 @@ def add_parsers(sub: argparse._SubParsersAction) -> None:
 
 def _cmd_calibrate(args: argparse.Namespace) -> int:
     from contactcal.infer.calibration.calibrate import calibrate_session
-    from contactcal.infer.calibration.record import check_device_id
+    from contactcal.infer.calibration.provenance import check_device_id
     from contactcal.infer.files.atomic import run_outputs
     from contactcal.infer.pipeline.overlay import write_overlays
     from contactcal.infer.video.command import calibrate_video, is_video_run

@@ -9,13 +9,21 @@ import numpy as np
 from contactcal.infer.calibration.curve import Curve
 from contactcal.infer.calibration.steps import Step
 
+#: kPa: an unloading step is compared with the loading step nearest in pressure if they are at
+#: most this far apart. Logged step pressures scatter by a few 0.01 kPa around the set point
+#: (a video's steps are the median of the controller's log), while set points are >= 0.5 kPa
+#: apart on the rig; a quarter kPa matches the same set point and never its neighbour.
+MATCH_TOLERANCE_KPA = 0.25
+
 
 def hysteresis(
     loading: tuple[list[Step], Curve], unloading: tuple[list[Step], Curve]
 ) -> dict[str, Any]:
     """Area difference unloading − loading at the pressures both passes have, and the onsets.
 
-    The differences are of the step medians (measured, not fitted), in the curves' unit.
+    The differences are of the step medians (measured, not fitted), in the curves' unit. Each
+    unloading step is paired with the loading step nearest in pressure within
+    :data:`MATCH_TOLERANCE_KPA` (reported at the loading step's pressure).
 
     Args:
         loading: the loading pass's steps and curve.
@@ -28,13 +36,18 @@ def hysteresis(
         shift None when a pass has no onset.
     """
     up = {s.pressure_kpa: s.median for s in loading[0]}
-    down = {s.pressure_kpa: s.median for s in unloading[0]}
-    common = sorted(set(up) & set(down))
-    diff = np.asarray([down[q] - up[q] for q in common], dtype=np.float64)
+    pairs: dict[float, float] = {}
+    for s in unloading[0]:
+        q = min(up, key=lambda p: abs(p - s.pressure_kpa))
+        if abs(q - s.pressure_kpa) <= MATCH_TOLERANCE_KPA and q not in pairs:
+            pairs[q] = s.median - up[q]
+    common = sorted(pairs)
+    diff = np.asarray([pairs[q] for q in common], dtype=np.float64)
     on_up, on_down = loading[1].onset_kpa, unloading[1].onset_kpa
     k = int(np.argmax(np.abs(diff))) if diff.size else None
     return {
         "pressures_kpa": common,
+        "matched_within_kpa": MATCH_TOLERANCE_KPA,
         "difference": diff.tolist(),
         "max_abs_difference": None if k is None else float(abs(diff[k])),
         "max_abs_at_kpa": None if k is None else common[k],

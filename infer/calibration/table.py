@@ -48,7 +48,13 @@ def _summary(fit: SessionFit) -> list[str]:
     if h is not None and h["max_abs_difference"] is not None:
         lines.append(
             f"hysteresis (unloading - loading): mean {h['mean_difference']:.1f} {unit}, max |.| "
-            f"{h['max_abs_difference']:.1f} {unit} at {h['max_abs_at_kpa']:g} kPa"
+            f"{h['max_abs_difference']:.1f} {unit} at {h['max_abs_at_kpa']:g} kPa, over "
+            f"{len(h['pressures_kpa'])} common pressure(s)"
+        )
+    elif h is not None:
+        lines.append(
+            "hysteresis: not measured (no unloading step within "
+            f"{h['matched_within_kpa']:g} kPa of a loading step)"
         )
     return lines
 

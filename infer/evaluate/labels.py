@@ -23,6 +23,7 @@ import cv2
 import numpy as np
 
 from contactcal.infer.evaluate.ellipse import ImageJEllipse, rasterise
+from contactcal.infer.image.decode import decode_strict
 from contactcal.infer.image.read import read_file_bytes
 from contactcal.infer.pipeline.manifest import Frame
 
@@ -129,6 +130,11 @@ def _number(at: str, name: str, cell: str) -> float:
     return value
 
 
+#: px, largest accepted ellipse axis: the widest accepted frame (`PixelScale`'s 100 000 px);
+#: larger values are a unit mistake and would overflow the area.
+MAX_AXIS_PX = 100_000.0
+
+
 def _ellipse(at: str, cells: dict[str, str]) -> ImageJEllipse | None:
     """The row's ellipse; None when all five numbers are empty (a frame without contact)."""
     keys = LABEL_COLUMNS[1:]
@@ -136,10 +142,11 @@ def _ellipse(at: str, cells: dict[str, str]) -> ImageJEllipse | None:
         return None
     v = {k: _number(at, k, cells[k]) for k in keys}
     for k in ("major", "minor"):
-        if v[k] <= 0:
+        if not 0 < v[k] <= MAX_AXIS_PX:
             raise LabelError(
-                f"{at}: {k} {v[k]:g} is not positive; expected the ellipse's full axis length in "
-                "pixels (leave all five numbers empty to label a frame without contact)"
+                f"{at}: {k} {v[k]:g} is not in (0, {MAX_AXIS_PX:g}]; expected the ellipse's full "
+                "axis length in pixels (leave all five numbers empty to label a frame without "
+                "contact)"
             )
     return ImageJEllipse(v["cx"], v["cy"], v["major"], v["minor"], v["angle_deg"])
 
@@ -184,7 +191,8 @@ def _ellipse_labels(path: Path, frames: list[Frame], manifest: Path) -> list[Lab
 
 def _read_mask(path: Path) -> np.ndarray:
     """``(H, W)`` bool: any colour channel > 0 (alpha ignored)."""
-    img = cv2.imdecode(np.frombuffer(read_file_bytes(path), np.uint8), cv2.IMREAD_UNCHANGED)
+    buf = np.frombuffer(read_file_bytes(path), np.uint8)
+    img = decode_strict(buf, cv2.IMREAD_UNCHANGED, str(path))
     if img is None or img.ndim not in (2, 3):
         raise LabelError(
             f"{path}: not a decodable PNG mask; expected 0 = background, > 0 = contact"

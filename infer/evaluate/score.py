@@ -118,29 +118,32 @@ def frame_records(
 def onset_summary(scored: Sequence[ScoredFrame]) -> dict[str, Any]:
     """Onset from the labels vs from each method (both by ``estimate_onset``), kPa.
 
+    Frames at the same pressure (repeats, or a loading and an unloading pass) are pooled into
+    one step: its median area, in contact when at least half of its frames are (said in
+    ``note``).
+
     Returns:
         ``{"labels_onset_kpa", "methods": {name: {"onset_kpa", "error_kpa"}}, "note"}``; the
         onsets are null (with the reason in ``note``) when the labelled frames do not give at
-        least two distinct pressures, one frame each.
+        least two distinct pressures.
     """
     methods = sorted({s.method for s in scored})
     first = [s for s in scored if s.method == methods[0]]
-    p = [s.pressure_kpa for s in first]
-    if len(p) < 2 or len(set(p)) < len(p):
+    p = sorted({s.pressure_kpa for s in first})
+    if len(p) < 2:
         note = (
-            f"onset not compared: it needs >= 2 labelled frames at distinct pressures, got "
-            f"{len(p)} frame(s) at {len(set(p))} pressure(s)"
+            f"onset not compared: it needs labelled frames at >= 2 distinct pressures, got "
+            f"{len(first)} frame(s) at {len(p)} pressure(s)"
         )
         none = {"onset_kpa": None, "error_kpa": None}
         return {"labels_onset_kpa": None, "methods": {m: none for m in methods}, "note": note}
-    truth = estimate_onset(p, [s.true_area_px for s in first], [s.true_contact for s in first])
+    truth = estimate_onset(p, *_steps(first, p, truth=True))
     out: dict[str, Any] = {}
     for m in methods:
-        fs = [s for s in scored if s.method == m]
-        est = estimate_onset(p, [s.area_px for s in fs], [s.contact for s in fs])
+        est = estimate_onset(p, *_steps([s for s in scored if s.method == m], p, truth=False))
         err = None if est is None or truth is None else est - truth
         out[m] = {"onset_kpa": est, "error_kpa": err}
-    note = ""
+    note = "" if len(p) == len(first) else "frames at one pressure pooled (median, majority)"
     if truth is None:
         note = "no contact range in the labels: no onset to compare"
     elif min(first, key=lambda s: s.pressure_kpa).true_contact:
@@ -149,3 +152,17 @@ def onset_summary(scored: Sequence[ScoredFrame]) -> dict[str, Any]:
             "bounded by it: label a frame without contact below the onset"
         )
     return {"labels_onset_kpa": truth, "methods": out, "note": note}
+
+
+def _steps(
+    frames: Sequence[ScoredFrame], pressures: Sequence[float], truth: bool
+) -> tuple[list[float], list[bool]]:
+    """Per pressure: the median area and majority contact of its frames (labels or method)."""
+    areas, contacts = [], []
+    for q in pressures:
+        at = [s for s in frames if s.pressure_kpa == q]
+        a = [s.true_area_px if truth else s.area_px for s in at]
+        c = [s.true_contact if truth else s.contact for s in at]
+        areas.append(float(np.median(a)))
+        contacts.append(2 * sum(c) >= len(c))
+    return areas, contacts

@@ -11,6 +11,7 @@ quoting the decoder). Pillow is no alternative: it decodes such JPEGs silently t
 from __future__ import annotations
 
 import os
+import re
 import sys
 import tempfile
 import threading
@@ -22,6 +23,13 @@ from contactcal.infer.image.gray import ImageError
 
 #: Standard error (file descriptor 2) is process-wide: one capturing decode at a time.
 _STDERR_LOCK = threading.Lock()
+
+
+#: Decoder messages about colour/metadata chunks, not pixels (e.g. libpng's "iCCP: known
+#: incorrect sRGB profile", common in files from some editors): passed on as warnings.
+METADATA_WARNING = re.compile(
+    r"libpng warning: (iCCP|sRGB|cHRM|gAMA|iTXt|tEXt|zTXt|pHYs|tIME|bKGD)"
+)
 
 
 def decode_strict(buf: np.ndarray, flag: int, name: str) -> np.ndarray | None:
@@ -39,7 +47,8 @@ def decode_strict(buf: np.ndarray, flag: int, name: str) -> np.ndarray | None:
         What ``cv2.imdecode`` returns (None when it cannot decode at all).
 
     Raises:
-        ImageError: the decoder warned or complained (corrupt data).
+        ImageError: the decoder warned or complained about the data (corrupt); a warning about
+            colour metadata only (:data:`METADATA_WARNING`) is printed on stderr instead.
     """
     with _STDERR_LOCK, tempfile.TemporaryFile() as sink:
         if sys.stderr is not None:
@@ -58,10 +67,15 @@ def decode_strict(buf: np.ndarray, flag: int, name: str) -> np.ndarray | None:
                 os.dup2(saved, 2)
                 os.close(saved)
         sink.seek(0)
-        said = sink.read(4096).decode("utf-8", "replace").strip()
-    if said:
+        said = [ln for ln in sink.read(4096).decode("utf-8", "replace").splitlines() if ln.strip()]
+    damage = [ln for ln in said if not METADATA_WARNING.search(ln)]
+    if damage:
         raise ImageError(
-            f"{name}: corrupt image data (the decoder said: {' / '.join(said.splitlines())}); "
+            f"{name}: corrupt image data (the decoder said: {' / '.join(damage)}); "
             "the file is damaged: copy or export it again from the camera"
+        )
+    for ln in said:  # pixels intact: said, not hidden, and not an error
+        print(
+            f"contactcal: warning: {name}: {ln.strip()} (colour metadata ignored)", file=sys.stderr
         )
     return img

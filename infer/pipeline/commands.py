@@ -33,7 +33,7 @@ def add_parsers(sub: argparse._SubParsersAction) -> None:
 
 
 def _cmd_measure(args: argparse.Namespace) -> int:
-    from contactcal.infer.calibration.record import check_device_id
+    from contactcal.infer.calibration.provenance import check_device_id
     from contactcal.infer.files.atomic import run_outputs, write_synced
     from contactcal.infer.files.jsonable import json_text
     from contactcal.infer.image.read import SUPPORTED_SUFFIXES

@@ -171,6 +171,12 @@ def check_coverage(extractor: Extractor, video: Path | None) -> None:
             "tolerance for longer than the settle time); check the log or --tolerance-kpa"
         )
     source = "the capture" if video is None else f"the video {video}"
+    if log is not None and extractor.last_time_s > float(log.times_s[-1]) + 1.0:
+        print(
+            f"note: {source} runs to {extractor.last_time_s:.1f} s, past the end of {where} at "
+            f"{float(log.times_s[-1]):.1f} s; frames after the log are not used",
+            file=sys.stderr,
+        )
     for s in extractor.steps:
         if s.index in extractor.kept:
             continue

@@ -16,9 +16,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from contactcal.infer.calibration.phases import LOADING, UNLOADING
 from contactcal.infer.video.log import PressureLog
-
-LOADING, UNLOADING = "loading", "unloading"
 
 
 @dataclass(frozen=True)
