@@ -13,7 +13,6 @@ from __future__ import annotations
 import csv
 import io
 import json
-import math
 import multiprocessing as mp
 import os
 from dataclasses import asdict, dataclass, field
@@ -25,7 +24,12 @@ import numpy as np
 from contactcal.infer.files.atomic import remove_stale_temporaries, write_json, write_text
 from contactcal.infer.files.jsonable import jsonable
 from contactcal.infer.image.write import write_image
-from contactcal.synth.layout import INDEX_COLUMNS, check_frame_names, frame_name, index_row
+from contactcal.synth.layout import (
+    INDEX_COLUMNS,
+    check_sweep,
+    frame_name,
+    index_row,
+)
 from contactcal.synth.randomize import SessionParams, sample_session
 from contactcal.synth.session import FrameOutput, RenderConfig, render_session
 
@@ -41,13 +45,7 @@ class DatasetConfig:
     render: RenderConfig = field(default_factory=RenderConfig)  # size, spp, mesh, variant
 
     def __post_init__(self) -> None:
-        if self.fingers < 1:
-            raise ValueError(f"--fingers must be >= 1, got {self.fingers}")
-        if not self.pressures_kpa or not all(
-            math.isfinite(p) and p >= 0 for p in self.pressures_kpa
-        ):
-            raise ValueError(f"pressures must be finite and >= 0 kPa, got {self.pressures_kpa}")
-        check_frame_names(self.pressures_kpa)
+        check_sweep(self.fingers, self.pressures_kpa)
         if not 0.0 <= self.hard_fraction <= 1.0:
             raise ValueError(f"--hard-fraction must be in [0, 1], got {self.hard_fraction}")
 

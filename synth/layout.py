@@ -42,6 +42,19 @@ def check_frame_names(pressures_kpa: tuple[float, ...]) -> None:
         seen[name] = p
 
 
+def check_sweep(fingers: int, pressures_kpa: tuple[float, ...]) -> None:
+    """A dataset's fingers (>= 1) and pressures (finite, >= 0 kPa, distinct frame names).
+
+    Raises:
+        ValueError: naming the option and what was expected.
+    """
+    if fingers < 1:
+        raise ValueError(f"--fingers must be >= 1, got {fingers}")
+    if not pressures_kpa or not all(math.isfinite(p) and p >= 0 for p in pressures_kpa):
+        raise ValueError(f"pressures must be finite and >= 0 kPa, got {pressures_kpa}")
+    check_frame_names(pressures_kpa)
+
+
 def parse_pressures(text: str) -> tuple[float, ...]:
     """``"0:20:1"`` (start:stop:step, stop included) or ``"0,2.5,5"`` → kPa, in the order given.
 

@@ -11,6 +11,8 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass, fields, replace
 
+from contactcal.synth.layout import check_sweep
+
 Range = tuple[float, float]
 
 
@@ -87,12 +89,7 @@ class GeneratorConfig:
     hard: Ranges = HARD  # ranges of hard sessions
 
     def __post_init__(self) -> None:
-        if self.fingers < 1:
-            raise ValueError(f"--fingers must be >= 1, got {self.fingers}")
-        if not self.pressures_kpa or not all(
-            math.isfinite(p) and p >= 0 for p in self.pressures_kpa
-        ):
-            raise ValueError(f"pressures must be finite and >= 0 kPa, got {self.pressures_kpa}")
+        check_sweep(self.fingers, self.pressures_kpa)
         if self.width < 16 or self.height < 12:
             size = f"{self.width}x{self.height}"
             raise ValueError(f"--size: frames must be at least 16x12 px, got {size}")
