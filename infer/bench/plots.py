@@ -56,6 +56,18 @@ def error_quartiles(
     return ps, q
 
 
+def _plain_log_ticks(ax: Any) -> None:
+    """Log axes labelled with plain numbers (1, 2, 5, 10, ...) and no crowded minor labels."""
+    from matplotlib.ticker import FuncFormatter, LogLocator, NullFormatter
+
+    for axis in (ax.xaxis, ax.yaxis):
+        if axis.get_scale() != "log":
+            continue
+        axis.set_major_locator(LogLocator(base=10.0, subs=(1.0, 2.0, 5.0)))
+        axis.set_major_formatter(FuncFormatter(lambda v, _: f"{v:g}"))
+        axis.set_minor_formatter(NullFormatter())
+
+
 def plot_error_vs_pressure(path: str | os.PathLike[str], frames: Sequence[ScoredFrame]) -> None:
     """|Relative| and |absolute| area error vs pressure per method: median and interquartile
     band over the sessions, on log axes so that methods orders of magnitude apart both read."""
@@ -76,6 +88,7 @@ def plot_error_vs_pressure(path: str | os.PathLike[str], frames: Sequence[Scored
             ax.plot(ps, q[:, 1], color=colour, marker="o", ms=3, label=method)
     for ax, (_, _, label) in zip(axes, panels, strict=True):
         ax.set_yscale("log")
+        _plain_log_ticks(ax)
         ax.set_xlabel("pressure (kPa)")
         ax.set_ylabel(f"{label}: median, IQR band")
         ax.grid(alpha=0.3, which="both")
@@ -133,6 +146,7 @@ def plot_pareto(
     ]
     ax.set_xscale("log")
     ax.set_yscale("log")
+    _plain_log_ticks(ax)
     ax.set_xlabel(f"median ms/frame at {size[0]}×{size[1]}")
     ax.set_ylabel("median |relative area error| at 5-10 kPa (%)")
     ax.grid(alpha=0.3, which="both")
