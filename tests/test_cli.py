@@ -127,3 +127,18 @@ def test_demo(tmp_path: Path) -> None:
     assert montage is not None and montage.shape[1] == 3 * 400  # 3 columns of 400 px tiles
     summary = (tmp_path / "summary.txt").read_text()
     assert all(f"== {m}" in summary for m in METHODS)
+
+
+def test_measure_says_which_reference_mode_ran(tmp_path: Path) -> None:
+    """Without --reference every result says so (and how the method coped); with it, names it."""
+    frame, ref = str(EXAMPLE / "p12.0kpa.jpg"), str(EXAMPLE / "p00.0kpa.jpg")
+    for method in METHODS:
+        out = tmp_path / f"{method}.json"
+        assert main(["measure", "--method", method, "--out", str(out), frame]) == 0
+        row = json.loads(out.read_text())[0]
+        assert row["reference"] is None and "no reference frame" in row["note"]
+        assert (
+            main(["measure", "--method", method, "--reference", ref, "--out", str(out), frame]) == 0
+        )
+        row = json.loads(out.read_text())[0]
+        assert row["reference"] == ref and "no reference frame" not in row["note"]

@@ -75,6 +75,9 @@ class Method(Protocol):
     def describe(self) -> dict[str, Any]:
         """The method's configuration as plain JSON values, for records (``calibration.json``)."""
 
+    #: What the method does without the session's reference frame, said in every result then.
+    NO_REFERENCE: str
+
 
 def load_reference(
     path: str | os.PathLike[str] | None, reduction: int = 1, bit_depth: int | None = None

@@ -185,6 +185,7 @@ class ClassicalMethod:
     """The published routine as a :class:`~contactcal.infer.methods.base.Method`."""
 
     name = "classical"
+    NO_REFERENCE = "no reference frame: the ROI was taken from this frame's own ring"
 
     def __init__(self, config: ClassicalConfig | None = None) -> None:
         self.config = config or ClassicalConfig()

@@ -48,6 +48,7 @@ class Measured:
     height: int
     result: AreaResult
     area_mm2: float | None
+    reference: Path | None = None  # the session's reference frame (None: measured without one)
 
     def to_json(self, method: str) -> dict[str, Any]:
         """The CLI contract's per-image object (``area_interval_px``: ``[lower, upper]`` input
@@ -63,6 +64,7 @@ class Measured:
             "width": self.width,
             "height": self.height,
             "note": self.result.note,
+            "reference": None if self.reference is None else str(self.reference),
         }
 
 
@@ -174,10 +176,10 @@ def measure_files(
     for path in it:
         img = load_image(path, reduce=k, bit_depth=bit_depth)
         w, h = _file_size(path, img, k)
-        note = "" if ref is None else _check_frame(ref, path, img, (w, h))
+        note = method.NO_REFERENCE if ref is None else _check_frame(ref, path, img, (w, h))
         res = method.measure(img)  # in the file's pixels
         if note:
             res = replace(res, note=f"{res.note}; {note}" if res.note else note)
         mm2 = None if scale is None else scale.area_mm2(res.area_px, w)
-        out.append(Measured(path, w, h, res, mm2))
+        out.append(Measured(path, w, h, res, mm2, None if ref is None else ref.path))
     return out

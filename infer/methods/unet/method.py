@@ -39,6 +39,10 @@ class UnetMethod:
     """
 
     name = "unet"
+    NO_REFERENCE = (
+        "no reference frame: the frame served as its own reference (the model expects the "
+        "session's 0 kPa frame; expect larger errors)"
+    )
 
     def __init__(
         self, model: str | os.PathLike[str] | None = None, threads: int = 1, outline: bool = False
