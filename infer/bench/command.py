@@ -5,6 +5,9 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
+#: Frames the robustness suite samples when ``--robustness-frames`` is not given.
+DEFAULT_ROBUSTNESS_FRAMES = 40
+
 
 def add_parsers(sub: argparse._SubParsersAction) -> None:
     """Add ``bench`` to the ``contactcal`` subcommands."""
@@ -22,6 +25,17 @@ def add_parsers(sub: argparse._SubParsersAction) -> None:
     b.add_argument("--model", type=Path, help="ONNX model (default: shipped)")
     b.add_argument("--repeats", type=int, default=5, help="timing runs; median (default 5)")
     b.add_argument("--timing-frames", type=int, default=6, help="frames per timing run")
+    b.add_argument(
+        "--robustness",
+        action="store_true",
+        help="also run the robustness suite (perturbed frames; robustness.png, report section)",
+    )
+    b.add_argument(
+        "--robustness-frames",
+        type=int,
+        metavar="N",
+        help="frames the robustness suite samples across sessions and pressures (default 40)",
+    )
     b.set_defaults(func=_cmd_bench)
 
 
@@ -31,7 +45,11 @@ def _cmd_bench(args: argparse.Namespace) -> int:
 
     if args.repeats < 1 or args.timing_frames < 1:
         raise ValueError("--repeats and --timing-frames must be >= 1")
-    cfg = BenchConfig(repeats=args.repeats, timing_frames=args.timing_frames)
+    cfg = BenchConfig(
+        repeats=args.repeats,
+        timing_frames=args.timing_frames,
+        robustness_frames=_robustness_frames(args),
+    )
     model = None if args.model is None else str(args.model)
     res = run_bench(args.data, args.out, model, cfg, args.crosscheck)
     for row in res["bins"]:
@@ -40,8 +58,22 @@ def _cmd_bench(args: argparse.Namespace) -> int:
         for row in c["bins"]:
             method, kpa = row["method"], row["bin_kpa"]
             print(f"[{c['label']}] {method:>16s} {kpa:>6s} kPa  median |rel err| {_pct(row)}")
+    if "robustness" in res:
+        print(
+            f"robustness: {len(res['robustness']['frames'])} frames, {args.out / 'robustness.png'}"
+        )
     print(f"report: {args.out / 'report.md'}")
     return 0
+
+
+def _robustness_frames(args: argparse.Namespace) -> int:
+    """Frames of the robustness suite: 0 without ``--robustness``."""
+    n = args.robustness_frames
+    if n is not None and not args.robustness:
+        raise ValueError("--robustness-frames needs --robustness")
+    if n is not None and n < 1:
+        raise ValueError(f"--robustness-frames must be >= 1, got {n}")
+    return (DEFAULT_ROBUSTNESS_FRAMES if n is None else n) if args.robustness else 0
 
 
 def _pct(row: dict[str, object]) -> str:

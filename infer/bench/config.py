@@ -17,6 +17,9 @@ class BenchConfig:
     threads: tuple[int, ...] = (1, 2)  # onnxruntime intra-op threads timed
     classical_scales: tuple[float, ...] = (1.0, 0.25)  # full and reduced-resolution baseline
     bins: tuple[tuple[float, float], ...] = field(default=PRESSURE_BINS)  # kPa, [lo, hi)
+    robustness_frames: int = 0  # frames of the robustness suite (0: not run); each costs
+    #   ~50 perturbed measurements per method, so more frames steady the medians but cost time
+    seed: int = 0  # seed of the robustness suite's random perturbations (noise, angles)
 
     def __post_init__(self) -> None:
         if self.repeats < 1 or self.timing_frames < 1:
@@ -25,3 +28,5 @@ class BenchConfig:
             raise ValueError(f"full_size must be (width, height) >= 1, got {self.full_size}")
         if not self.threads or min(self.threads) < 1:
             raise ValueError(f"threads must be >= 1, got {self.threads}")
+        if self.robustness_frames < 0:
+            raise ValueError(f"robustness_frames must be >= 0, got {self.robustness_frames}")

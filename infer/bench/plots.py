@@ -1,4 +1,5 @@
-"""Figures of ``contactcal bench``: error vs pressure and speed vs error (``pareto.png``).
+"""Figures of ``contactcal bench``: error vs pressure, speed vs error (``pareto.png``) and error
+vs perturbation level (``robustness.png``).
 
 matplotlib is imported inside the functions only, with its object API and the Agg canvas (never
 pyplot's global backend); every figure is written atomically.
@@ -151,5 +152,48 @@ def plot_pareto(
     ax.set_ylabel("median |relative area error| at 5-10 kPa (%)")
     ax.grid(alpha=0.3, which="both")
     ax.legend(handles=handles, fontsize=8, loc="upper left", bbox_to_anchor=(1.02, 1.0))
+    fig.tight_layout()
+    _save(fig, path)
+
+
+def plot_robustness(path: str | os.PathLike[str], robustness: Mapping[str, Any]) -> None:
+    """Median |relative area error| at ≥ 5 kPa vs level, one panel per perturbation, one line
+    per method, log y (errors floored at ``FLOOR_PCT``); the dashed line marks the baseline.
+
+    Args:
+        path: PNG to write.
+        robustness: ``results.json``'s ``"robustness"`` (``perturbations`` and ``rows``).
+    """
+    perts = robustness["perturbations"]
+    cols = min(5, len(perts))
+    nrows = -(-len(perts) // cols)
+    fig = _figure(3.2 * cols, 2.9 * nrows + 0.4)
+    axes = fig.subplots(nrows, cols, squeeze=False).ravel()
+    methods = sorted({r["method"] for r in robustness["rows"]})
+    for ax, p in zip(axes, perts, strict=False):
+        for i, method in enumerate(methods):
+            pts = [
+                (p["levels"].index(r["level"]), 100 * r["median_abs_rel_error_ge5"])
+                for r in robustness["rows"]
+                if r["perturbation"] == p["name"]
+                and r["method"] == method
+                and r["median_abs_rel_error_ge5"] is not None
+            ]
+            if pts:
+                x, y = zip(*pts, strict=True)
+                ax.plot(x, np.maximum(y, FLOOR_PCT), color=f"C{i}", marker="o", ms=3, label=method)
+        ax.axvline(p["levels"].index(p["baseline"]), color="0.5", ls="--", lw=0.8)
+        ax.set_xticks(range(len(p["levels"])), p["labels"], fontsize=7)
+        ax.set_yscale("log")
+        _plain_log_ticks(ax)
+        ax.set_title(p["name"], fontsize=9)
+        ax.set_xlabel(p["unit"], fontsize=8)
+        ax.grid(alpha=0.3, which="both")
+    for ax in axes[len(perts) :]:
+        ax.set_visible(False)
+    for ax in axes[::cols]:
+        ax.set_ylabel("median |rel. area error| ≥5 kPa (%)", fontsize=7)
+    if axes[0].get_legend_handles_labels()[0]:
+        axes[0].legend(fontsize=7)
     fig.tight_layout()
     _save(fig, path)

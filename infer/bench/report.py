@@ -7,7 +7,7 @@ from collections.abc import Mapping, Sequence
 from pathlib import Path
 from typing import Any
 
-from contactcal.infer.bench.plots import plot_error_vs_pressure, plot_pareto
+from contactcal.infer.bench.plots import plot_error_vs_pressure, plot_pareto, plot_robustness
 from contactcal.infer.bench.scoring import (
     ScoredFrame,
     bin_label,
@@ -62,6 +62,39 @@ HARD_COLUMNS: Columns = (
     ("median_abs_onset_error_kpa", "median abs. onset error kPa", False),
     ("onset_missing", "no onset found", False),
 )
+
+
+def robustness_text(rob: Mapping[str, Any]) -> str:
+    """The report's robustness section: one table row per perturbation and level, each method's
+    error at ≥ 5 kPa, its ratio to the baseline level and its no-contact accuracy."""
+    methods = list(dict.fromkeys(r["method"] for r in rob["rows"]))
+    cols: list[tuple[str, str, bool]] = [("perturbation", "perturbation", False)]
+    cols.append(("label", "level", False))
+    for m in methods:
+        cols += [(f"{m} err", f"{m} ≥5 kPa", True), (f"{m} ratio", "× base", False)]
+        cols.append((f"{m} nc", f"{m} no-contact acc.", True))
+    table: dict[tuple[str, float], dict[str, Any]] = {}
+    for r in rob["rows"]:
+        row = table.setdefault((r["perturbation"], r["level"]), {**r})
+        m = r["method"]
+        row[f"{m} err"], row[f"{m} ratio"] = r["median_abs_rel_error_ge5"], r["error_ratio"]
+        row[f"{m} nc"] = r["no_contact_accuracy"]
+    first = rob["rows"][0]
+    refs = "\n".join(
+        f"- {p['name']} ({p['unit']}): reference {p['reference']}" for p in rob["perturbations"]
+    )
+    return (
+        "## Robustness to perturbed frames\n\n"
+        f"{len(rob['frames'])} frames sampled evenly across pressures and sessions (seed "
+        f"{rob['seed']}), each measured at every level of every perturbation "
+        "(`contactcal.infer.bench.perturb`\ndocuments the levels and the truth). ≥5 kPa: median "
+        f"|relative area error| over the {first['contact_frames_ge5']} frames\nwith true "
+        "contact at ≥ 5 kPa; × base: its ratio to the perturbation's unperturbed level; "
+        f"no-contact acc.:\nshare of the {first['no_contact_frames']} frames without true "
+        f"contact reported as no contact.\n\n{refs}\n\n"
+        + md_table(list(table.values()), cols)
+        + "\n\n![robustness](robustness.png)"
+    )
 
 
 def _no_contact_accuracy(frames: Sequence[ScoredFrame]) -> float | None:
@@ -184,6 +217,8 @@ def report_text(results: Mapping[str, Any]) -> str:
         + md_table(onset_table(results["onset"]), ONSET_COLUMNS),
         "## Hard cases\n\n" + md_table(results["hard"], HARD_COLUMNS),
     ]
+    if "robustness" in results:
+        sections.append(robustness_text(results["robustness"]))
     return "\n\n".join(sections) + "\n"
 
 
@@ -208,8 +243,8 @@ def write_report(
     extra_text: str = "",
 ) -> None:
     """Add the ``bins``, ``hard`` and ``coverage`` tables to ``results``; write ``results.json``,
-    the figures (``error_vs_pressure.png``, ``pareto.png``) and ``report.md`` into ``out_dir``,
-    atomically.
+    the figures (``error_vs_pressure.png``, ``pareto.png``, with ``robustness`` results also
+    ``robustness.png``) and ``report.md`` into ``out_dir``, atomically.
 
     Args:
         out_dir: report folder (created if missing).
@@ -225,5 +260,7 @@ def write_report(
     plot_error_vs_pressure(out / "error_vs_pressure.png", frames)
     size = tuple(results["config"]["full_size"])
     plot_pareto(out / "pareto.png", results["bins"], results["timing"], (size[0], size[1]))
+    if "robustness" in results:
+        plot_robustness(out / "robustness.png", results["robustness"])
     text = report_text(results)
     write_text(out / "report.md", text + ("\n" + extra_text if extra_text else ""))

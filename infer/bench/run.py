@@ -2,7 +2,8 @@
 
 Accuracy (:mod:`~contactcal.infer.bench.accuracy`) is measured on the dataset's frames at their
 native size against the exact masks; speed (:mod:`~contactcal.infer.bench.timing`) end to end on
-the same frames upscaled to the rig's 2592×1944. The report (:mod:`~contactcal.infer.bench.report`)
+the same frames upscaled to the rig's 2592×1944; optionally, robustness to perturbed frames
+(:mod:`~contactcal.infer.bench.robustness`). The report (:mod:`~contactcal.infer.bench.report`)
 has the tables, ``results.json`` and the figures.
 """
 
@@ -24,6 +25,7 @@ from contactcal.infer.bench.crosscheck import (
 )
 from contactcal.infer.bench.dataset import read_index, sessions_of
 from contactcal.infer.bench.report import write_report
+from contactcal.infer.bench.robustness import run_robustness
 from contactcal.infer.bench.timing import timing
 
 
@@ -50,7 +52,8 @@ def run_bench(
         ``bins``, ``hard`` and ``coverage`` (per method and pressure bin); with ``crosscheck``
         also ``crosscheck`` (one results object per dataset, with its ``label``) and
         ``side_by_side`` (per method and bin, every dataset's error, recall and no-contact
-        accuracy).
+        accuracy); with ``config.robustness_frames`` also ``robustness``
+        (:func:`~contactcal.infer.bench.robustness.run_robustness`).
 
     Raises:
         ValueError: unusable dataset folder (the message names the file).
@@ -74,6 +77,10 @@ def run_bench(
         "onset": onset,
         "timing": timing(sessions, model, config),
     }
+    if config.robustness_frames:
+        results["robustness"] = run_robustness(
+            sessions, model, config.robustness_frames, config.seed
+        )
     extra = ""
     if crosscheck:
         names = labels([data, *crosscheck])

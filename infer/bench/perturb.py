@@ -1,0 +1,282 @@
+"""Image perturbations of the robustness suite (``contactcal bench --robustness``).
+
+Each is a pure function ``(gray (H, W) uint8, level, rng) -> gray uint8``, deterministic for a
+given ``numpy.random.Generator`` state, returning a new array (the input is never modified) and
+the input's values unchanged at the perturbation's ``baseline`` level. Two need the session's
+window ring (located by :func:`~contactcal.infer.methods.unet.ring.locate_ring` on the
+unperturbed reference frame) as the keyword ``ring``. What each level means:
+
+* **contrast** ``c``: ``128 + c·(g − 128)``, clipped (a camera contrast setting about mid grey).
+* **gamma** ``γ``: ``255·(g/255)^γ`` (a different tone curve; the renderer's own display gamma
+  already varies 1.8-2.4, i.e. a relative γ of 0.75-1.33).
+* **exposure**, stops ``s``: the file is linearised with the renderer's display gamma 2.2,
+  multiplied by ``2^s``, clipped at full scale (over-exposure saturates) and re-encoded.
+* **blur** ``σ``: Gaussian blur of ``σ`` pixels of a 2592-px-wide frame (the rig's), scaled to
+  the frame's width, so a level means the same optical blur at every resolution.
+* **noise** ``sd``: additive Gaussian noise, ``sd`` grey levels, rounded and clipped.
+* **JPEG** ``q``: encoded at quality ``q`` and decoded (libjpeg, 4:2:0 irrelevant: grey);
+  ``0`` = not re-encoded (the lossless rendered original).
+* **resolution** ``w'``: resampled to ``w'`` px wide, aspect kept (area filter down, bilinear
+  up); ``0`` = the native size. Up-sampling adds no information: from native 400 px it checks
+  only that the answer does not depend on the pixel count (kernels and crops that scale with
+  the width); down-sampling also loses ridge detail.
+* **dimmed sector** ``f``: the outer window ring (radii ``SECTOR_RADII`` × the ring's outer
+  radius) dimmed by the fraction ``f`` over ``SECTOR_DEG`` degrees centred at an angle drawn
+  from ``rng`` (a weak LED or a dirty light-guide sector).
+* **offset** ``f``: the whole frame shifted by ``f`` × the ring radius, rounded to whole pixels,
+  in a direction drawn from ``rng``; the uncovered border is black (the rig is dark outside the
+  window). Whole pixels keep a shifted 0/255 mask exact.
+* **no reference**: the frame unchanged, the method given no reference frame (the U-Net then
+  finds the ring in the frame and uses the frame as its reference channel; the classical
+  routine takes its ROI from the frame).
+
+The reference frame (:data:`REFERENCE_MODES`): camera settings are per session, so contrast,
+gamma, exposure, blur, JPEG and resolution perturb it exactly as the frame; noise is drawn
+independently for it (sensor noise differs between exposures); a dimmed sector is a property of
+the rig (a weak LED), present from the 0 kPa frame on, so the reference gets the same sector.
+The offset leaves the reference as recorded: it is a misregistration between the frame and the
+session's reference, and the ring moves with the frame. For the classical routine (ROI fixed
+from the reference, the ring outside the ROI) that is what an off-centre finger does: the
+contact moves within the ROI. For the U-Net it is harsher than a finger offset: its crop (from
+the reference's ring) is off-centre on the frame's ring and its reference channel no longer
+lines up; read it as camera or rig movement after the reference was taken. The true area of an
+offset frame is its shifted mask's (contact pushed out of the frame is lost); of a resampled
+frame the mask area × the pixel-count ratio ``(w'·h') / (w·h)``; of every other, the mask's.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable
+from dataclasses import dataclass
+
+import cv2
+import numpy as np
+
+from contactcal.infer.methods.unet.ring import RingFit
+
+#: The rig's frame width, px: blur levels are in pixels at this width.
+RIG_WIDTH_PX = 2592
+#: Display gamma assumed to linearise a frame for an exposure change (the renderer's default).
+DISPLAY_GAMMA = 2.2
+#: Angular width of the dimmed ring sector, degrees.
+SECTOR_DEG = 60.0
+#: Radii of the dimmed annulus, × the ring's outer radius (the bright outer ring, not the
+#: membrane inside it where the contact lies).
+SECTOR_RADII = (0.85, 1.15)
+
+
+def _u8(values: np.ndarray) -> np.ndarray:
+    return np.clip(np.rint(values), 0, 255).astype(np.uint8)
+
+
+def _check(level: float, lo: float, hi: float, what: str) -> None:
+    if not lo <= level <= hi:
+        raise ValueError(f"{what} level must be in [{lo:g}, {hi:g}], got {level!r}")
+
+
+def contrast(gray: np.ndarray, level: float, rng: np.random.Generator) -> np.ndarray:
+    """Contrast factor ``level`` (1 = unchanged) about grey 128."""
+    _check(level, 0.0, 10.0, "contrast")
+    return _u8(128.0 + level * (gray.astype(np.float64) - 128.0))
+
+
+def gamma(gray: np.ndarray, level: float, rng: np.random.Generator) -> np.ndarray:
+    """Tone curve ``255·(g/255)^level`` (1 = unchanged)."""
+    _check(level, 0.05, 20.0, "gamma")
+    return _u8(255.0 * (gray.astype(np.float64) / 255.0) ** level)
+
+
+def exposure(gray: np.ndarray, level: float, rng: np.random.Generator) -> np.ndarray:
+    """Exposure change of ``level`` stops (0 = unchanged) in linear light, clipped."""
+    _check(level, -8.0, 8.0, "exposure")
+    linear = (gray.astype(np.float64) / 255.0) ** DISPLAY_GAMMA * 2.0**level
+    return _u8(255.0 * np.clip(linear, 0.0, 1.0) ** (1.0 / DISPLAY_GAMMA))
+
+
+def blur(gray: np.ndarray, level: float, rng: np.random.Generator) -> np.ndarray:
+    """Gaussian blur, ``level`` = σ in pixels of a 2592-px-wide frame (0 = unchanged)."""
+    _check(level, 0.0, 500.0, "blur")
+    if level == 0:
+        return gray.copy()
+    sigma = level * gray.shape[1] / RIG_WIDTH_PX
+    return cv2.GaussianBlur(gray, (0, 0), sigma, borderType=cv2.BORDER_REFLECT)
+
+
+def noise(gray: np.ndarray, level: float, rng: np.random.Generator) -> np.ndarray:
+    """Additive Gaussian noise of ``level`` grey levels standard deviation (0 = unchanged)."""
+    _check(level, 0.0, 255.0, "noise")
+    if level == 0:
+        return gray.copy()
+    return _u8(gray + rng.normal(0.0, level, gray.shape))
+
+
+def jpeg(gray: np.ndarray, level: float, rng: np.random.Generator) -> np.ndarray:
+    """JPEG round trip at quality ``level`` (1-100; 0 = not re-encoded)."""
+    _check(level, 0.0, 100.0, "JPEG quality")
+    if level == 0:
+        return gray.copy()
+    ok, data = cv2.imencode(".jpg", gray, [cv2.IMWRITE_JPEG_QUALITY, max(1, round(level))])
+    if not ok:
+        raise ValueError(f"JPEG encoding at quality {level:g} failed")
+    return cv2.imdecode(data, cv2.IMREAD_GRAYSCALE)
+
+
+def resolution(gray: np.ndarray, level: float, rng: np.random.Generator) -> np.ndarray:
+    """Resampled to ``level`` px wide, aspect kept (0 = native size)."""
+    _check(level, 0.0, 20000.0, "resolution")
+    h, w = gray.shape
+    width = round(level)
+    if width in (0, w):
+        return gray.copy()
+    if width < 8:
+        raise ValueError(f"resolution level must be 0 or >= 8 px wide, got {level!r}")
+    size = (width, max(1, round(h * width / w)))
+    interp = cv2.INTER_AREA if width < w else cv2.INTER_LINEAR
+    return cv2.resize(gray, size, interpolation=interp)
+
+
+def dim_sector(
+    gray: np.ndarray, level: float, rng: np.random.Generator, *, ring: RingFit
+) -> np.ndarray:
+    """The outer ring dimmed by the fraction ``level`` over a ``SECTOR_DEG`` sector (0 = none).
+
+    Args:
+        gray: ``(H, W) uint8`` frame.
+        level: fraction of the brightness removed, 0-1.
+        rng: draws the sector's centre angle (uniform over the circle).
+        ring: the session's window ring (input pixels).
+    """
+    _check(level, 0.0, 1.0, "dimmed sector")
+    centre = rng.uniform(-math.pi, math.pi)
+    yy, xx = np.mgrid[0 : gray.shape[0], 0 : gray.shape[1]]
+    dx, dy = xx - ring.cx, yy - ring.cy
+    r = np.hypot(dx, dy) / ring.radius
+    off = np.angle(np.exp(1j * (np.arctan2(dy, dx) - centre)))  # wrapped to (-π, π]
+    sector = (
+        (r >= SECTOR_RADII[0])
+        & (r <= SECTOR_RADII[1])
+        & (np.abs(off) <= math.radians(SECTOR_DEG) / 2)
+    )
+    return _u8(np.where(sector, (1.0 - level) * gray, gray))
+
+
+def offset(
+    gray: np.ndarray, level: float, rng: np.random.Generator, *, ring: RingFit
+) -> np.ndarray:
+    """The frame shifted by ``level`` × the ring radius, whole pixels, black border (0 = none).
+
+    Args:
+        gray: ``(H, W) uint8`` frame (or a 0/255 mask: the same rng state gives the same shift).
+        level: shift, fraction of ``ring.radius``, 0-1.
+        rng: draws the direction (uniform over the circle).
+        ring: the session's window ring (input pixels).
+    """
+    _check(level, 0.0, 1.0, "offset")
+    angle = rng.uniform(-math.pi, math.pi)
+    h, w = gray.shape
+    dx = int(np.clip(round(level * ring.radius * math.cos(angle)), -w, w))
+    dy = int(np.clip(round(level * ring.radius * math.sin(angle)), -h, h))
+    out = np.zeros_like(gray)
+    out[max(dy, 0) : h + min(dy, 0), max(dx, 0) : w + min(dx, 0)] = gray[
+        max(-dy, 0) : h + min(-dy, 0), max(-dx, 0) : w + min(-dx, 0)
+    ]
+    return out
+
+
+def unchanged(gray: np.ndarray, level: float, rng: np.random.Generator) -> np.ndarray:
+    """The frame as it is (the "no reference" case changes the reference, not the frame)."""
+    _check(level, 0.0, 1.0, "no reference")
+    return gray.copy()
+
+
+#: How a perturbation treats the session's reference frame.
+REFERENCE_MODES = {
+    "same": "perturbed as the frame, identically seeded",
+    "independent": "perturbed as the frame, independently seeded",
+    "kept": "unperturbed",
+    "dropped": "none given above the baseline level",
+}
+
+
+@dataclass(frozen=True)
+class Perturbation:
+    """One perturbation of the suite and its levels."""
+
+    name: str
+    apply: Callable[..., np.ndarray]  # (gray, level, rng[, ring=RingFit]) -> gray, pure
+    levels: tuple[float, ...]  # in the order shown; more levels cost more frames measured
+    baseline: float  # the unperturbed level (one of ``levels``): each row's own baseline
+    unit: str  # what a level is
+    reference: str  # key of REFERENCE_MODES
+    needs_ring: bool = False  # ``apply`` takes the session's ring as ``ring=``
+    moves_mask: bool = False  # the mask is perturbed too (else its area scales with the size)
+    names: tuple[tuple[float, str], ...] = ()  # levels shown as words
+
+    def __post_init__(self) -> None:
+        if self.baseline not in self.levels:
+            raise ValueError(f"{self.name}: baseline {self.baseline} not in levels {self.levels}")
+        if self.reference not in REFERENCE_MODES:
+            raise ValueError(f"{self.name}: unknown reference mode {self.reference!r}")
+
+    def label(self, level: float) -> str:
+        """The level as shown in tables and figures."""
+        return dict(self.names).get(level, f"{level:g}")
+
+
+#: The suite, in report order.
+PERTURBATIONS: tuple[Perturbation, ...] = (
+    Perturbation("contrast", contrast, (0.5, 0.75, 1.0, 1.5, 2.0), 1.0, "× about grey 128", "same"),
+    Perturbation("gamma", gamma, (0.5, 0.7, 1.0, 1.4, 2.0), 1.0, "exponent", "same"),
+    Perturbation("exposure", exposure, (-2.0, -1.0, 0.0, 1.0, 2.0), 0.0, "stops", "same"),
+    Perturbation("blur", blur, (0.0, 3.0, 6.0, 12.0, 24.0), 0.0, "σ, px at 2592 wide", "same"),
+    Perturbation(
+        "noise", noise, (0.0, 3.0, 6.0, 12.0, 24.0), 0.0, "sd, grey levels", "independent"
+    ),
+    Perturbation(
+        "JPEG",
+        jpeg,
+        (0.0, 95.0, 75.0, 50.0, 25.0, 10.0),
+        0.0,
+        "quality",
+        "same",
+        names=((0, "off"),),
+    ),
+    Perturbation(
+        "resolution",
+        resolution,
+        (0.0, 400.0, 648.0, 1296.0, 2592.0),
+        0.0,
+        "width, px",
+        "same",
+        names=((0, "native"),),
+    ),
+    Perturbation(
+        "dimmed sector",
+        dim_sector,
+        (0.0, 0.3, 0.6, 0.9),
+        0.0,
+        f"fraction, {SECTOR_DEG:g}° of the ring",
+        "same",
+        needs_ring=True,
+    ),
+    Perturbation(
+        "offset",
+        offset,
+        (0.0, 0.02, 0.05, 0.1),
+        0.0,
+        "× ring radius",
+        "kept",
+        needs_ring=True,
+        moves_mask=True,
+    ),
+    Perturbation(
+        "no reference",
+        unchanged,
+        (0.0, 1.0),
+        0.0,
+        "reference frame",
+        "dropped",
+        names=((0, "with"), (1, "without")),
+    ),
+)

@@ -1,0 +1,211 @@
+"""Robustness suite of ``contactcal bench --robustness``: every method's error per level of each
+perturbation (:mod:`~contactcal.infer.bench.perturb`) of a bounded sample of held-out frames.
+
+Frames are sampled deterministically: all frames of all sessions (reference frames included, as
+in the accuracy tables) ordered by pressure then session, ``n`` taken evenly spaced. Each is
+perturbed at each level (its session's reference as the perturbation says), and measured by
+each method from decoded arrays (``set_reference`` then ``measure``; no reduced JPEG decode).
+A level's random draws come from ``numpy.random.default_rng([seed, frame, perturbation, level,
+stream])``, so a run is reproducible and levels are independent of each other.
+
+Per method, perturbation and level: the median |relative area error| over frames with true
+contact at ≥ 5 kPa, its ratio to the same perturbation's baseline level, and the no-contact
+accuracy (share of frames without true contact, i.e. below the onset, reported as no contact).
+"""
+
+from __future__ import annotations
+
+import functools
+import os
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+
+from contactcal.infer.bench.dataset import IndexRow
+from contactcal.infer.bench.perturb import PERTURBATIONS, REFERENCE_MODES, Perturbation
+from contactcal.infer.bench.scoring import ScoredFrame, bin_row
+from contactcal.infer.image.read import load_image
+from contactcal.infer.methods.base import Method
+from contactcal.infer.methods.registry import METHODS, make_method
+from contactcal.infer.methods.unet.ring import RingFit, locate_ring
+
+#: Errors are summarised over contact frames at or above this pressure, kPa.
+MIN_ERROR_KPA = 5.0
+
+
+@dataclass(frozen=True)
+class Sample:
+    """One sampled frame, decoded, with its session's reference and ring."""
+
+    row: IndexRow  # the frame's dataset row
+    frame: np.ndarray  # (H, W) uint8
+    reference: np.ndarray  # (H, W) uint8, the session's lowest-pressure frame
+    mask: np.ndarray  # (H, W) uint8, 255 = contact
+    ring: RingFit  # the window ring located on the unperturbed reference, px
+
+
+def sample_rows(
+    sessions: Mapping[str, Sequence[IndexRow]], n: int
+) -> list[tuple[IndexRow, IndexRow]]:
+    """``n`` (frame, reference) row pairs spread evenly over pressures and sessions.
+
+    Args:
+        sessions: rows per session, sorted by pressure (the first is the reference).
+        n: frames wanted (>= 1); all frames when the dataset has fewer.
+    """
+    if n < 1:
+        raise ValueError(f"the robustness suite needs >= 1 frame, got {n}")
+    pool = sorted(
+        ((r, rows[0]) for rows in sessions.values() for r in rows),
+        key=lambda pair: (pair[0].pressure_kpa, pair[0].session_key, str(pair[0].frame)),
+    )
+    if n >= len(pool):
+        return pool
+    return [pool[int((i + 0.5) * len(pool) / n)] for i in range(n)]
+
+
+def load_sample(row: IndexRow, reference: IndexRow) -> Sample:
+    """Decode a frame, its mask and its session's reference; locate the reference's ring."""
+    ref = load_image(reference.frame)
+    return Sample(row, load_image(row.frame), ref, load_image(row.mask), locate_ring(ref))
+
+
+def perturbed(
+    p: Perturbation, level: float, sample: Sample, seed: tuple[int, ...]
+) -> tuple[np.ndarray, np.ndarray | None, float]:
+    """The frame at one level, the reference the method gets, and the true area.
+
+    Args:
+        p: the perturbation.
+        level: one of ``p.levels``.
+        sample: the unperturbed frame.
+        seed: entropy of this (frame, perturbation, level); stream 1 is the reference's own.
+
+    Returns:
+        ``(frame (H', W') uint8, reference (H', W') uint8 or None, true area px at H'×W')``.
+    """
+    fn = functools.partial(p.apply, ring=sample.ring) if p.needs_ring else p.apply
+
+    def rng(stream: int) -> np.random.Generator:
+        return np.random.default_rng([*seed, stream])
+
+    frame = fn(sample.frame, level, rng(0))
+    if p.reference == "dropped":
+        ref = sample.reference if level == p.baseline else None
+    elif p.reference == "kept":
+        ref = sample.reference
+    else:
+        ref = fn(sample.reference, level, rng(0 if p.reference == "same" else 1))
+    if p.moves_mask:
+        true = float(np.count_nonzero(fn(sample.mask, level, rng(0))))
+    else:
+        true = sample.row.area_px * frame.size / sample.frame.size
+    return frame, ref, true
+
+
+def _score(
+    method: Method, sample: Sample, frame: np.ndarray, ref: np.ndarray | None, true: float
+) -> ScoredFrame:
+    """One method on one perturbed frame, given the reference it gets and the true area."""
+    method.set_reference(ref, 1)
+    res = method.measure(frame)
+    return ScoredFrame(
+        method=method.name,
+        session=sample.row.session_key,
+        frame=str(sample.row.frame),
+        pressure_kpa=sample.row.pressure_kpa,
+        true_area_px=true,
+        area_px=float(res.area_px),
+        contact=bool(res.contact),
+    )
+
+
+def measure_suite(
+    samples: Sequence[Sample], methods: Sequence[Method], seed: int
+) -> dict[tuple[str, float, str], list[ScoredFrame]]:
+    """Every method on every sample at every level: scored frames per (perturbation, level,
+    method)."""
+    out: dict[tuple[str, float, str], list[ScoredFrame]] = {}
+    for i, sample in enumerate(samples):
+        for j, p in enumerate(PERTURBATIONS):
+            for k, level in enumerate(p.levels):
+                frame, ref, true = perturbed(p, level, sample, (seed, i, j, k))
+                for m in methods:
+                    scored = _score(m, sample, frame, ref, true)
+                    out.setdefault((p.name, level, m.name), []).append(scored)
+    return out
+
+
+def _median_error(frames: Sequence[ScoredFrame]) -> dict[str, Any]:
+    return bin_row([f for f in frames if f.pressure_kpa >= MIN_ERROR_KPA])
+
+
+def summary_rows(
+    scored: Mapping[tuple[str, float, str], Sequence[ScoredFrame]], methods: Sequence[str]
+) -> list[dict[str, Any]]:
+    """Per perturbation, level (in ``levels`` order) and method: the error at ≥ 5 kPa, its ratio
+    to the baseline level's, and the no-contact accuracy (None where no frame defines one)."""
+    rows = []
+    for p in PERTURBATIONS:
+        base = {
+            m: _median_error(scored[(p.name, p.baseline, m)])["median_abs_rel_error"]
+            for m in methods
+        }
+        for level in p.levels:
+            for method in methods:
+                frames = scored[(p.name, level, method)]
+                high, every = _median_error(frames), bin_row(frames)
+                err = high["median_abs_rel_error"]
+                rows.append(
+                    {
+                        "perturbation": p.name,
+                        "level": level,
+                        "label": p.label(level),
+                        "baseline": level == p.baseline,
+                        "method": method,
+                        "contact_frames_ge5": high["contact_frames"],
+                        "median_abs_rel_error_ge5": err,
+                        "error_ratio": None
+                        if err is None or not base[method]
+                        else err / base[method],
+                        "no_contact_frames": every["no_contact_frames"],
+                        "no_contact_accuracy": every["no_contact_accuracy"],
+                    }
+                )
+    return rows
+
+
+def run_robustness(
+    sessions: Mapping[str, Sequence[IndexRow]],
+    model: str | os.PathLike[str] | None,
+    frames: int,
+    seed: int = 0,
+) -> dict[str, Any]:
+    """The robustness suite on ``frames`` sampled frames (see the module docstring).
+
+    Returns:
+        ``results.json``'s ``"robustness"``: ``frames`` (the sampled files), ``seed``,
+        ``perturbations`` (name, levels, labels, baseline, unit, reference handling) and
+        ``rows`` (:func:`summary_rows`).
+    """
+    samples = [load_sample(r, ref) for r, ref in sample_rows(sessions, frames)]
+    methods = [make_method(name, model, threads=1) for name in METHODS]
+    scored = measure_suite(samples, methods, seed)
+    return {
+        "frames": [str(s.row.frame) for s in samples],
+        "seed": seed,
+        "perturbations": [
+            {
+                "name": p.name,
+                "levels": list(p.levels),
+                "labels": [p.label(lv) for lv in p.levels],
+                "baseline": p.baseline,
+                "unit": p.unit,
+                "reference": REFERENCE_MODES[p.reference],
+            }
+            for p in PERTURBATIONS
+        ],
+        "rows": summary_rows(scored, METHODS),
+    }
