@@ -86,12 +86,12 @@ def robustness_text(rob: Mapping[str, Any]) -> str:
     return (
         "## Robustness to perturbed frames\n\n"
         f"{len(rob['frames'])} frames sampled evenly across pressures and sessions (seed "
-        f"{rob['seed']}), each measured at every level of every perturbation "
-        "(`contactcal.infer.bench.perturb`\ndocuments the levels and the truth). ≥5 kPa: median "
-        f"|relative area error| over the {first['contact_frames_ge5']} frames\nwith true "
-        "contact at ≥ 5 kPa; × base: its ratio to the perturbation's unperturbed level; "
-        f"no-contact acc.:\nshare of the {first['no_contact_frames']} frames without true "
-        f"contact reported as no contact.\n\n{refs}\n\n"
+        f"{rob['seed']}), each measured at every\nlevel of every perturbation "
+        "(`contactcal.infer.bench.perturb` documents the levels and the truth).\n"
+        f"≥5 kPa: median |relative area error| over the {first['contact_frames_ge5']} frames "
+        "with true contact at ≥ 5 kPa; × base: its\nratio to the perturbation's unperturbed "
+        f"level; no-contact acc.: share of the {first['no_contact_frames']} frames without "
+        f"true contact\nreported as no contact. The reference frame per perturbation:\n\n{refs}\n\n"
         + md_table(list(table.values()), cols)
         + "\n\n![robustness](robustness.png)"
     )

@@ -23,9 +23,10 @@ from contactcal.infer.bench.crosscheck import (
     score_dataset,
     side_by_side,
 )
-from contactcal.infer.bench.dataset import read_index, sessions_of
+from contactcal.infer.bench.dataset import IndexRow, read_index, sessions_of
 from contactcal.infer.bench.report import write_report
 from contactcal.infer.bench.robustness import run_robustness
+from contactcal.infer.bench.scoring import ScoredFrame
 from contactcal.infer.bench.timing import timing
 
 
@@ -83,13 +84,30 @@ def run_bench(
         )
     extra = ""
     if crosscheck:
-        names = labels([data, *crosscheck])
-        scored = {names[0]: frames}
-        results["crosscheck"] = []
-        for name, folder, sess in zip(names[1:], crosscheck, others, strict=True):
-            res, scored[name] = score_dataset(name, folder, sess, model, config.bins)
-            results["crosscheck"].append(res)
-        results["side_by_side"] = side_by_side(scored, config.bins)
-        extra = crosscheck_text(results, names[0])
+        extra = _crosscheck(results, data, frames, crosscheck, others, model, config)
     write_report(out_dir, results, frames, config.bins, extra)
     return results
+
+
+def _crosscheck(
+    results: dict[str, Any],
+    data: str | os.PathLike[str],
+    frames: list[ScoredFrame],
+    folders: Sequence[str | os.PathLike[str]],
+    sessions: list[dict[str, list[IndexRow]]],
+    model: str | os.PathLike[str] | None,
+    config: BenchConfig,
+) -> str:
+    """Score each cross-check set; add ``crosscheck`` and ``side_by_side`` to ``results``.
+
+    Returns:
+        The report's cross-check section (Markdown).
+    """
+    names = labels([data, *folders])
+    scored = {names[0]: frames}
+    results["crosscheck"] = []
+    for name, folder, sess in zip(names[1:], folders, sessions, strict=True):
+        res, scored[name] = score_dataset(name, folder, sess, model, config.bins)
+        results["crosscheck"].append(res)
+    results["side_by_side"] = side_by_side(scored, config.bins)
+    return crosscheck_text(results, names[0])

@@ -1,0 +1,175 @@
+"""``contactcal bench --robustness``: the perturbations, the sampling, the report and the CLI."""
+
+from __future__ import annotations
+
+import functools
+import json
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import pytest
+from procedural import draw_frame, write_dataset
+
+from contactcal.infer.bench import config as bench_config
+from contactcal.infer.bench import run as bench_run
+from contactcal.infer.bench.config import BenchConfig
+from contactcal.infer.bench.dataset import read_index, sessions_of
+from contactcal.infer.bench.perturb import PERTURBATIONS, Perturbation, offset, resolution
+from contactcal.infer.bench.robustness import Sample, load_sample, perturbed, sample_rows
+from contactcal.infer.bench.run import run_bench
+from contactcal.infer.cli import main
+from contactcal.infer.methods.unet.ring import RingFit, locate_ring
+
+TINY = BenchConfig(
+    repeats=1, timing_frames=1, full_size=(128, 96), threads=(1,), robustness_frames=4
+)
+PNG_MAGIC = b"\x89PNG\r\n\x1a\n"
+
+
+@pytest.fixture(scope="module")
+def frame() -> np.ndarray:
+    """A drawn frame at the held-out sets' 400×300 (a blur level is sub-pixel on tiny frames)."""
+    return draw_frame(np.random.default_rng(3), 400, 300, (40.0, 30.0)).image
+
+
+def _apply(p: Perturbation, gray: np.ndarray, level: float, seed: int = 0) -> np.ndarray:
+    kw = {"ring": locate_ring(gray)} if p.needs_ring else {}
+    return p.apply(gray, level, np.random.default_rng(seed), **kw)
+
+
+@pytest.mark.parametrize("p", PERTURBATIONS, ids=lambda p: p.name)
+def test_perturbation_shape_dtype_determinism(p: Perturbation, frame: np.ndarray) -> None:
+    before = frame.copy()
+    for level in p.levels:
+        out = _apply(p, frame, level)
+        assert out.dtype == np.uint8 and out.ndim == 2
+        if p.name != "resolution":
+            assert out.shape == frame.shape
+        np.testing.assert_array_equal(out, _apply(p, frame, level))  # same seed, same image
+    np.testing.assert_array_equal(frame, before)  # the input is never modified
+    np.testing.assert_array_equal(_apply(p, frame, p.baseline), frame)  # baseline = identity
+    assert p.label(p.baseline)  # every level has a label
+
+
+@pytest.mark.parametrize("p", PERTURBATIONS, ids=lambda p: p.name)
+def test_perturbation_changes_the_frame(p: Perturbation, frame: np.ndarray) -> None:
+    """Every level but the baseline does something (except "no reference": the reference)."""
+    for level in p.levels:
+        if level != p.baseline and p.name not in ("no reference", "resolution"):
+            assert not np.array_equal(_apply(p, frame, level), frame), (p.name, level)
+
+
+def test_resolution_sizes(frame: np.ndarray) -> None:
+    rng = np.random.default_rng(0)
+    assert resolution(frame, 2592, rng).shape == (1944, 2592)
+    assert resolution(frame, 64, rng).shape == (48, 64)
+    with pytest.raises(ValueError, match="resolution level"):
+        resolution(frame, 4, rng)
+
+
+def test_offset_shifts_by_whole_pixels() -> None:
+    mask = np.zeros((40, 60), np.uint8)
+    mask[10:20, 20:30] = 255
+    ring = RingFit(30.0, 20.0, 50.0)
+    out = offset(mask, 0.2, np.random.default_rng(1), ring=ring)  # 10 px in some direction
+    assert np.count_nonzero(out) == 100  # the patch stays inside: the area is kept
+    ys, xs = np.nonzero(out)
+    assert np.hypot(ys.min() - 10, xs.min() - 20) == pytest.approx(10, abs=0.75)
+    edge = offset(mask, 1.0, np.random.default_rng(1), ring=ring)  # 50 px: pushed out
+    assert edge.shape == mask.shape and np.count_nonzero(edge) < 100
+
+
+def test_noise_reference_independent_others_same(tmp_path: Path) -> None:
+    data = write_dataset(tmp_path / "d", fingers=1)
+    row, ref = sample_rows(sessions_of(read_index(data)), 5)[3]  # the 8 kPa frame
+    s = load_sample(row, ref)
+    s = Sample(s.row, s.reference.copy(), s.reference, s.mask, s.ring)  # frame == reference
+    by_name = {p.name: p for p in PERTURBATIONS}
+    frame, reference, _ = perturbed(by_name["noise"], 12.0, s, (0, 0, 0, 0))
+    assert not np.array_equal(frame, reference)
+    frame, reference, _ = perturbed(by_name["dimmed sector"], 0.9, s, (0, 0, 0, 0))
+    np.testing.assert_array_equal(frame, reference)
+    _, reference, true = perturbed(by_name["no reference"], 1.0, s, (0, 0, 0, 0))
+    assert reference is None and true == row.area_px
+    frame, _, true = perturbed(by_name["resolution"], 128.0, s, (0, 0, 0, 0))
+    assert frame.shape == (96, 128) and true == pytest.approx(4 * row.area_px)
+
+
+def test_sampling_spread_and_deterministic(tmp_path: Path) -> None:
+    data = write_dataset(tmp_path / "d", fingers=4)
+    sessions = sessions_of(read_index(data))
+    pairs = sample_rows(sessions, 8)
+    assert pairs == sample_rows(sessions, 8) and len(pairs) == 8
+    assert {r.pressure_kpa for r, _ in pairs} == {0.0, 2.0, 4.0, 8.0, 14.0}
+    assert len({r.session for r, _ in pairs}) == 4
+    assert all(ref == sessions[r.session_key][0] for r, ref in pairs)
+    assert len(sample_rows(sessions, 100)) == 20
+    with pytest.raises(ValueError, match=">= 1 frame"):
+        sample_rows(sessions, 0)
+
+
+@pytest.fixture(scope="module")
+def bench(tmp_path_factory: pytest.TempPathFactory) -> tuple[Path, dict[str, Any]]:
+    root = tmp_path_factory.mktemp("rob")
+    data = write_dataset(root / "data")
+    return root / "out", run_bench(data, root / "out", config=TINY)
+
+
+def test_report_figure_and_results(bench: tuple[Path, dict[str, Any]]) -> None:
+    out, results = bench
+    assert (out / "robustness.png").read_bytes().startswith(PNG_MAGIC)
+    report = (out / "report.md").read_text(encoding="utf-8")
+    assert "## Robustness to perturbed frames" in report and "](robustness.png)" in report
+    rob = json.loads((out / "results.json").read_text())["robustness"]
+    assert rob == json.loads(json.dumps(results["robustness"]))
+    assert len(rob["frames"]) == 4 and rob["seed"] == 0
+    assert [p["name"] for p in rob["perturbations"]] == [p.name for p in PERTURBATIONS]
+    n_levels = sum(len(p.levels) for p in PERTURBATIONS)
+    assert len(rob["rows"]) == 2 * n_levels  # both methods at every level
+    for r in rob["rows"]:
+        assert r["method"] in ("unet", "classical")
+        err, ratio = r["median_abs_rel_error_ge5"], r["error_ratio"]
+        base = next(
+            b
+            for b in rob["rows"]
+            if b["baseline"]
+            and b["perturbation"] == r["perturbation"]
+            and b["method"] == r["method"]
+        )
+        if r["baseline"] and ratio is not None:
+            assert ratio == 1.0
+        if ratio is not None:
+            assert ratio == pytest.approx(err / base["median_abs_rel_error_ge5"])
+        assert f"| {r['perturbation']} | {r['label']} |" in report
+
+
+def test_baselines_agree(bench: tuple[Path, dict[str, Any]]) -> None:
+    """Every perturbation's baseline measures the same unperturbed frames: equal numbers."""
+    _, results = bench
+    keys = ("median_abs_rel_error_ge5", "no_contact_accuracy", "contact_frames_ge5")
+    for method in ("unet", "classical"):
+        base = [r for r in results["robustness"]["rows"] if r["baseline"] and r["method"] == method]
+        assert len({tuple(r[k] for k in keys) for r in base}) == 1
+
+
+def test_off_by_default_and_cli(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch, capsys: pytest.CaptureFixture[str]
+) -> None:
+    data = write_dataset(tmp_path / "data", fingers=2)
+    tiny = functools.partial(BenchConfig, full_size=TINY.full_size, threads=TINY.threads)
+    monkeypatch.setattr(bench_config, "BenchConfig", tiny)
+    monkeypatch.setattr(bench_run, "BenchConfig", tiny)
+    args = ["bench", "--data", str(data), "--repeats", "1", "--timing-frames", "1"]
+    assert main([*args, "--out", str(tmp_path / "plain")]) == 0
+    assert "robustness" not in json.loads((tmp_path / "plain" / "results.json").read_text())
+    assert not (tmp_path / "plain" / "robustness.png").exists()
+    out = tmp_path / "rob"
+    assert main([*args, "--out", str(out), "--robustness", "--robustness-frames", "2"]) == 0
+    assert len(json.loads((out / "results.json").read_text())["robustness"]["frames"]) == 2
+    assert "robustness: 2 frames" in capsys.readouterr().out
+    assert main([*args, "--out", str(out), "--robustness-frames", "2"]) == 2
+    assert "--robustness-frames needs --robustness" in capsys.readouterr().err
+    assert main([*args, "--out", str(out), "--robustness", "--robustness-frames", "0"]) == 2
+    with pytest.raises(ValueError, match="robustness_frames"):
+        BenchConfig(robustness_frames=-1)
