@@ -27,7 +27,7 @@ import numpy as np
 
 from contactcal.infer.calibration.band import Band
 from contactcal.infer.calibration.curve import Curve
-from contactcal.infer.calibration.steps import Step
+from contactcal.infer.calibration.steps import Step, pool
 
 #: Coverage level of the band (5th to 95th percentile).
 BAND_LEVEL = 0.9
@@ -99,7 +99,7 @@ def bootstrap_band(
             areas, contacts = _draw_frames(s, rng)
             if s.n == 1 and s.intervals[0] is None and in_range[j] and resid.size:
                 areas = np.array([max(0.0, fitted[j] + resid[rng.integers(resid.size)])])
-            med[j], con[j] = np.median(areas), 2 * int(contacts.sum()) >= contacts.size
+            med[j], con[j] = pool(areas, contacts)
         again = refit(p, med, con)
         if again is not None and again.has_contact:
             curves.append([again.area_at(q) for q in grid])

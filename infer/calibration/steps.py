@@ -16,6 +16,15 @@ from contactcal.infer.calibration.phases import PHASES
 from contactcal.infer.calibration.points import CalibrationPoint
 
 
+def pool(
+    areas: Sequence[float] | np.ndarray, contacts: Sequence[bool] | np.ndarray
+) -> tuple[float, bool]:
+    """One step's area and contact from its frames: the median area, and in contact when at
+    least half of the frames are (the rule of this module, for steps, resamples and labels)."""
+    c = np.asarray(contacts, dtype=bool)
+    return float(np.median(areas)), 2 * int(c.sum()) >= c.size
+
+
 @dataclass(frozen=True, eq=False)
 class Step:
     """One pressure step of one phase.
@@ -44,12 +53,12 @@ class Step:
     @property
     def median(self) -> float:
         """Median frame area (curve unit)."""
-        return float(np.median(self.areas))
+        return pool(self.areas, self.contacts)[0]
 
     @property
     def contact(self) -> bool:
         """True when at least half of the frames are in contact."""
-        return 2 * int(self.contacts.sum()) >= self.n
+        return pool(self.areas, self.contacts)[1]
 
     def spread(self) -> dict[str, float]:
         """``min``, ``q25``, ``q75``, ``max`` of the frame areas (curve unit)."""

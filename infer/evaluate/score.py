@@ -17,6 +17,7 @@ import numpy as np
 
 from contactcal.infer.bench.scoring import ScoredFrame
 from contactcal.infer.calibration.fit import estimate_onset
+from contactcal.infer.calibration.steps import pool
 from contactcal.infer.evaluate.labels import LabelMask
 from contactcal.infer.methods.base import AreaResult
 from contactcal.infer.pipeline.measure import Measured
@@ -161,8 +162,10 @@ def _steps(
     areas, contacts = [], []
     for q in pressures:
         at = [s for s in frames if s.pressure_kpa == q]
-        a = [s.true_area_px if truth else s.area_px for s in at]
-        c = [s.true_contact if truth else s.contact for s in at]
-        areas.append(float(np.median(a)))
-        contacts.append(2 * sum(c) >= len(c))
+        area, contact = pool(
+            [s.true_area_px if truth else s.area_px for s in at],
+            [s.true_contact if truth else s.contact for s in at],
+        )
+        areas.append(area)
+        contacts.append(contact)
     return areas, contacts

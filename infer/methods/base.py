@@ -63,6 +63,8 @@ class Method(Protocol):
         """Begin a session of image files: read the reference, return the decode reduction k.
 
         The frames are then to be loaded with ``load_image(path, reduce=k, bit_depth=...)``;
+        k > 1 only when every file (frames and reference) has one size whose sides divide by
+        k, so a frame decoded at 1/k is exactly k times smaller per side.
         ``bit_depth`` is the significant bits of 16-bit files (None: from the file).
         """
 

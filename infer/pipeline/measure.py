@@ -17,7 +17,6 @@ import cv2
 import numpy as np
 
 from contactcal.infer.image.gray import ImageError
-from contactcal.infer.image.jpeg import jpeg_size
 from contactcal.infer.image.read import load_image
 from contactcal.infer.methods.base import AreaResult, Method
 from contactcal.infer.methods.unet.config import PreprocessConfig
@@ -77,12 +76,11 @@ class _Reference:
     ring: RingFit  # at the check's working size (found=False: position not checked)
 
 
-def _file_size(path: Path, img: np.ndarray, k: int) -> tuple[int, int]:
-    """``(width, height)`` of the file decoded at 1/k into ``img`` (k > 1 only for JPEG)."""
-    if k == 1:
-        return img.shape[1], img.shape[0]
-    h, w = jpeg_size(path)
-    return w, h
+def _file_size(img: np.ndarray, k: int) -> tuple[int, int]:
+    """``(width, height)`` of the file decoded at 1/k into ``img``: exactly k times its size,
+    since a method chooses k > 1 only when every file's sides divide by k (:meth:`Method.start`,
+    which read every file's header to choose it)."""
+    return img.shape[1] * k, img.shape[0] * k
 
 
 def _coarse_ring(img: np.ndarray) -> RingFit:
@@ -132,7 +130,7 @@ def _start(
     if reference is None:
         return k, None
     img = load_image(reference, reduce=k, bit_depth=bit_depth)
-    return k, _Reference(reference, _file_size(reference, img, k), _coarse_ring(img))
+    return k, _Reference(reference, _file_size(img, k), _coarse_ring(img))
 
 
 def measure_files(
@@ -175,7 +173,7 @@ def measure_files(
         it = tqdm(images, desc=f"measure ({method.name})", unit="frame", leave=False)
     for path in it:
         img = load_image(path, reduce=k, bit_depth=bit_depth)
-        w, h = _file_size(path, img, k)
+        w, h = _file_size(img, k)
         note = method.NO_REFERENCE if ref is None else _check_frame(ref, path, img, (w, h))
         res = method.measure(img)  # in the file's pixels
         if note:
