@@ -23,6 +23,7 @@ def add_parsers(sub: argparse._SubParsersAction) -> None:
     s.add_argument("--variant", default="auto", choices=("auto", "llvm_ad_rgb", "scalar_rgb"))
     s.add_argument("--quiet", action="store_true", help="no progress bar")
     s.set_defaults(func=_cmd_synth)
+    add_fidelity_parser(sub)
 
 
 #: Modules of the ``synth`` extra that rendering needs (checked before anything is written).
@@ -56,3 +57,57 @@ def _cmd_synth(args: argparse.Namespace) -> int:
 
 def _args(args: argparse.Namespace) -> dict[str, object]:
     return {k: str(v) if isinstance(v, Path) else v for k, v in vars(args).items() if k != "func"}
+
+
+def add_fidelity_parser(sub: argparse._SubParsersAction) -> None:
+    """Add ``fidelity`` (nominal renders against the rig paper) to the subcommands."""
+    s = sub.add_parser(
+        "fidelity", help="render nominal sessions and measure them against the rig paper"
+    )
+    s.add_argument("--sessions", type=int, default=12, help="nominal sessions (default 12)")
+    s.add_argument("--seed", type=int, default=9000, help="dataset seed (default 9000)")
+    s.add_argument("--size", default="400x300", help="frame size W[xH], 4:3 (default 400x300)")
+    s.add_argument("--spp", type=int, default=8, help="samples per pixel (default 8)")
+    s.add_argument("--pressures", default="0,1,2,3,4,5,7.5,10,12.5,15,17.5,20", help="kPa")
+    s.add_argument("--workers", type=int, default=1, help="worker processes (default 1)")
+    s.add_argument("--out", type=Path, required=True, help="folder for fidelity.json/.md/.jpg")
+    s.set_defaults(func=_cmd_fidelity)
+
+
+def _cmd_fidelity(args: argparse.Namespace) -> int:
+    require_extra("synth", "fidelity", SYNTH_MODULES)
+    import numpy as np
+
+    from contactcal.infer.files.atomic import run_outputs, write_json, write_text
+    from contactcal.infer.image.write import write_image
+    from contactcal.synth.fidelity_report import (
+        FidelityConfig,
+        run_fidelity,
+        summarise,
+        summary_markdown,
+    )
+    from contactcal.synth.layout import parse_pressures, parse_size
+    from contactcal.synth.session import RenderConfig
+
+    if args.sessions < 1 or args.workers < 1:
+        raise ValueError("--sessions and --workers must be >= 1")
+    width, height = parse_size(args.size)
+    config = FidelityConfig(
+        sessions=args.sessions,
+        pressures_kpa=tuple(parse_pressures(args.pressures)),
+        seed=args.seed,
+        render=RenderConfig(width=width, height=height, spp=args.spp),
+        workers=args.workers,
+    )
+    results = run_fidelity(config)
+    summary = summarise([r for r, _ in results]) | {"args": _args(args)}
+    with run_outputs() as out:
+        write_json(out.stage(args.out / "fidelity.json"), summary)
+        write_text(out.stage(args.out / "fidelity.md"), summary_markdown(summary))
+        write_image(
+            out.stage(args.out / "fidelity_strip.jpg"),
+            np.ascontiguousarray(results[0][1][:, :, ::-1]),
+        )
+    print(summary_markdown(summary), end="")
+    print(f"fidelity: ROI found within tolerance in {summary['roi_ok']}/{args.sessions} sessions")
+    return 0

@@ -6,9 +6,14 @@ Full derivation and reference table: `docs/mechanics.md`.
 
 Model (one call to `solve_contact` per pressure):
 
-1. Free membrane: small-slope paraboloid cap ``z(r) = h (1 - r²/a²)``, ``h = p a² / (4 T)``
-   (clamp radius ``a``, effective tension ``T``).
-2. Onset: the apex reaches the finger at gap ``g`` when ``p_on = 4 T g / a²``.
+1. Free membrane: paraboloid cap ``z(r) = h (1 - r²/a²)`` with the large-deflection (Hencky)
+   law of a thin membrane without pre-tension, ``h ∝ p^(1/3)``: ``h = g (p / p_on)^(1/3)``
+   (clamp radius ``a``, gap ``g``). Most of the inflation happens at low pressure (69 % of the
+   gap at a third of the onset pressure), which is what brings the inner ring back and shrinks
+   it at 1-2 kPa as in the paper (docs/fidelity.md); a linear law ``h = p a² / (4 T)`` would
+   not.
+2. Onset: the apex reaches the finger at gap ``g``; ``p_on = 4 T g / a²`` defines the
+   effective tension ``T`` at onset used for the shape in contact.
 3. Area: Hertz finger law ``A_h(F) = pi (0.75 R F / E_f(F))^(2/3)``, ``E_f = E0 (1 + beta F)``
    (SORI, PNAS 2024; rigid surface). With ``F = p A`` the equilibrium ``A = A_h(p A)`` becomes,
    for ``s = sqrt(A)``, the monotone cubic ``beta p s³ + s = pi^1.5 0.75 R p / E0`` (unique positive
@@ -57,6 +62,7 @@ from contactcal.synth.membrane_shape import (
 __all__ = [
     "CENTRE_MAX_FRACTION",
     "CLAMP_MARGIN_FRACTION",
+    "INFLATION_EXPONENT",
     "MAX_INDENTATION_MM",
     "TILT_EGG_GAIN",
     "ContactState",
@@ -72,6 +78,8 @@ __all__ = [
 CLAMP_MARGIN_FRACTION = 0.08  # patch kept within (1 - this) a, leaving room for the annulus
 MAX_INDENTATION_MM = 3.0  # finger pulp indentation saturates near this (soft clip); the
 #   uncoupled height law alone would push a soft membrane (large gap, low tension) 5+ mm in
+INFLATION_EXPONENT = 1.0 / 3.0  # free cap h ∝ p^this: 1/3 = Hencky membrane (no pre-tension);
+#   1 = pre-tensioned (linear) membrane, whose inner ring only returns just before contact
 CENTRE_MAX_FRACTION = 0.5  # |patch centre| <= this * a; beyond, the finger is off the membrane
 Semi = tuple[float, float]  # (long, short) semi-axes, mm
 
@@ -185,8 +193,8 @@ def _plateau_height(pressure_kpa: float, area_mm2: float, membrane: MembranePara
 def _free_cap(
     pressure_kpa: float, p_on: float, finger: FingerParams, a: float, t: float
 ) -> ContactState:
-    """State without contact: the paraboloid cap of apex p a² / (4 T)."""
-    p = pressure_kpa / 1000.0
+    """State without contact: the paraboloid cap of apex ``g (p / p_on)^INFLATION_EXPONENT``."""
+    gap = p_on / 1000.0 * a * a / (4.0 * t)
     return ContactState(
         pressure_kpa=pressure_kpa,
         onset_kpa=p_on,
@@ -195,7 +203,7 @@ def _free_cap(
         semi_axes_mm=(0.0, 0.0),
         yaw_rad=float(finger.yaw_rad),
         area_mm2=0.0,
-        plateau_z_mm=p * a * a / (4.0 * t),
+        plateau_z_mm=gap * (pressure_kpa / p_on) ** INFLATION_EXPONENT,
         indentation_mm=0.0,
         clamp_radius_mm=float(a),
     )

@@ -61,7 +61,7 @@ class ContactState:
     ]  # mm, (long, short) after saturation/clamp fit; (0, 0) if none
     yaw_rad: float  # rad, world angle of the long axis (finger direction) about +z
     area_mm2: float  # mm², shoelace area of the perturbed boundary; 0.0 without contact
-    plateau_z_mm: float  # mm, plateau height in contact; cap apex height p a²/(4T) without
+    plateau_z_mm: float  # mm, plateau height in contact; cap apex height without contact
     indentation_mm: float  # mm, finger indentation plateau_z - gap (>= 0); 0 without contact
     clamp_radius_mm: float  # mm, clamp circle radius a; membrane_z is 0 outside it
     harmonics: tuple[tuple[int, float, float], ...] = ()  # (n, eps_n, phase_n rad) incl. n=1 tilt

@@ -21,8 +21,8 @@ from contactcal.synth.mechanics_params import FingerParams, MembraneParams
 from contactcal.synth.rig import RigGeometry
 
 LED_COUNT = 16  # LEDs feeding the light guide plate (sets the azimuthal non-uniformity's scale)
-BASE_EXPOSURE = 2.0  # × render radiance: puts the window ring near 200-250 grey, like the rig's
-#   photographs (the published routine finds the ring at threshold 150)
+BASE_EXPOSURE = 8.0  # × render radiance: puts the window ring near 200-230 grey, like the rig's
+#   photographs (the published routine finds the ring at threshold 150; docs/fidelity.md)
 
 
 @dataclass(frozen=True)
@@ -98,19 +98,25 @@ BODY_DRAWS = (  # finger, membrane, rig, LED profile
     _uniform("e0_mpa", 0.011, 0.022),
     _uniform("beta_per_n", 0.4, 1.0),
     _uniform("aspect", 1.2, 1.5),
-    _normal("offset_x_mm", 0.0, 1.0, hard_sd=2.5),
-    _normal("offset_y_mm", 0.0, 1.0, hard_sd=2.5),
+    # Nominal: the display is worn centred on the pulp (the paper's patches fit its 55 % ROI);
+    # hard: off-centre up to the ROI's edge.
+    _normal("offset_x_mm", 0.0, 0.4, hard_sd=2.5),
+    _normal("offset_y_mm", 0.0, 0.4, hard_sd=2.5),
     _normal("yaw_rad", math.pi / 2, 0.35),  # finger enters along the image's y axis
-    _normal("tilt_rad", 0.0, 0.15),
+    _normal("tilt_rad", 0.0, 0.06, hard_sd=0.15),  # pitch; shifts the patch by R sin(tilt)
     _uniform("clamp_radius_mm", 11.5, 13.5),
     # Several mm: the inner ring (LGP seen in the concave membrane) only comes back and shrinks
-    # for inflations of ~4.5-7 mm (docs/renderer.md), and the paper shows it shrinking before
-    # contact. A 70 µm silicone membrane's low tension makes such gaps consistent with onset.
-    _uniform("gap_mm", 3.5, 6.0),
+    # for inflations of ~4-7 mm (docs/fidelity.md), and the paper shows it shrinking at 1-2 kPa,
+    # before contact. A 70 µm silicone membrane's low tension makes such gaps consistent with
+    # onset; with the Hencky law (mechanics.py) 1 kPa already inflates ~70 % of the gap.
+    _uniform("gap_mm", 5.0, 7.0, hard=(3.5, 7.5)),
     _uniform("onset_kpa", 2.0, 4.0),
     _uniform("onset_ramp_kpa", 0.5, 1.0),
-    _uniform("chamber_depth_mm", 2.5, 4.0),
-    _uniform("lgp_gap_mm", 7.0, 12.0),
+    # Window-to-membrane depth and LGP depth set the rings' sizes (docs/fidelity.md): the
+    # paper's 55 % ROI holds its patches only if the window ring looks large next to the
+    # membrane (deep chamber, LGP near the window); a deeper LGP shrinks the inner ring sooner.
+    _uniform("chamber_depth_mm", 7.0, 9.0, hard=(5.0, 10.0)),
+    _uniform("lgp_gap_mm", 4.0, 6.0, hard=(2.0, 12.0)),
     _uniform("fov_y_deg", 28.0, 30.5),
     _normal("camera_offset_x_mm", 0.0, 0.3),
     _normal("camera_offset_y_mm", 0.0, 0.3),
@@ -118,7 +124,7 @@ BODY_DRAWS = (  # finger, membrane, rig, LED profile
 )
 # (hard only: a dim LED sector is drawn here, see _dim_sector)
 EXPOSURE_DRAWS = (
-    Draw("exposure_gain", "lognormal", (0.0, 0.25), (0.0, 0.6)),
+    Draw("exposure_gain", "lognormal", (0.0, 0.1), (0.0, 0.6)),  # nominal: a set-up camera
     _uniform("defocus_sigma_px", 0.0, 1.0, hard=(0.0, 2.2)),
     Draw("full_well", "loguniform", (300.0, 5000.0)),
     _uniform("read_noise", 0.002, 0.012),
@@ -131,10 +137,14 @@ LOOK_DRAWS = (  # camera pose, skin, coating, seeds, LGP brightness
     _normal("shift_x_px", 0.0, 1.5),
     _normal("shift_y_px", 0.0, 1.5),
     Draw("skin_gain", "uniform", (0.6, 1.3), size=3),
-    _uniform("coating_reflectance", 0.35, 0.75),
+    # Sparse mica flakes on clear silicone: effective specular reflectance of the same order as
+    # the window's (2R/(1+R) ≈ 8 %), so the window ring stays the brightest structure (paper).
+    _uniform("coating_reflectance", 0.035, 0.075, hard=(0.02, 0.3)),
     _uniform("particle_density_per_mm2", 250.0, 1200.0),
-    _uniform("particle_tilt_deg", 1.0, 4.0),
-    _uniform("sparkle_fraction", 0.03, 0.2),
+    # Flake tilts blur the inner ring into a halo; the paper's ring hugs the contact with a sharp
+    # inner edge, so nominal flakes lie flat (hard: the old, blurrier range).
+    _uniform("particle_tilt_deg", 0.5, 2.0, hard=(1.0, 4.0)),
+    _uniform("sparkle_fraction", 0.02, 0.08, hard=(0.03, 0.2)),
     _uniform("sparkle_tilt_deg", 10.0, 30.0),
     _uniform("roughness_alpha", 0.03, 0.12),
     _uniform("blue_per_red_reflectance", 0.9, 1.05),
@@ -142,7 +152,7 @@ LOOK_DRAWS = (  # camera pose, skin, coating, seeds, LGP brightness
     Draw("fingerprint_seed", "seed"),
     _uniform("ridge_contrast", 0.35, 1.0, hard=(0.12, 0.4)),  # faint ridges when hard
     Draw("particle_seed", "seed"),
-    _uniform("lgp_radiance", 0.7, 1.4),
+    _uniform("lgp_radiance", 0.9, 1.2, hard=(0.5, 1.6)),
 )
 DIM_SECTOR_PROBABILITY = 0.3  # hard only: share of sessions with a dim LED sector
 JPEG_PROBABILITY = 0.5  # share of sessions saved as JPEG (else lossless)

@@ -42,13 +42,15 @@ class RigGeometry:
     window_thickness_mm: float = 2.0  # paper: 2 mm PMMA; sets the ~0.5 mm offset of its 2nd reflex
     window_ior: float = 1.49  # PMMA at 550 nm; higher = brighter outer ring, darker scene
     # --- display ---
-    chamber_depth_mm: float = 3.0  # window top to clamp plane; deeper = inner ring further inside
+    chamber_depth_mm: float = 8.0  # window top to clamp plane; deeper = patch smaller next to
+    #   the window ring (the paper's 55 % ROI holds it), inner ring further inside
     clamp_radius_mm: float = 12.5  # membrane radius a (11.5-13.5); must be < cylinder radius
     # --- light guide plate (LGP): opaque annulus, edge-lit by LEDs, emitting up (Lambertian) ---
     lgp_inner_radius_mm: float = 11.5  # larger = thinner rings; must stay out of the camera's view
     lgp_outer_radius_mm: float = 13.75  # at the wall; the outer ring's outer edge
-    lgp_gap_mm: float = 10.0  # LGP top face below window bottom: 0 = rings at the very edge but
-    #   the inner ring re-appears only at ~7 mm inflation; 10 = ring shrinks from ~5 mm on
+    lgp_gap_mm: float = 5.0  # LGP top face below window bottom: 0 = rings at the very edge but
+    #   the inner ring re-appears only at ~7 mm inflation; 15 = it shrinks from ~3 mm on but the
+    #   window ring looks smaller (ROI too small for the patch); 5 = both (docs/fidelity.md)
     # --- camera ---
     camera_offset_mm: tuple[float, float] = (0.0, 0.0)  # pupil (x, y) misalignment off the axis
     fov_y_deg: float = 29.0  # vertical field of view; 28.1 frames the window aperture exactly

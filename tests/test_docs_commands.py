@@ -33,6 +33,7 @@ DOCS = sorted(
 #: Option → tiny value, so a documented command runs in seconds on tiny data.
 SHRINK = {
     "--fingers": "2",
+    "--sessions": "1",
     "--pressures": "0,4,12",
     "--size": "48x36",
     "--spp": "1",

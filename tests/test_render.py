@@ -58,7 +58,8 @@ def test_projection_inverts_pixel_rays() -> None:
     # looking up, world +x is on the image's left and +y at the top
     u, v = project_to_pixels(RIG, np.array([[5.0, 3.0, 0.0]]), W, H)[0]
     assert u < W / 2 - 0.5 and v < H / 2 - 0.5
-    assert mm_per_px_at(RIG, 0.0, W, H) == pytest.approx(2 * 60 * np.tan(np.radians(14.5)) / H)
+    depth = RIG.cylinder_height_mm + RIG.window_thickness_mm + RIG.chamber_depth_mm
+    assert mm_per_px_at(RIG, 0.0, W, H) == pytest.approx(2 * depth * np.tan(np.radians(14.5)) / H)
 
 
 def test_sample_profile_is_periodic_linear() -> None:

@@ -1,0 +1,96 @@
+"""Nominal renders show the rig paper's observations (issue 9, items 1a-1e; docs/fidelity.md).
+
+Fast subset: two nominal sessions at 160x120, 4 spp. Full check (slow): twelve sessions at
+400x300, 8 spp, the numbers reported in docs/fidelity.md.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+pytest.importorskip("mitsuba")
+
+from contactcal.synth.fidelity import SessionFidelity  # noqa: E402
+from contactcal.synth.fidelity_report import FidelityConfig, run_fidelity, summarise  # noqa: E402
+from contactcal.synth.reflexes import window_ring_circle  # noqa: E402
+from contactcal.synth.rig import RigGeometry  # noqa: E402
+from contactcal.synth.session import RenderConfig  # noqa: E402
+from contactcal.synth.window import WindowReflection  # noqa: E402
+
+FAST = FidelityConfig(
+    sessions=2,
+    pressures_kpa=(0, 1, 2, 3, 5, 10, 15, 20),
+    seed=9000,
+    render=RenderConfig(width=160, height=120, spp=4),
+)
+FULL = FidelityConfig(sessions=12, workers=2)
+RING_TO_EDGE_MAX = 0.15  # of the ring radius (~1.7 mm on the membrane): our reflex sits ~1 mm
+#   outside the contact edge where the paper's hugs it (docs/fidelity.md, "where we differ")
+
+
+@pytest.fixture(scope="module")
+def fast() -> list[SessionFidelity]:
+    return [r for r, _ in run_fidelity(FAST)]
+
+
+def _at(r: SessionFidelity, field: str, lo: float, hi: float = 99.0) -> list:
+    vals = getattr(r, field)
+    return [v for p, v in zip(r.pressures_kpa, vals, strict=True) if lo <= p <= hi]
+
+
+def test_window_ring_circle_is_the_reflex_outer_edge() -> None:
+    """Reference: the closed-form outer edge equals the window reflex layer's support."""
+    for rig in (RigGeometry(), RigGeometry(lgp_gap_mm=12.0), RigGeometry(lgp_gap_mm=1.0)):
+        refl = WindowReflection(rig, 400, 300, 16, ss=2)(1.0, np.ones(16))[..., 0]
+        cx, cy, r = window_ring_circle(rig, 400, 300)
+        ys, xs = np.nonzero(refl > 0)
+        assert np.max(np.hypot(xs - cx, ys - cy)) == pytest.approx(r, abs=1.0)
+
+
+def test_roi_step_finds_the_whole_window_ring(fast: list[SessionFidelity]) -> None:
+    """1a: the published ROI step finds the ring (centre 2 %, radius 3 %)."""
+    for r in fast:
+        assert r.roi_found and r.roi_ok, (r.roi_centre_error, r.roi_radius_error)
+        assert r.bright_in_ring >= 0.95  # at 0 kPa the window ring is the brightest structure
+
+
+def test_inner_ring_shrinks_before_contact_then_hugs_it(fast: list[SessionFidelity]) -> None:
+    """1b: inner ring back and shrinking at 1-2 kPa, onset 2-4 kPa, then at the contact edge."""
+    for r in fast:
+        assert 2.0 <= r.onset_kpa <= 4.0
+        one, two = _at(r, "inner_ring", 1, 1)[0], _at(r, "inner_ring", 2, 2)[0]
+        assert two is not None and (one is None or two < one), (one, two)
+        late = [v for v in _at(r, "ring_to_edge", r.onset_kpa + 5.0) if v is not None]
+        assert late and max(late) <= RING_TO_EDGE_MAX, late
+
+
+def test_published_routine_overestimates_from_5_kpa(fast: list[SessionFidelity]) -> None:
+    """1c (fast subset): the routine overestimates at >= 5 kPa, by < 60 % at 15-20 kPa.
+
+    At 160 px the routine's kernels shrink to 1 px, so single frames may land a few % under;
+    the per-session median must still be an overestimate (the full check bins at 400 px).
+    """
+    for r in fast:
+        errs = _at(r, "classical_error", 5.0)
+        assert errs and all(e is not None for e in errs) and np.median(errs) > 0, errs
+        assert all(e < 0.6 for e in _at(r, "classical_error", 15.0)), errs
+
+
+def test_patch_fits_the_roi_and_the_blob_encloses_it(fast: list[SessionFidelity]) -> None:
+    """1d, 1e: the contact patch is inside the 55 % ROI; the half-max blob encloses it."""
+    for r in fast:
+        inside = [v for v in r.patch_in_roi if v is not None]
+        assert inside and min(inside) >= 0.99, inside
+        assert all(_at(r, "blob_encloses", 5.0)), r.blob_encloses
+
+
+@pytest.mark.slow
+def test_full_fidelity_check_on_twelve_nominal_sessions() -> None:
+    """1a-1e on twelve sessions at 400x300 (numbers in docs/fidelity.md)."""
+    s = summarise([r for r, _ in run_fidelity(FULL)])
+    assert s["roi_ok"] >= 0.95 * s["sessions"]
+    high = s["bins"][-1]
+    assert 3.0 <= high["median_error_pct"] <= 25.0
+    assert s["sessions_over_30pct_at_15_20"] <= s["sessions"] / 6
+    assert all(b["patch_in_roi_min"] is None or b["patch_in_roi_min"] >= 0.99 for b in s["bins"])
