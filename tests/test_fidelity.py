@@ -11,12 +11,12 @@ import pytest
 
 pytest.importorskip("mitsuba")
 
-from contactcal.synth.fidelity import SessionFidelity  # noqa: E402
-from contactcal.synth.fidelity_report import FidelityConfig, run_fidelity, summarise  # noqa: E402
-from contactcal.synth.reflexes import window_ring_circle  # noqa: E402
-from contactcal.synth.rig import RigGeometry  # noqa: E402
-from contactcal.synth.session import RenderConfig  # noqa: E402
-from contactcal.synth.window import WindowReflection  # noqa: E402
+from contactcal.synth.fidelity import SessionFidelity
+from contactcal.synth.fidelity_report import FidelityConfig, run_fidelity, summarise
+from contactcal.synth.reflexes import window_ring_circle
+from contactcal.synth.rig import RigGeometry
+from contactcal.synth.session import RenderConfig
+from contactcal.synth.window import WindowReflection
 
 FAST = FidelityConfig(
     sessions=2,
