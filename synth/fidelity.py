@@ -7,8 +7,9 @@ the way the paper describes its photographs and its routine (docs/fidelity.md):
   ring: centre within ``ROI_CENTRE_TOLERANCE`` of its radius, radius within
   ``ROI_RADIUS_TOLERANCE``, against the ring's true outer edge (``reflexes.window_ring_circle``
   moved by the camera's tilt and shift);
-* **brightest ring**: at 0 kPa, the share of pixels above the ROI threshold that lie in the
-  window ring's band (the flat membrane must stay below it);
+* **brightest ring**: at 0 kPa, the share of the pixels the ROI step keeps (above its threshold,
+  after its erosion) that lie in the window ring's band, and the ring's median grey level
+  against the 99th percentile inside it;
 * **inner ring** (Fig. 10): the radius of the mirror reflex of the LGP in the mean membrane
   surface per pressure, as a fraction of the window ring's radius (geometry, no noise);
 * **routine error** (Figs. 11-12): the published routine's signed relative area error per frame;
@@ -47,12 +48,15 @@ class SessionFidelity:
     roi_found: bool  # the ROI step returned a circle
     roi_centre_error: float  # |found - true centre| / true radius (inf when not found)
     roi_radius_error: float  # |found - true radius| / true radius (inf when not found)
-    bright_in_ring: float  # at 0 kPa: share of pixels > the ROI threshold inside the ring band
+    bright_in_ring: float  # at 0 kPa: share of pixels > threshold, after the erosion, in the ring
+    ring_grey: float  # at 0 kPa: median grey level of the window ring's band
+    inside_grey_p99: float  # at 0 kPa: 99th percentile grey inside the ring's inner edge
     onset_kpa: float  # mechanics onset
     pressures_kpa: tuple[float, ...]
     inner_ring: tuple[float | None, ...]  # reflex radius / window ring radius; None = absent
     ring_to_edge: tuple[float | None, ...]  # median reflex-to-contact distance / ring radius
     classical_error: tuple[float | None, ...]  # (A_routine - A_true) / A_true; None: no contact
+    false_contact: tuple[bool | None, ...]  # no true contact, the routine reports some; None: has
     patch_in_roi: tuple[float | None, ...]  # share of contact pixels inside the true ROI
     blob_encloses: tuple[bool | None, ...]  # routine's blob covers >= 95 % of the contact
 
@@ -145,18 +149,22 @@ def measure_session(
         c_err = math.hypot(roi.cx - cx, roi.cy - cy) / r
         r_err = abs(roi.ring_radius - r) / r
     gray = cv2.cvtColor(ref.frame, cv2.COLOR_RGB2GRAY)
-    bright = gray > config.ring_threshold
+    bright = _eroded_bright(gray, config)
     inner_edge = r * _ring_inner_fraction(session)
     band = _disc(gray.shape, cx, cy, r + 2.0) & ~_disc(gray.shape, cx, cy, inner_edge - 2.0)
     in_ring = float(np.mean(band[bright])) if bright.any() else 0.0
+    interior = _disc(gray.shape, cx, cy, inner_edge - 2.0)
     true_roi = _disc((h, w), cx, cy, config.roi_fraction * r)
-    errs, inside, encl, rings, edge = [], [], [], [], []
+    errs, inside, encl, rings, edge, false = [], [], [], [], [], []
     for f in frames:
         ring, to_edge = _inner_ring(session, f, r)
         rings.append(ring), edge.append(to_edge)
         if not f.mask.any() or roi is None:
             errs.append(None), inside.append(None), encl.append(None)
+            none = roi is None or f.mask.any()
+            false.append(None if none else measure_classical(f.frame, roi, config).contact)
             continue
+        false.append(None)
         e, i, b = _contact_frame(f, roi, true_roi, config)
         errs.append(e), inside.append(i), encl.append(b)
     return SessionFidelity(
@@ -164,14 +172,25 @@ def measure_session(
         roi_centre_error=c_err,
         roi_radius_error=r_err,
         bright_in_ring=in_ring,
+        ring_grey=float(np.median(gray[band])),
+        inside_grey_p99=float(np.percentile(gray[interior], 99)),
         onset_kpa=session.onset_kpa,
         pressures_kpa=tuple(f.pressure_kpa for f in frames),
         inner_ring=tuple(rings),
         ring_to_edge=tuple(edge),
         classical_error=tuple(errs),
+        false_contact=tuple(false),
         patch_in_roi=tuple(inside),
         blob_encloses=tuple(encl),
     )
+
+
+def _eroded_bright(gray: np.ndarray, config: ClassicalConfig) -> np.ndarray:
+    """The ROI step's binary image after its erosion (``(H, W) bool``)."""
+    k = max(1, round(config.ring_erode_px * gray.shape[1] / config.reference_width_px))
+    kernel = cv2.getStructuringElement(cv2.MORPH_ELLIPSE, (k, k))
+    _, ring = cv2.threshold(gray, config.ring_threshold, 255, cv2.THRESH_BINARY)
+    return cv2.erode(ring, kernel) > 0
 
 
 def _ring_inner_fraction(session: SessionParams) -> float:

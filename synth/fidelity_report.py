@@ -88,6 +88,7 @@ def summarise(results: Sequence[SessionFidelity]) -> dict[str, object]:
         errs = [e for e in _bin_values(results, lo, hi, "classical_error") if e is not None]
         inside = [v for v in _bin_values(results, lo, hi, "patch_in_roi") if v is not None]
         encl = [v for v in _bin_values(results, lo, hi, "blob_encloses") if v is not None]
+        false = [v for v in _bin_values(results, lo, hi, "false_contact") if v is not None]
         bins.append(
             {
                 "bin_kpa": [lo, hi],
@@ -98,6 +99,8 @@ def summarise(results: Sequence[SessionFidelity]) -> dict[str, object]:
                 "over_30pct": int(sum(abs(e) > 0.30 for e in errs)),
                 "patch_in_roi_min": float(min(inside)) if inside else None,
                 "blob_encloses_share": float(np.mean(encl)) if encl else None,
+                "frames_without_contact": len(false),
+                "routine_reports_contact": int(sum(false)),
             }
         )
     high = [_session_high(r) for r in results]
@@ -122,8 +125,8 @@ def summary_markdown(summary: dict[str, object]) -> str:
     """The per-bin table of docs/fidelity.md."""
     rows = [
         "| pressure (kPa) | frames with contact | routine median error | IQR | off by > 30 % "
-        "| patch in ROI (min) | blob encloses contact |",
-        "|---|---|---|---|---|---|---|",
+        "| patch in ROI (min) | blob encloses contact | no contact, routine says contact |",
+        "|---|---|---|---|---|---|---|---|",
     ]
     for b in summary["bins"]:  # type: ignore[union-attr]
         lo, hi = b["bin_kpa"]
@@ -140,7 +143,8 @@ def summary_markdown(summary: dict[str, object]) -> str:
         encl = "—" if b["blob_encloses_share"] is None else f"{b['blob_encloses_share']:.0%}"
         rows.append(
             f"| {lo:g}–{hi:g} | {b['frames_with_contact']} | {pct(b['median_error_pct'])} "
-            f"| {iqr} | {b['over_30pct']} | {inside} | {encl} |"
+            f"| {iqr} | {b['over_30pct']} | {inside} | {encl} "
+            f"| {b['routine_reports_contact']} of {b['frames_without_contact']} |"
         )
     return "\n".join(rows) + "\n"
 
