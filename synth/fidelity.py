@@ -33,6 +33,7 @@ from contactcal.synth.randomize import SessionParams
 from contactcal.synth.reflexes import membrane_reflex_mask, window_ring_circle
 from contactcal.synth.rig import focal_px
 from contactcal.synth.session import FrameOutput
+from contactcal.synth.window import WindowReflection
 
 __all__ = ["ROI_CENTRE_TOLERANCE", "ROI_RADIUS_TOLERANCE", "SessionFidelity", "measure_session"]
 
@@ -150,10 +151,9 @@ def measure_session(
         r_err = abs(roi.ring_radius - r) / r
     gray = cv2.cvtColor(ref.frame, cv2.COLOR_RGB2GRAY)
     bright = _eroded_bright(gray, config)
-    inner_edge = r * _ring_inner_fraction(session)
-    band = _disc(gray.shape, cx, cy, r + 2.0) & ~_disc(gray.shape, cx, cy, inner_edge - 2.0)
+    band = _ring_band(session, w, h)
     in_ring = float(np.mean(band[bright])) if bright.any() else 0.0
-    interior = _disc(gray.shape, cx, cy, inner_edge - 2.0)
+    interior = _disc(gray.shape, cx, cy, r) & ~cv2.dilate(band.astype(np.uint8), None).astype(bool)
     true_roi = _disc((h, w), cx, cy, config.roi_fraction * r)
     errs, inside, encl, rings, edge, false = [], [], [], [], [], []
     for f in frames:
@@ -193,10 +193,10 @@ def _eroded_bright(gray: np.ndarray, config: ClassicalConfig) -> np.ndarray:
     return cv2.erode(ring, kernel) > 0
 
 
-def _ring_inner_fraction(session: SessionParams) -> float:
-    """Inner edge of the window ring as a fraction of its outer radius (closed form)."""
-    rig = session.rig
-    h = rig.z_window_bottom - rig.camera_position[2]
-    tan_in = rig.lgp_inner_radius_mm / (h + rig.lgp_gap_mm)
-    tan_out = min(rig.lgp_outer_radius_mm / (h + rig.lgp_gap_mm), rig.cylinder_radius_mm / h)
-    return tan_in / tan_out
+def _ring_band(session: SessionParams, w: int, h: int) -> np.ndarray:
+    """``(H, W) bool`` pixels of the window ring (both reflexes), in the saved frame's pixels."""
+    rig, cam = session.rig, session.camera
+    support = WindowReflection(rig, w, h, 16, ss=2)(1.0, np.ones(16))[..., 0] > 0
+    hmat = tilt_homography(w, h, cam.tilt_deg, cam.shift_px, focal_px(rig, h))
+    warped = cv2.warpPerspective(support.astype(np.uint8), hmat, (w, h), flags=cv2.INTER_NEAREST)
+    return cv2.dilate(warped, np.ones((3, 3), np.uint8)) > 0

@@ -26,8 +26,9 @@ class FingerprintConfig:
     """Parameters of the fingerprint texture generator (lengths in mm)."""
 
     size_mm: float = 28.0  # side of the square; covers membranes of radius <= 14 mm; cost ~ size²
-    px_per_mm: float = 18.0  # 7.2-9 px per ridge period by default; higher = sharper, cost ~ px²
-    period_mm_range: tuple[float, float] = (0.40, 0.50)  # ridge+valley period drawn uniformly
+    px_per_mm: float = 20.0  # 7-11 px per ridge period by default; higher = sharper, cost ~ px²
+    period_mm_range: tuple[float, float] = (0.35, 0.55)  # ridge+valley period drawn uniformly
+    #   (Maltoni: ~0.5 mm, 0.40-0.47 from ridge counts; widened for children/large fingers)
     period_variation: float = 0.03  # relative std of the local period (slow warp); 0 = uniform
     iterations: int = 6  # ridge-growth iterations; fewer = noisier ridges, more = slower
     orientation_bins: int = 16  # oriented filters; fewer = faster but facetted curved ridges

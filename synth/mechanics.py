@@ -12,6 +12,9 @@ Model (one call to `solve_contact` per pressure):
    gap at a third of the onset pressure), which is what brings the inner ring back and shrinks
    it at 1-2 kPa as in the paper (docs/fidelity.md); a linear law ``h = p a² / (4 T)`` would
    not.
+   A membrane without pre-tension is slack at rest: below ``SLACK_TAUT_KPA`` its cap carries
+   seeded wrinkles of amplitude ``slack_mm`` (fading linearly), which scatter the flat
+   membrane's reflection of the LGP (the paper sees no inner ring at 0 kPa).
 2. Onset: the apex reaches the finger at gap ``g``; ``p_on = 4 T g / a²`` defines the
    effective tension ``T`` at onset used for the shape in contact.
 3. Area: Hertz finger law ``A_h(F) = pi (0.75 R F / E_f(F))^(2/3)``, ``E_f = E0 (1 + beta F)``
@@ -64,6 +67,7 @@ __all__ = [
     "CLAMP_MARGIN_FRACTION",
     "INFLATION_EXPONENT",
     "MAX_INDENTATION_MM",
+    "SLACK_TAUT_KPA",
     "TILT_EGG_GAIN",
     "ContactState",
     "FingerParams",
@@ -78,6 +82,7 @@ __all__ = [
 CLAMP_MARGIN_FRACTION = 0.08  # patch kept within (1 - this) a, leaving room for the annulus
 MAX_INDENTATION_MM = 3.0  # finger pulp indentation saturates near this (soft clip); the
 #   uncoupled height law alone would push a soft membrane (large gap, low tension) 5+ mm in
+SLACK_TAUT_KPA = 0.5  # kPa: the slack membrane's wrinkles fade linearly to 0 by this pressure
 INFLATION_EXPONENT = 1.0 / 3.0  # free cap h ∝ p^this: 1/3 = Hencky membrane (no pre-tension);
 #   1 = pre-tensioned (linear) membrane, whose inner ring only returns just before contact
 CENTRE_MAX_FRACTION = 0.5  # |patch centre| <= this * a; beyond, the finger is off the membrane
@@ -191,7 +196,13 @@ def _plateau_height(pressure_kpa: float, area_mm2: float, membrane: MembranePara
 
 
 def _free_cap(
-    pressure_kpa: float, p_on: float, finger: FingerParams, a: float, t: float
+    pressure_kpa: float,
+    p_on: float,
+    finger: FingerParams,
+    a: float,
+    t: float,
+    slack_mm: float = 0.0,
+    slack_seed: int = 0,
 ) -> ContactState:
     """State without contact: the paraboloid cap of apex ``g (p / p_on)^INFLATION_EXPONENT``."""
     gap = p_on / 1000.0 * a * a / (4.0 * t)
@@ -204,6 +215,8 @@ def _free_cap(
         yaw_rad=float(finger.yaw_rad),
         area_mm2=0.0,
         plateau_z_mm=gap * (pressure_kpa / p_on) ** INFLATION_EXPONENT,
+        slack_mm=slack_mm * max(0.0, 1.0 - pressure_kpa / SLACK_TAUT_KPA),
+        slack_seed=slack_seed,
         indentation_mm=0.0,
         clamp_radius_mm=float(a),
     )
@@ -237,7 +250,15 @@ def solve_contact(
     a = membrane.clamp_radius_mm
     p_on = onset_pressure_kpa(membrane)
     if pressure_kpa <= p_on:
-        return _free_cap(pressure_kpa, p_on, finger, a, membrane.tension_n_per_mm)
+        return _free_cap(
+            pressure_kpa,
+            p_on,
+            finger,
+            a,
+            membrane.tension_n_per_mm,
+            membrane.slack_mm,
+            membrane.slack_seed,
+        )
     semi = _patch_semi_axes(pressure_kpa, p_on, finger, membrane.onset_ramp_kpa)
     centre = _patch_centre(finger, a)
     harm = _patch_harmonics(finger)

@@ -81,12 +81,15 @@ class FingerParams:
 
 @dataclass(frozen=True)
 class MembraneParams:
-    """Clamped, pre-tensioned membrane and its gap to the finger."""
+    """Clamped membrane, its gap to the finger and its slack at rest."""
 
     clamp_radius_mm: float  # mm, clamp circle radius a (11.5-13.5); larger -> softer, earlier onset
     tension_n_per_mm: float  # N/mm, effective tension T (0.05-0.12); larger -> later onset
     gap_mm: float  # mm, flat membrane to finger's lowest point (1-2), >= 0; larger -> later onset
     onset_ramp_kpa: float  # kPa, ramp tau (0.5-1); smaller -> area jumps faster after onset
+    slack_mm: float = 0.0  # mm, wrinkle amplitude of the slack membrane at 0 kPa (gone by
+    #   SLACK_TAUT_KPA); scatters the flat membrane's LGP reflex, absent at 0 kPa in the paper
+    slack_seed: int = 0  # seed of the wrinkle pattern (one membrane = one pattern)
 
     def __post_init__(self) -> None:
         _positive("MembraneParams.clamp_radius_mm", self.clamp_radius_mm)
@@ -94,3 +97,5 @@ class MembraneParams:
         _positive("MembraneParams.onset_ramp_kpa", self.onset_ramp_kpa)
         g = self.gap_mm
         _require(_finite(g) and g >= 0.0, "MembraneParams.gap_mm", "finite >= 0 (mm)", g)
+        w = self.slack_mm
+        _require(_finite(w) and w >= 0.0, "MembraneParams.slack_mm", "finite >= 0 (mm)", w)

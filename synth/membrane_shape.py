@@ -15,7 +15,13 @@ from dataclasses import dataclass
 
 import numpy as np
 
-__all__ = ["AREA_POLYGON_POINTS", "ContactState", "boundary_radius", "polygon_area_mm2"]
+__all__ = [
+    "AREA_POLYGON_POINTS",
+    "ContactState",
+    "boundary_radius",
+    "polygon_area_mm2",
+    "wrinkles",
+]
 
 AREA_POLYGON_POINTS = 4096  # shoelace resolution for `area_mm2` (relative error ~1e-6)
 
@@ -65,6 +71,8 @@ class ContactState:
     indentation_mm: float  # mm, finger indentation plateau_z - gap (>= 0); 0 without contact
     clamp_radius_mm: float  # mm, clamp circle radius a; membrane_z is 0 outside it
     harmonics: tuple[tuple[int, float, float], ...] = ()  # (n, eps_n, phase_n rad) incl. n=1 tilt
+    slack_mm: float = 0.0  # mm, wrinkle amplitude of the (not yet taut) membrane; 0 in contact
+    slack_seed: int = 0  # seed of the wrinkle pattern
 
     def _patch_polar(
         self, x_mm: np.ndarray, y_mm: np.ndarray
@@ -100,7 +108,8 @@ class ContactState:
     def membrane_z(self, x_mm: np.ndarray | float, y_mm: np.ndarray | float) -> np.ndarray:
         """Membrane height above the clamp plane.
 
-        Without contact: paraboloid cap ``h (1 - r²/a²)``. In contact: plateau ``plateau_z_mm``
+        Without contact: paraboloid cap ``h (1 - r²/a²)``, plus the slack wrinkles
+        ``slack_mm · wrinkles(x, y)`` under the same envelope. In contact: plateau ``plateau_z_mm``
         inside the patch and, along each ray from the patch centre, the clamped-annulus profile
         ``z_top f(r)`` from the boundary r_b to the clamp circle R_c (zero slope at r_b, 0 at R_c).
 
@@ -116,7 +125,8 @@ class ContactState:
         a = self.clamp_radius_mm
         if not self.in_contact:
             r2 = np.broadcast_to(x * x + y * y, np.broadcast_shapes(x.shape, y.shape))
-            return np.where(r2 < a * a, self.plateau_z_mm * (1.0 - r2 / (a * a)), 0.0)
+            h = self.plateau_z_mm + self.slack_mm * wrinkles(x, y, self.slack_seed)
+            return np.where(r2 < a * a, h * (1.0 - r2 / (a * a)), 0.0)
         r, rx, ry, c, s = self._patch_polar(x, y)
         rb = boundary_radius(c, s, self.semi_axes_mm, self.harmonics)
         cx, cy = self.centre_mm
@@ -151,6 +161,30 @@ class ContactState:
         return np.stack(
             [self.centre_mm[0] + rb * np.cos(ang), self.centre_mm[1] + rb * np.sin(ang)], axis=1
         )
+
+
+WRINKLE_WAVES = 8  # plane waves summed into the slack membrane's wrinkles
+WRINKLE_PERIOD_MM = (1.5, 4.0)  # wavelength range of the wrinkles, mm
+
+
+def wrinkles(x_mm: np.ndarray, y_mm: np.ndarray, seed: int) -> np.ndarray:
+    """Unit-rms wrinkle pattern of a slack membrane (sum of seeded random plane waves).
+
+    Args:
+        x_mm, y_mm: world coordinates (mm), broadcastable.
+        seed: pattern seed.
+
+    Returns:
+        float64 heights of rms ≈ 1 (multiply by the amplitude in mm).
+    """
+    rng = np.random.default_rng(seed)
+    k = 2 * np.pi / rng.uniform(*WRINKLE_PERIOD_MM, WRINKLE_WAVES)
+    ang = rng.uniform(0.0, np.pi, WRINKLE_WAVES)
+    phase = rng.uniform(0.0, 2 * np.pi, WRINKLE_WAVES)
+    z = np.zeros(np.broadcast_shapes(np.shape(x_mm), np.shape(y_mm)))
+    for kk, aa, pp in zip(k, ang, phase, strict=True):
+        z = z + np.cos(kk * (np.cos(aa) * x_mm + np.sin(aa) * y_mm) + pp)
+    return z * np.sqrt(2.0 / WRINKLE_WAVES)
 
 
 def polygon_area_mm2(points: np.ndarray) -> float:

@@ -19,6 +19,7 @@ from contactcal.synth.coating import MembraneOptics
 from contactcal.synth.mechanics import tension_for_onset
 from contactcal.synth.mechanics_params import FingerParams, MembraneParams
 from contactcal.synth.rig import RigGeometry
+from contactcal.synth.skin import SkinCondition
 
 LED_COUNT = 16  # LEDs feeding the light guide plate (sets the azimuthal non-uniformity's scale)
 BASE_EXPOSURE = 11.0  # × render radiance: puts the window ring near 230 grey and its outer fringe
@@ -41,6 +42,7 @@ class SessionParams:
     lgp_radiance: float  # emitted radiance of the light guide plate (relative)
     lgp_profile: tuple[float, ...]  # (LED_COUNT,) relative brightness around the ring
     camera: CameraEffects  # session's base camera (exposure, blur, noise, JPEG, tilt)
+    skin: SkinCondition  # ridge polarity, dry/wet skin, scars
     hard: bool  # drawn from the hard-case distribution
 
 
@@ -152,9 +154,20 @@ LOOK_DRAWS = (  # camera pose, skin, coating, seeds, LGP brightness
     _uniform("coating_diffuse", 0.0, 0.03, hard=(0.0, 0.1)),  # binder glow; > ~4 % lifts the
     #   dark membrane above half the ring's brightness and the routine's blob swells (fidelity.md)
     Draw("fingerprint_seed", "seed"),
-    _uniform("ridge_contrast", 0.35, 1.0, hard=(0.12, 0.4)),  # faint ridges when hard
+    _uniform("ridge_contrast", 0.35, 1.0, hard=(0.05, 1.0)),  # hard: barely visible to crisp
     Draw("particle_seed", "seed"),
     _uniform("lgp_radiance", 0.9, 1.2, hard=(0.5, 1.6)),
+    # Slack membrane at 0 kPa (mechanics.py): wrinkles of tens of µm tilt the surface by a few
+    # degrees, enough to scatter the flat membrane's LGP reflex (docs/fidelity.md).
+    _uniform("slack_mm", 0.02, 0.06, hard=(0.0, 0.08)),
+    Draw("slack_seed", "seed"),
+)
+SKIN_DRAWS = (  # synth/skin.py; nominal skin is clean, hard skin far beyond (docs/synth.md)
+    _uniform("dryness", 0.0, 0.1, hard=(0.0, 0.6)),
+    _uniform("wetness", 0.0, 0.15, hard=(0.0, 0.8)),
+    _uniform("inverted", 0.0, 0.0, hard=(0.0, 1.0)),  # < 0.5 → ridges darker (hard only)
+    Draw("scar_count", "uniform", (0.0, 1.3), (0.0, 3.99)),  # floor → 0-1 (hard: 0-3) scars
+    Draw("skin_seed", "seed"),
 )
 DIM_SECTOR_PROBABILITY = 0.3  # hard only: share of sessions with a dim LED sector
 JPEG_PROBABILITY = 0.5  # share of sessions saved as JPEG (else lossless)
@@ -193,6 +206,8 @@ def _membrane_and_rig(v: dict[str, Any]) -> tuple[MembraneParams, RigGeometry]:
         tension_n_per_mm=tension_for_onset(v["onset_kpa"], gap, a),
         gap_mm=gap,
         onset_ramp_kpa=v["onset_ramp_kpa"],
+        slack_mm=float(v["slack_mm"]),
+        slack_seed=int(v["slack_seed"]),
     )
     rig = RigGeometry(
         chamber_depth_mm=float(v["chamber_depth_mm"]),
@@ -249,6 +264,7 @@ def sample_session(rng: np.random.Generator, hard: bool = False) -> SessionParam
     v |= _draw(rng, EXPOSURE_DRAWS, hard)
     jpeg_quality = 0 if rng.random() < JPEG_PROBABILITY else int(rng.integers(60, 96))
     v |= _draw(rng, LOOK_DRAWS, hard)
+    v |= _draw(rng, SKIN_DRAWS, hard)
     membrane, rig = _membrane_and_rig(v)
     return SessionParams(
         finger=_finger(v),
@@ -262,6 +278,13 @@ def sample_session(rng: np.random.Generator, hard: bool = False) -> SessionParam
         lgp_radiance=float(v["lgp_radiance"]),
         lgp_profile=tuple(float(x) for x in np.clip(profile, 0.05, None)),
         camera=_camera(v, jpeg_quality),
+        skin=SkinCondition(
+            polarity=-1 if hard and v["inverted"] < 0.5 else 1,
+            dryness=float(v["dryness"]),
+            wetness=float(v["wetness"]),
+            scars=int(v["scar_count"]),
+            seed=int(v["skin_seed"]),
+        ),
         hard=hard,
     )
 

@@ -21,6 +21,7 @@ from contactcal.synth.mechanics import solve_contact
 from contactcal.synth.membrane_shape import ContactState
 from contactcal.synth.randomize import SessionParams, frame_camera
 from contactcal.synth.rig import RigGeometry, focal_px, mm_per_px_at
+from contactcal.synth.skin import apply_skin
 
 if TYPE_CHECKING:
     from contactcal.synth.render import RigRenderer
@@ -76,7 +77,10 @@ def contact_weight(
     cy, sy = math.cos(f.yaw_rad), math.sin(f.yaw_rad)
     along, across = dx * cy + dy * sy, -dx * sy + dy * cy
     ridges = fp.sample(across, along)
-    w = session.ridge_contrast * np.clip(ridges, 0.0, 1.0) * state.inside(x, y)
+    texel = 2 * a / size
+    centre = ((f.offset_mm[0] + a) / texel - 0.5, (f.offset_mm[1] + a) / texel - 0.5)
+    ridges = apply_skin(ridges, texel, centre, session.skin)
+    w = session.ridge_contrast * ridges * state.inside(x, y)
     return w.astype(np.float32)
 
 

@@ -25,7 +25,7 @@ def test_smoke_shape_dtype_range() -> None:
     assert np.isfinite(fp.ridges).all()
     assert fp.ridges.min() >= 0.0 and fp.ridges.max() <= 1.0
     assert fp.ridges.max() > 0.9 and fp.ridges.min() < 0.1  # real ridges and valleys
-    assert 0.40 <= fp.period_mm <= 0.50
+    assert SMALL.period_mm_range[0] <= fp.period_mm <= SMALL.period_mm_range[1]
     assert fp.pattern in PATTERNS
     assert fp.size_mm == pytest.approx(10.0) and fp.px_per_mm == 16.0
 
@@ -66,8 +66,8 @@ def test_measured_period_matches_config(period_mm: float) -> None:
 
 
 def test_default_texture_period_with_variation() -> None:
-    fp = make_fingerprint(np.random.default_rng(11))  # default: 28 mm, 18 px/mm, +-3 % warp
-    assert fp.ridges.shape == (504, 504)
+    fp = make_fingerprint(np.random.default_rng(11))  # default: 28 mm, 20 px/mm, +-3 % warp
+    assert fp.ridges.shape == (560, 560)
     expected = fp.period_mm * fp.px_per_mm
     assert ridge_period_px(fp.ridges) == pytest.approx(expected, rel=0.05)
     n = fp.ridges.shape[0]
