@@ -1,5 +1,8 @@
 """The camera after the optics: exposure, defocus, sensor noise, tone curve, JPEG, small tilt.
 
+The v2 look effects (vignetting, glare, dust, motion blur, white balance, S-curve) live in
+``look.py`` and are carried by ``CameraEffects.look`` (default: none).
+
 Pure numpy/OpenCV. Works on the renderer's linear radiance and turns it into the ``uint8`` frame
 a real rig camera would save. A small camera tilt/offset is applied as an image homography to
 the frame and its mask together (a camera rotation is exactly a homography; the sub-millimetre
@@ -8,10 +11,12 @@ offsets sampled here are nearly so for this shallow scene), so the mask stays ex
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import cv2
 import numpy as np
+
+from contactcal.synth.look import LookEffects, apply_optics, apply_white_balance, tone_curve
 
 
 @dataclass(frozen=True)
@@ -26,6 +31,7 @@ class CameraEffects:
     jpeg_quality: int = 0  # 0 → PNG-like lossless; 60-95 → JPEG round trip artefacts
     tilt_deg: tuple[float, float] = (0.0, 0.0)  # camera rotation about x, y; shifts/keystones
     shift_px: tuple[float, float] = (0.0, 0.0)  # image offset of the optical axis, px
+    look: LookEffects = field(default_factory=LookEffects)  # v2 appearance (look.py); none
 
     def __post_init__(self) -> None:
         if not self.exposure > 0:
@@ -34,6 +40,8 @@ class CameraEffects:
             raise ValueError("defocus_sigma_px and read_noise must be >= 0, full_well > 0")
         if self.jpeg_quality and not 1 <= self.jpeg_quality <= 100:
             raise ValueError(f"jpeg_quality must be 0 (off) or 1-100, got {self.jpeg_quality}")
+        if not isinstance(self.look, LookEffects):
+            raise ValueError(f"synth/camera.py: look must be a LookEffects, got {self.look!r}")
 
 
 def tilt_homography(
@@ -72,7 +80,7 @@ def apply_camera(
         linear_rgb: ``(H, W, 3) float32`` linear radiance, 1.0 ≈ white at exposure 1.
         mask: ``(H, W) bool`` exact contact mask of the same camera.
         fx: camera settings.
-        rng: generator for the noise.
+        rng: generator for the sensor noise (the look's dust/glare use ``fx.look.seed``).
         focal_px: focal length in pixels (for the tilt homography).
 
     Returns:
@@ -91,11 +99,15 @@ def apply_camera(
         hmat = tilt_homography(w, h, fx.tilt_deg, fx.shift_px, focal_px)
         img = cv2.warpPerspective(img, hmat, (w, h), flags=cv2.INTER_LINEAR)
         m = cv2.warpPerspective(m, hmat, (w, h), flags=cv2.INTER_NEAREST)
+    img = apply_optics(img, fx.look)  # vignetting, glare, dust, motion blur (never the mask)
     if fx.defocus_sigma_px > 0:
         img = cv2.GaussianBlur(img, (0, 0), fx.defocus_sigma_px)
     electrons = rng.poisson(np.clip(img, 0.0, 4.0) * fx.full_well).astype(np.float32)
     img = electrons / fx.full_well + rng.normal(0.0, fx.read_noise, img.shape).astype(np.float32)
+    img = apply_white_balance(img, fx.look.wb_gains)
     img = np.clip(img, 0.0, 1.0) ** (1.0 / fx.gamma)
+    if fx.look.tone_strength > 0:
+        img = tone_curve(img, fx.look.tone_strength)
     out = np.rint(img * 255.0).astype(np.uint8)
     if fx.jpeg_quality:
         ok, buf = cv2.imencode(".jpg", out[:, :, ::-1], [cv2.IMWRITE_JPEG_QUALITY, fx.jpeg_quality])

@@ -16,6 +16,7 @@ import numpy as np
 
 from contactcal.synth.camera import CameraEffects
 from contactcal.synth.coating import MembraneOptics
+from contactcal.synth.look import LookEffects
 from contactcal.synth.mechanics import tension_for_onset
 from contactcal.synth.mechanics_params import FingerParams, MembraneParams
 from contactcal.synth.rig import RigGeometry
@@ -53,7 +54,7 @@ class Draw:
     ``kind`` and the meaning of ``nominal`` / ``hard`` (the latter used when ``hard=True``;
     None = same as nominal): ``"uniform"`` (lo, hi); ``"normal"`` (mean, sd); ``"lognormal"``
     (0, sd) -> ``exp(N(0, sd))``; ``"loguniform"`` (lo, hi) -> ``exp(U(log lo, log hi))``;
-    ``"seed"`` -> an int in [0, 2³¹) (no parameters).
+    ``"seed"`` -> an int in [0, 2³¹) (no parameters). ``hard_kind``: another kind for ``hard``.
     """
 
     name: str
@@ -61,21 +62,23 @@ class Draw:
     nominal: tuple[float, float] = (0.0, 0.0)
     hard: tuple[float, float] | None = None
     size: int | None = None
+    hard_kind: str | None = None
 
     def sample(self, rng: np.random.Generator, hard: bool) -> Any:
         """Draw the value (exactly one generator call)."""
         lo, hi = self.hard if hard and self.hard is not None else self.nominal
-        if self.kind == "uniform":
+        kind = self.hard_kind if hard and self.hard_kind else self.kind
+        if kind == "uniform":
             return rng.uniform(lo, hi, self.size)
-        if self.kind == "normal":
+        if kind == "normal":
             return rng.normal(lo, hi, self.size)
-        if self.kind == "lognormal":
+        if kind == "lognormal":
             return float(math.exp(rng.normal(lo, hi)))
-        if self.kind == "loguniform":
+        if kind == "loguniform":
             return float(math.exp(rng.uniform(math.log(lo), math.log(hi))))
-        if self.kind == "seed":
+        if kind == "seed":
             return int(rng.integers(2**31))
-        raise ValueError(f"synth/randomize.py: unknown Draw kind {self.kind!r}")
+        raise ValueError(f"synth/randomize.py: unknown Draw kind {kind!r}")
 
 
 def _uniform(name: str, lo: float, hi: float, hard: tuple[float, float] | None = None) -> Draw:
@@ -127,13 +130,14 @@ BODY_DRAWS = (  # finger, membrane, rig, LED profile
 )
 # (hard only: a dim LED sector is drawn here, see _dim_sector)
 EXPOSURE_DRAWS = (
-    Draw("exposure_gain", "lognormal", (0.0, 0.1), (0.0, 0.6)),  # nominal: a set-up camera
+    # nominal: a set-up camera; hard: ±2 stops, clipped window rings included
+    Draw("exposure_gain", "lognormal", (0.0, 0.1), (0.25, 4.0), hard_kind="loguniform"),
     _uniform("defocus_sigma_px", 0.0, 1.0, hard=(0.0, 2.2)),
     Draw("full_well", "loguniform", (300.0, 5000.0)),
     _uniform("read_noise", 0.002, 0.012),
     _uniform("gamma", 1.8, 2.4),
 )
-# (the JPEG quality is drawn here: lossless or 60-95, half and half)
+# (the JPEG quality is drawn here: lossless or 50-98, half and half)
 LOOK_DRAWS = (  # camera pose, skin, coating, seeds, LGP brightness
     _normal("camera_tilt_x_deg", 0.0, 0.6),
     _normal("camera_tilt_y_deg", 0.0, 0.6),
@@ -169,6 +173,21 @@ SKIN_DRAWS = (  # synth/skin.py; nominal skin is clean, hard skin far beyond (do
     Draw("scar_count", "uniform", (0.0, 1.3), (0.0, 3.99)),  # floor → 0-1 (hard: 0-3) scars
     Draw("skin_seed", "seed"),
 )
+# Appearance v2 (synth/look.py, docs/synth.md), drawn last so the draws above keep their values.
+CAMERA2_DRAWS = (
+    _uniform("lgp_inner_radius_mm", 11.5, 11.5, hard=(10.5, 12.5)),  # hard: ring width
+    _uniform("tone_strength", 0.0, 0.1, hard=(0.0, 0.5)),  # S-curve blend
+    Draw("wb_gains", "uniform", (0.97, 1.03), (0.75, 1.25), size=3),  # white balance / cast
+    _uniform("vignetting", 0.0, 0.1, hard=(0.0, 0.4)),
+    Draw("vignette_centre", "normal", (0.0, 0.03), size=2),  # × image width
+    _uniform("motion_blur_px", 0.0, 0.0, hard=(0.0, 3.0)),
+    _uniform("motion_blur_deg", 0.0, 180.0),
+    Draw("dust_count", "uniform", (0.0, 3.99), (0.0, 15.99)),  # floor → 0-3 (hard: 0-15)
+    _uniform("stray_draw", 1.0, 1.0, hard=(0.0, 1.0)),  # < STRAY_PROBABILITY → glare
+    _uniform("stray_amplitude", 0.0, 0.0, hard=(0.0, 0.15)),  # fraction of white
+    Draw("look_seed", "seed"),
+)
+STRAY_PROBABILITY = 0.3  # hard only: share of sessions with a stray reflection
 DIM_SECTOR_PROBABILITY = 0.3  # hard only: share of sessions with a dim LED sector
 JPEG_PROBABILITY = 0.5  # share of sessions saved as JPEG (else lossless)
 
@@ -215,6 +234,7 @@ def _membrane_and_rig(v: dict[str, Any]) -> tuple[MembraneParams, RigGeometry]:
         lgp_gap_mm=float(v["lgp_gap_mm"]),
         fov_y_deg=float(v["fov_y_deg"]),
         camera_offset_mm=(float(v["camera_offset_x_mm"]), float(v["camera_offset_y_mm"])),
+        lgp_inner_radius_mm=float(v["lgp_inner_radius_mm"]),
     )
     return membrane, rig
 
@@ -229,6 +249,17 @@ def _camera(v: dict[str, Any], jpeg_quality: int) -> CameraEffects:
         jpeg_quality=jpeg_quality,
         tilt_deg=(float(v["camera_tilt_x_deg"]), float(v["camera_tilt_y_deg"])),
         shift_px=(float(v["shift_x_px"]), float(v["shift_y_px"])),
+        look=LookEffects(
+            vignetting=float(v["vignetting"]),
+            vignette_centre=tuple(float(c) for c in np.clip(v["vignette_centre"], -0.5, 0.5)),
+            wb_gains=tuple(float(g) for g in v["wb_gains"]),
+            tone_strength=float(v["tone_strength"]),
+            motion_blur_px=float(v["motion_blur_px"]),
+            motion_blur_deg=float(v["motion_blur_deg"]),
+            dust_count=int(v["dust_count"]),
+            stray_amplitude=float(v["stray_amplitude"]) * (v["stray_draw"] < STRAY_PROBABILITY),
+            seed=int(v["look_seed"]),
+        ),
     )
 
 
@@ -262,9 +293,10 @@ def sample_session(rng: np.random.Generator, hard: bool = False) -> SessionParam
     if hard and rng.random() < DIM_SECTOR_PROBABILITY:
         _dim_sector(rng, profile)
     v |= _draw(rng, EXPOSURE_DRAWS, hard)
-    jpeg_quality = 0 if rng.random() < JPEG_PROBABILITY else int(rng.integers(60, 96))
+    jpeg_quality = 0 if rng.random() < JPEG_PROBABILITY else int(rng.integers(50, 99))
     v |= _draw(rng, LOOK_DRAWS, hard)
     v |= _draw(rng, SKIN_DRAWS, hard)
+    v |= _draw(rng, CAMERA2_DRAWS, hard)  # v2 appearance, last: earlier draws keep their values
     membrane, rig = _membrane_and_rig(v)
     return SessionParams(
         finger=_finger(v),

@@ -63,11 +63,20 @@ class Augmenter(torch.nn.Module):
         preprocess: the normalisation constants of the cached inputs.
         seed: seed of the Augmenter's own generator (``self.generator``, CPU); save and restore
             its ``get_state()`` / ``set_state()`` to resume.
+        reference_dropout: share of samples whose reference channel (channel 1 of a 2-channel
+            input) becomes the blank placeholder, drawn from ``self.generator``.
     """
 
-    def __init__(self, config: AugmentConfig, preprocess: PreprocessConfig, seed: int = 0) -> None:
+    def __init__(
+        self,
+        config: AugmentConfig,
+        preprocess: PreprocessConfig,
+        seed: int = 0,
+        reference_dropout: float = 0.0,
+    ) -> None:
         super().__init__()
         self.config = config
+        self.reference_dropout = reference_dropout
         self.preprocess = preprocess
         self.generator = torch.Generator().manual_seed(seed)
         c = config
@@ -100,12 +109,15 @@ class Augmenter(torch.nn.Module):
         Returns:
             ``(x, mask)`` of the same shapes and dtypes; mask stays binary.
         """
-        if not self.config.enabled:
-            return x, mask
         u = network_to_unit(x, self.preprocess).clamp(0.0, 1.0)
-        with self._seeded(x.device):
-            u, m = self.seq(u, mask)
-        u = u.clamp(0.0, 1.0)
+        m = mask
+        if self.config.enabled:
+            with self._seeded(x.device):
+                u, m = self.seq(u, mask)
+            u = u.clamp(0.0, 1.0)
+        if self.reference_dropout > 0.0 and u.shape[1] == 2:
+            drop = torch.rand(u.shape[0], generator=self.generator) < self.reference_dropout
+            u[drop.to(u.device), 1] = 0.0  # prepare.blank_reference: black, after the warp
         return unit_to_network(u, self.preprocess), (m > 0.5).to(mask.dtype)
 
     @contextmanager

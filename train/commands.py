@@ -42,6 +42,13 @@ def add_parsers(sub: Any) -> None:
         default=None,
         help="feed the session's zero-pressure frame as a 2nd channel (default on)",
     )
+    t.add_argument(
+        "--reference-dropout",
+        type=float,
+        metavar="P",
+        help="share of training frames whose reference channel is blanked, so one model works "
+        "with and without a reference frame (default 0)",
+    )
     t.add_argument("--seed", type=int, help="split/init/shuffle/augmentation seed (default 0)")
     t.add_argument("--batch-size", type=int, metavar="B", help="frames per step (default 16)")
     # dest differs from the deployment commands' --threads (onnxruntime threads, an int >= 1
@@ -109,6 +116,7 @@ def build_config(args: argparse.Namespace) -> Any:
         "device": args.device,
         "input_size": args.input_size,
         "use_reference": args.reference,
+        "reference_dropout": args.reference_dropout,
         "seed": args.seed,
         "batch_size": args.batch_size,
         "num_threads": args.torch_threads,

@@ -25,6 +25,9 @@ class TrainConfig:
     input_size: int = 256  # px, network input side (overrides preprocess.input_size)
     use_reference: bool = True  # 2nd channel = session's zero-pressure frame; helps the onset,
     #   needs a reference frame at deployment
+    reference_dropout: float = 0.0  # share of training frames whose reference channel is the
+    #   blank placeholder (deployment without a reference frame); more = better without a
+    #   reference, less use of the reference's onset cue
     bce_weight: float = 1.0  # weight of per-pixel BCE (calibration, stable gradients)
     dice_weight: float = 1.0  # weight of per-frame soft Dice (small contacts count fully)
     device: str = "auto"  # "cpu", "cuda" or "auto" (cuda when available)
@@ -50,6 +53,10 @@ class TrainConfig:
             raise ValueError(f"device must be cpu, cuda or auto, got {self.device!r}")
         if self.input_size < 16:
             raise ValueError(f"input_size must be >= 16 px, got {self.input_size}")
+        if not 0.0 <= self.reference_dropout < 1.0:
+            raise ValueError(f"reference_dropout must be in [0, 1), got {self.reference_dropout}")
+        if self.reference_dropout > 0.0 and not self.use_reference:
+            raise ValueError("reference_dropout needs the reference channel (use_reference)")
         if not 0.0 < self.prob_threshold < 1.0:
             raise ValueError(f"prob_threshold must be in (0, 1), got {self.prob_threshold}")
 
@@ -58,7 +65,11 @@ class TrainConfig:
         return dataclasses.replace(
             self,
             model=dataclasses.replace(self.model, in_channels=2 if self.use_reference else 1),
-            preprocess=dataclasses.replace(self.preprocess, input_size=self.input_size),
+            preprocess=dataclasses.replace(
+                self.preprocess,
+                input_size=self.input_size,
+                no_reference="blank" if self.reference_dropout > 0.0 else "self",
+            ),
         )
 
     def spec(self) -> ModelSpec:

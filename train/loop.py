@@ -134,7 +134,9 @@ def _prepare(dirs: list[Path], out: Path, cfg: TrainConfig, resume: bool, progre
     )
     shuffle = torch.Generator().manual_seed(cfg.seed)
     # A stream apart from the shuffling's (seeded cfg.seed).
-    augment = Augmenter(cfg.augment, cfg.preprocess, seed=cfg.seed + 1).to(device)
+    augment = Augmenter(
+        cfg.augment, cfg.preprocess, seed=cfg.seed + 1, reference_dropout=cfg.reference_dropout
+    ).to(device)
     run = Run(cfg, out, digest, device, train_set, val_set, model, opt, sched, shuffle, augment)
     if ckpt is not None:
         model.load_state_dict(ckpt["model"])

@@ -4,6 +4,8 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
+NO_REFERENCE_MODES = ("self", "blank")
+
 
 @dataclass(frozen=True)
 class PreprocessConfig:
@@ -27,8 +29,15 @@ class PreprocessConfig:
     #   ellipses and blobs, lower rejects slightly broken rings
     ring_work_px: int = 512  # px, longest side the ring search works at; smaller is faster, coarser
     fallback_radius_fraction: float = 0.45  # of min(H, W), ring radius assumed when none is found
+    no_reference: str = "self"  # a 2-channel model's reference channel without a reference frame:
+    #   "self" = the frame itself (models trained without reference dropout), "blank" = a
+    #   constant black plane, the placeholder a model trained with reference dropout has seen
 
     def __post_init__(self) -> None:
+        if self.no_reference not in NO_REFERENCE_MODES:
+            raise ValueError(
+                f"no_reference must be one of {NO_REFERENCE_MODES}, got {self.no_reference!r}"
+            )
         if self.input_size < 8:
             raise ValueError(f"input_size must be >= 8 px, got {self.input_size}")
         if not self.crop_factor > 0.0:

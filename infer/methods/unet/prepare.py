@@ -197,6 +197,16 @@ def from_network(prob: np.ndarray, box: CropBox, out_shape: tuple[int, ...]) -> 
     )
 
 
+def blank_reference(config: PreprocessConfig) -> np.ndarray:
+    """``(S, S) float32`` placeholder reference channel: black, in network units.
+
+    What a model trained with reference dropout sees when a session has no zero-pressure frame
+    (``PreprocessConfig.no_reference == "blank"``); training substitutes the same plane.
+    """
+    s = config.input_size
+    return np.full((s, s), unit_to_network(0.0, config), np.float32)
+
+
 def session_reference(
     reference: np.ndarray | None, config: PreprocessConfig = PreprocessConfig()
 ) -> SessionReference:
@@ -240,7 +250,8 @@ def prepare(
         gray: ``(H, W) uint8`` frame.
         reference: from :func:`session_reference` (same image size as ``gray``).
         config: preprocessing.
-        channels: 1 (frame) or 2 (frame, reference; without a reference frame, the frame itself).
+        channels: 1 (frame) or 2 (frame, reference; without a reference frame, the frame itself
+            or :func:`blank_reference`, as ``config.no_reference`` says).
 
     Returns:
         :class:`Prepared` with ``x`` of shape ``(channels, S, S)``.
@@ -262,7 +273,9 @@ def prepare(
     x = to_network(gray, box, config)
     chans = [x]
     if channels == 2:
-        if ref_x is None:
-            ref_x = x if reference.gray is None else to_network(reference.gray, box, config)
+        if ref_x is None and reference.gray is not None:
+            ref_x = to_network(reference.gray, box, config)
+        elif ref_x is None:
+            ref_x = x if config.no_reference == "self" else blank_reference(config)
         chans.append(ref_x)
     return Prepared(np.stack(chans), box, ring)
