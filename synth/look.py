@@ -63,7 +63,7 @@ class LookEffects:
 def vignette_gain(
     height: int, width: int, strength: float, centre: tuple[float, float] = (0.0, 0.0)
 ) -> np.ndarray:
-    """Radial falloff ``max(1 - strength r², 0)``, r = 1 at the half-diagonal.
+    """Radial falloff ``max(1 - strength r², 0)``, r = 1 at the corner pixels' centres.
 
     Args:
         height, width: image size, px.
@@ -76,7 +76,7 @@ def vignette_gain(
     cx = (width - 1) / 2 + centre[0] * width
     cy = (height - 1) / 2 + centre[1] * width
     y, x = np.mgrid[0:height, 0:width].astype(np.float32)
-    r2 = ((x - cx) ** 2 + (y - cy) ** 2) / (0.25 * (width**2 + height**2))
+    r2 = ((x - cx) ** 2 + (y - cy) ** 2) / max(0.25 * ((width - 1) ** 2 + (height - 1) ** 2), 1.0)
     return np.maximum(1.0 - strength * r2, 0.0)[:, :, None].astype(np.float32)
 
 

@@ -3,7 +3,8 @@
 A *session* is one finger on the rig, stepped through the pressures: its finger, membrane,
 fingerprint, coating, light and camera are drawn once (``sample_session``); each frame then
 adds a small per-frame jitter of exposure and noise (``frame_camera``). The ``hard`` flag raises
-the odds of off-centre fingers, low/high exposure, faint ridges, defocus and a weak LED sector.
+the odds of off-centre fingers, low/high exposure, faint ridges, defocus and a weak LED sector,
+and widens the v2 look (``CAMERA2_DRAWS``: colour cast, tone curve, vignetting, dust, glare).
 """
 
 from __future__ import annotations
@@ -54,7 +55,9 @@ class Draw:
     ``kind`` and the meaning of ``nominal`` / ``hard`` (the latter used when ``hard=True``;
     None = same as nominal): ``"uniform"`` (lo, hi); ``"normal"`` (mean, sd); ``"lognormal"``
     (0, sd) -> ``exp(N(0, sd))``; ``"loguniform"`` (lo, hi) -> ``exp(U(log lo, log hi))``;
-    ``"seed"`` -> an int in [0, 2³¹) (no parameters). ``hard_kind``: another kind for ``hard``.
+    ``"seed"`` -> an int in [0, 2³¹) (no parameters); ``"loguniform_z"`` (lo, hi): loguniform
+    mapped from one N(0, 1) draw (uses the generator as ``"lognormal"`` does, so switching
+    between them moves no later draw). ``hard_kind``: another kind for ``hard``.
     """
 
     name: str
@@ -76,6 +79,9 @@ class Draw:
             return float(math.exp(rng.normal(lo, hi)))
         if kind == "loguniform":
             return float(math.exp(rng.uniform(math.log(lo), math.log(hi))))
+        if kind == "loguniform_z":
+            u = 0.5 * (1.0 + math.erf(rng.normal(0.0, 1.0) / math.sqrt(2.0)))
+            return float(lo * (hi / lo) ** u)
         if kind == "seed":
             return int(rng.integers(2**31))
         raise ValueError(f"synth/randomize.py: unknown Draw kind {kind!r}")
@@ -131,7 +137,7 @@ BODY_DRAWS = (  # finger, membrane, rig, LED profile
 # (hard only: a dim LED sector is drawn here, see _dim_sector)
 EXPOSURE_DRAWS = (
     # nominal: a set-up camera; hard: ±2 stops, clipped window rings included
-    Draw("exposure_gain", "lognormal", (0.0, 0.1), (0.25, 4.0), hard_kind="loguniform"),
+    Draw("exposure_gain", "lognormal", (0.0, 0.1), (0.25, 4.0), hard_kind="loguniform_z"),
     _uniform("defocus_sigma_px", 0.0, 1.0, hard=(0.0, 2.2)),
     Draw("full_well", "loguniform", (300.0, 5000.0)),
     _uniform("read_noise", 0.002, 0.012),

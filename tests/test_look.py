@@ -1,0 +1,165 @@
+"""The v2 look effects (synth/look.py) and their use in apply_camera; fast, no Mitsuba."""
+
+from __future__ import annotations
+
+import dataclasses
+
+import numpy as np
+import pytest
+
+from contactcal.synth.camera import CameraEffects, apply_camera
+from contactcal.synth.look import (
+    LookEffects,
+    add_dust,
+    apply_optics,
+    apply_white_balance,
+    motion_blur,
+    motion_kernel,
+    tone_curve,
+    vignette_gain,
+)
+from contactcal.synth.randomize import sample_session
+
+H, W = 60, 80
+HARD = LookEffects(
+    vignetting=0.4,
+    vignette_centre=(0.03, -0.02),
+    wb_gains=(1.25, 0.9, 0.75),
+    tone_strength=0.5,
+    motion_blur_px=3.0,
+    motion_blur_deg=30.0,
+    dust_count=15,
+    stray_amplitude=0.15,
+    seed=7,
+)
+
+
+def _frame(seed: int = 0) -> tuple[np.ndarray, np.ndarray]:
+    rng = np.random.default_rng(seed)
+    img = (0.2 + 0.6 * rng.random((H, W, 3))).astype(np.float32)
+    mask = np.zeros((H, W), bool)
+    mask[20:40, 30:50] = True
+    return img, mask
+
+
+def test_default_look_is_identity() -> None:
+    img, _ = _frame()
+    np.testing.assert_array_equal(apply_optics(img, LookEffects()), img)
+    assert apply_white_balance(img, (1.0, 1.0, 1.0)) is img
+    np.testing.assert_array_equal(vignette_gain(H, W, 0.0), np.ones((H, W, 1), np.float32))
+    np.testing.assert_array_equal(motion_blur(img, 0.0, 45.0), img)
+
+
+def test_default_camera_output_unchanged_by_look_field() -> None:
+    img, mask = _frame()
+    fx = CameraEffects(exposure=1.0, read_noise=0.01)
+    a = apply_camera(img, mask, fx, np.random.default_rng(3), 100.0)
+    b = apply_camera(
+        img, mask, dataclasses.replace(fx, look=LookEffects()), np.random.default_rng(3), 100.0
+    )
+    np.testing.assert_array_equal(a[0], b[0])
+
+
+def test_shapes_and_smoke() -> None:
+    img, mask = _frame()
+    out, m = apply_camera(
+        img, mask, CameraEffects(jpeg_quality=50, look=HARD), np.random.default_rng(1), 90.0
+    )
+    assert out.shape == (H, W, 3) and out.dtype == np.uint8
+    assert m.shape == (H, W) and m.dtype == bool
+    assert apply_optics(img, HARD).shape == (H, W, 3)
+
+
+def test_vignetting_reference_values() -> None:
+    g = vignette_gain(H, W, 0.4)[:, :, 0]
+    assert g.max() <= 1.0 and g[H // 2, W // 2] == pytest.approx(1.0, abs=1e-3)
+    assert g[0, 0] == pytest.approx(0.6, abs=1e-3)  # r = 1 at the corner → 1 - k
+    off = vignette_gain(H, W, 0.4, (0.1, 0.0))[:, :, 0]
+    assert off[H // 2, -1] > off[H // 2, 0]  # centre moved right: left edge darker
+
+
+def test_white_balance_scales_channel_means() -> None:
+    img, _ = _frame()
+    gains = (1.25, 1.0, 0.75)
+    out = apply_white_balance(img, gains)
+    np.testing.assert_allclose(out.mean(axis=(0, 1)), img.mean(axis=(0, 1)) * gains, rtol=1e-5)
+
+
+def test_tone_curve_monotone_fixes_ends() -> None:
+    x = np.linspace(0.0, 1.0, 1001, dtype=np.float32)
+    for s in (0.0, 0.1, 0.5, 1.0):
+        y = tone_curve(x, s)
+        assert y[0] == 0.0 and y[-1] == pytest.approx(1.0)
+        assert np.all(np.diff(y) >= 0)
+    y = tone_curve(x, 0.5)
+    assert y[250] < x[250] and y[750] > x[750]  # S-shape: more contrast in mid-tones
+    np.testing.assert_allclose(tone_curve(x, 0.0), x)
+
+
+def test_motion_kernel_normalised_and_directional() -> None:
+    k = motion_kernel(3.0, 0.0)
+    assert k.sum() == pytest.approx(1.0)
+    c = k.shape[0] // 2
+    assert k[c].sum() == pytest.approx(1.0)  # horizontal: all weight in the centre row
+
+
+def test_dust_never_changes_mask_and_is_local() -> None:
+    img, mask = _frame()
+    fx = CameraEffects(full_well=1e6, read_noise=0.0, look=LookEffects(dust_count=15, seed=2))
+    base = CameraEffects(full_well=1e6, read_noise=0.0)
+    out, m = apply_camera(img, mask, fx, np.random.default_rng(0), 90.0)
+    ref, m0 = apply_camera(img, mask, base, np.random.default_rng(0), 90.0)
+    np.testing.assert_array_equal(m, mask)
+    np.testing.assert_array_equal(m0, m)
+    dusty = add_dust(img, 3, np.random.default_rng(5))
+    assert 0 < np.mean(np.abs(dusty - img) > 1e-3) < 0.2
+    assert not np.array_equal(out, ref)
+
+
+def test_same_seed_same_frame() -> None:
+    img, mask = _frame()
+    fx = CameraEffects(jpeg_quality=80, read_noise=0.01, look=HARD)
+    a = apply_camera(img, mask, fx, np.random.default_rng(11), 90.0)
+    b = apply_camera(img, mask, fx, np.random.default_rng(11), 90.0)
+    np.testing.assert_array_equal(a[0], b[0])
+    np.testing.assert_array_equal(a[1], b[1])
+
+
+@pytest.mark.parametrize(
+    "kwargs",
+    [
+        {"vignetting": -0.1},
+        {"vignetting": 1.0},
+        {"wb_gains": (1.0, 0.0, 1.0)},
+        {"wb_gains": (1.0, 1.0)},
+        {"tone_strength": 1.5},
+        {"motion_blur_px": -1.0},
+        {"dust_count": -1},
+        {"stray_amplitude": 2.0},
+        {"vignette_centre": (0.9, 0.0)},
+        {"seed": -1},
+    ],
+)
+def test_bad_input_raises(kwargs: dict) -> None:
+    with pytest.raises(ValueError, match="synth/look.py"):
+        LookEffects(**kwargs)
+
+
+def test_camera_rejects_non_look() -> None:
+    with pytest.raises(ValueError, match="synth/camera.py"):
+        CameraEffects(look="none")  # type: ignore[arg-type]
+
+
+def test_sessions_draw_looks_in_range() -> None:
+    for seed in range(40):
+        nominal = sample_session(np.random.default_rng([seed, 0])).camera.look
+        hard_s = sample_session(np.random.default_rng([seed, 0]), hard=True)
+        hard = hard_s.camera.look
+        assert 0 <= nominal.vignetting <= 0.1 and 0 <= hard.vignetting <= 0.4
+        assert all(0.97 <= g <= 1.03 for g in nominal.wb_gains)
+        assert all(0.75 <= g <= 1.25 for g in hard.wb_gains)
+        assert nominal.motion_blur_px == 0 and nominal.stray_amplitude == 0
+        assert 0 <= nominal.dust_count <= 3 and 0 <= hard.dust_count <= 15
+        assert 10.5 <= hard_s.rig.lgp_inner_radius_mm <= 12.5
+        rig = sample_session(np.random.default_rng([seed, 0])).rig
+        assert rig.lgp_inner_radius_mm == 11.5
