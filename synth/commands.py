@@ -26,6 +26,8 @@ def add_parsers(sub: argparse._SubParsersAction) -> None:
     add_fidelity_parser(sub)
 
 
+STRIP_MAX_WIDTH_PX = 2400  # fidelity_strip.jpg is downscaled to at most this width
+
 #: Modules of the ``synth`` extra that rendering needs (checked before anything is written).
 SYNTH_MODULES = ("mitsuba", "drjit")
 
@@ -76,6 +78,7 @@ def add_fidelity_parser(sub: argparse._SubParsersAction) -> None:
 
 def _cmd_fidelity(args: argparse.Namespace) -> int:
     require_extra("synth", "fidelity", SYNTH_MODULES)
+    import cv2
     import numpy as np
 
     from contactcal.infer.files.atomic import run_outputs, write_json, write_text
@@ -104,10 +107,12 @@ def _cmd_fidelity(args: argparse.Namespace) -> int:
     with run_outputs() as out:
         write_json(out.stage(args.out / "fidelity.json"), summary)
         write_text(out.stage(args.out / "fidelity.md"), summary_markdown(summary))
-        write_image(
-            out.stage(args.out / "fidelity_strip.jpg"),
-            np.ascontiguousarray(results[0][1][:, :, ::-1]),
-        )
+        strip = np.ascontiguousarray(results[0][1][:, :, ::-1])  # RGB → BGR
+        if strip.shape[1] > STRIP_MAX_WIDTH_PX:  # a figure for docs, not data: keep it small
+            f = STRIP_MAX_WIDTH_PX / strip.shape[1]
+            strip = cv2.resize(strip, None, fx=f, fy=f, interpolation=cv2.INTER_AREA)
+        jpeg = (cv2.IMWRITE_JPEG_QUALITY, 85)
+        write_image(out.stage(args.out / "fidelity_strip.jpg"), strip, jpeg)
     print(summary_markdown(summary), end="")
     print(f"fidelity: ROI found within tolerance in {summary['roi_ok']}/{args.sessions} sessions")
     return 0
