@@ -196,16 +196,12 @@ def _plateau_height(pressure_kpa: float, area_mm2: float, membrane: MembranePara
 
 
 def _free_cap(
-    pressure_kpa: float,
-    p_on: float,
-    finger: FingerParams,
-    a: float,
-    t: float,
-    slack_mm: float = 0.0,
-    slack_seed: int = 0,
+    pressure_kpa: float, p_on: float, finger: FingerParams, membrane: MembraneParams
 ) -> ContactState:
     """State without contact: the paraboloid cap of apex ``g (p / p_on)^INFLATION_EXPONENT``."""
-    gap = p_on / 1000.0 * a * a / (4.0 * t)
+    a = membrane.clamp_radius_mm
+    gap = p_on / 1000.0 * a * a / (4.0 * membrane.tension_n_per_mm)
+    slack = membrane.slack_mm * max(0.0, 1.0 - pressure_kpa / SLACK_TAUT_KPA)
     return ContactState(
         pressure_kpa=pressure_kpa,
         onset_kpa=p_on,
@@ -215,8 +211,8 @@ def _free_cap(
         yaw_rad=float(finger.yaw_rad),
         area_mm2=0.0,
         plateau_z_mm=gap * (pressure_kpa / p_on) ** INFLATION_EXPONENT,
-        slack_mm=slack_mm * max(0.0, 1.0 - pressure_kpa / SLACK_TAUT_KPA),
-        slack_seed=slack_seed,
+        slack_mm=slack,
+        slack_seed=membrane.slack_seed,
         indentation_mm=0.0,
         clamp_radius_mm=float(a),
     )
@@ -250,15 +246,7 @@ def solve_contact(
     a = membrane.clamp_radius_mm
     p_on = onset_pressure_kpa(membrane)
     if pressure_kpa <= p_on:
-        return _free_cap(
-            pressure_kpa,
-            p_on,
-            finger,
-            a,
-            membrane.tension_n_per_mm,
-            membrane.slack_mm,
-            membrane.slack_seed,
-        )
+        return _free_cap(pressure_kpa, p_on, finger, membrane)
     semi = _patch_semi_axes(pressure_kpa, p_on, finger, membrane.onset_ramp_kpa)
     centre = _patch_centre(finger, a)
     harm = _patch_harmonics(finger)

@@ -36,19 +36,7 @@ def add_parsers(sub: Any) -> None:
     t.add_argument(
         "--input-size", type=int, metavar="S", help="network input side, px (default 256)"
     )
-    t.add_argument(
-        "--reference",
-        action=argparse.BooleanOptionalAction,
-        default=None,
-        help="feed the session's zero-pressure frame as a 2nd channel (default on)",
-    )
-    t.add_argument(
-        "--reference-dropout",
-        type=float,
-        metavar="P",
-        help="share of training frames whose reference channel is blanked, so one model works "
-        "with and without a reference frame (default 0)",
-    )
+    _add_reference_args(t)
     t.add_argument("--seed", type=int, help="split/init/shuffle/augmentation seed (default 0)")
     t.add_argument("--batch-size", type=int, metavar="B", help="frames per step (default 16)")
     # dest differs from the deployment commands' --threads (onnxruntime threads, an int >= 1
@@ -125,6 +113,23 @@ def build_config(args: argparse.Namespace) -> Any:
     arch = {"base": args.base, "levels": args.levels}
     arch = {k: v for k, v in arch.items() if v is not None}
     return dataclasses.replace(cfg, model=dataclasses.replace(cfg.model, **arch)) if arch else cfg
+
+
+def _add_reference_args(t: argparse.ArgumentParser) -> None:
+    """``--reference/--no-reference`` and ``--reference-dropout``."""
+    t.add_argument(
+        "--reference",
+        action=argparse.BooleanOptionalAction,
+        default=None,
+        help="feed the session's zero-pressure frame as a 2nd channel (default on)",
+    )
+    t.add_argument(
+        "--reference-dropout",
+        type=float,
+        metavar="P",
+        help="share of training frames whose reference channel is blanked, so one model works "
+        "with and without a reference frame (default 0)",
+    )
 
 
 def _cmd_train(args: argparse.Namespace) -> int:

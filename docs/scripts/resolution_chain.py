@@ -1,0 +1,87 @@
+"""Resolution chain check (docs/synth.md, "Resolution chain"): does the network see the same
+ridges from a 400×300 training render as from a 2592×1944 rig frame decoded the way deployment
+decodes it?
+
+For a few nominal sessions and pressures the same frame is rendered twice (same session, same
+seed): at 2592×1944 (saved as JPEG q90 like the rig's camera, decoded by ``contactcal`` at the
+reduction deployment picks for the network input) and at 400×300 (the training frames). Both go
+through the one preprocessing (`prepare`) to the network input; the script prints, per input
+size, the ridge contrast inside the contact (RMS of a band-pass at the ridge frequency, in network
+units) and the ridge period in network pixels.
+
+Run from the repository root (slow: one 5 MP render takes about a minute on 2 cores):
+``python docs/scripts/resolution_chain.py [--sessions 2] [--spp 8]``.
+"""
+
+from __future__ import annotations
+
+import argparse
+import tempfile
+from pathlib import Path
+
+import cv2
+import numpy as np
+
+from contactcal.infer.image.read import load_image
+from contactcal.infer.methods.unet.config import PreprocessConfig
+from contactcal.infer.methods.unet.prepare import crop_resize, prepare, session_reference
+from contactcal.synth.dataset import DatasetConfig, session_params
+from contactcal.synth.session import RenderConfig, render_session
+
+PRESSURES = (0.0, 10.0, 20.0)
+FULL = (2592, 1944)
+SMALL = (400, 300)
+
+
+def _ridge_contrast(x: np.ndarray, mask: np.ndarray) -> float:
+    """RMS of a difference of Gaussians (σ 0.6 / 2 px) inside the eroded contact mask."""
+    dog = cv2.GaussianBlur(x, (0, 0), 0.6) - cv2.GaussianBlur(x, (0, 0), 2.0)
+    inner = cv2.erode(mask.astype(np.uint8), np.ones((5, 5), np.uint8)) > 0
+    return float(np.sqrt(np.mean(dog[inner] ** 2))) if inner.any() else float("nan")
+
+
+def _network_views(frames, reduce: int, size: int, tmp: Path, tag: str):
+    """Save frames (JPEG q90), decode at 1/reduce, prepare; yield (x, mask) in network pixels."""
+    cfg = PreprocessConfig(input_size=size)
+    paths = []
+    for f in frames:
+        p = tmp / f"{tag}_{f.pressure_kpa:04.1f}.jpg"
+        cv2.imwrite(str(p), f.frame[:, :, ::-1], [cv2.IMWRITE_JPEG_QUALITY, 90])
+        paths.append(p)
+    ref = session_reference(load_image(paths[0], reduce=reduce), cfg)
+    for f, p in zip(frames, paths, strict=True):
+        gray = load_image(p, reduce=reduce)
+        x = prepare(gray, ref, cfg, channels=1).x[0]
+        m = cv2.resize(f.mask.astype(np.float32), gray.shape[::-1], interpolation=cv2.INTER_AREA)
+        yield f.pressure_kpa, x, crop_resize(m, ref.box, size) > 0.5
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser()
+    ap.add_argument("--sessions", type=int, default=2)
+    ap.add_argument("--spp", type=int, default=8)
+    args = ap.parse_args()
+    data = DatasetConfig(fingers=args.sessions, pressures_kpa=PRESSURES, seed=9000, hard_fraction=0)
+    print("| session | kPa | input | from | ridge contrast | ")
+    print("|---|---|---|---|---|")
+    with tempfile.TemporaryDirectory() as tmp:
+        for finger in range(args.sessions):
+            session = session_params(data, finger)
+            renders = {}
+            for size, weight in ((FULL, 2048), (SMALL, 1024)):
+                rc = RenderConfig(*size, spp=args.spp, weight_size=weight)
+                renders[size] = list(render_session(session, PRESSURES, rc, (9000, finger)))
+            for net, reduce in ((192, 8), (384, 4)):
+                rows = {
+                    "2592×1944 JPEG": _network_views(renders[FULL], reduce, net, Path(tmp), "f"),
+                    "400×300": _network_views(renders[SMALL], 1, net, Path(tmp), "s"),
+                }
+                for name, views in rows.items():
+                    for kpa, x, m in views:
+                        if kpa > 0:
+                            c = _ridge_contrast(x, m)
+                            print(f"| {finger} | {kpa:g} | {net}² | {name} | {c:.3f} |")
+
+
+if __name__ == "__main__":
+    main()
