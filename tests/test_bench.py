@@ -5,6 +5,7 @@ from __future__ import annotations
 import csv
 import functools
 import json
+from dataclasses import replace as dataclasses_replace
 from pathlib import Path
 from typing import Any
 
@@ -263,3 +264,17 @@ def test_cli(
     assert main(["bench", "--data", str(tmp_path / "none"), "--out", str(out)]) == 2
     assert "none" in capsys.readouterr().err
     assert main([*args, "--timing-frames", "0"]) == 2
+
+
+def test_no_reference_mode(bench: tuple[Path, Path, dict[str, Any]], tmp_path: Path) -> None:
+    """``use_reference=False``: same frames, measured without the zero-pressure frames."""
+    data, _, with_ref = bench
+    cfg = BenchConfig(repeats=1, timing_frames=1, full_size=(128, 96), threads=(1,))
+    res = run_bench(data, tmp_path / "out", config=dataclasses_replace(cfg, use_reference=False))
+    assert with_ref["reference"] == "session zero-pressure frame" and res["reference"] == "none"
+    assert "Reference frame: none." in (tmp_path / "out" / "report.md").read_text()
+    key = lambda r: (r["method"], r["frame"])  # noqa: E731
+    a = {key(r): r["area_px"] for r in with_ref["records"]}
+    b = {key(r): r["area_px"] for r in res["records"]}
+    assert a.keys() == b.keys()
+    assert any(a[k] != b[k] for k in a if k[0] == "unet")  # the U-Net's input did change

@@ -24,14 +24,19 @@ from contactcal.infer.methods.registry import METHODS, make_method
 SOFT_SUFFIX = " (soft area)"
 
 
-def score_session(method: Method, name: str, rows: Sequence[IndexRow]) -> list[ScoredFrame]:
+def score_session(
+    method: Method, name: str, rows: Sequence[IndexRow], use_reference: bool = True
+) -> list[ScoredFrame]:
     """Measure one session (``rows`` sorted by pressure; the first is its reference frame).
+
+    With ``use_reference=False`` the method gets no reference frame (as ``measure`` without
+    ``--reference``); the frames are the same.
 
     Returns:
         One :class:`ScoredFrame` per frame, plus one ``"<name> (soft area)"`` frame per frame for
         methods that report a probability-mass (sub-pixel) area.
     """
-    k = method.start([r.frame for r in rows], rows[0].frame)
+    k = method.start([r.frame for r in rows], rows[0].frame if use_reference else None)
     out: list[ScoredFrame] = []
     for r in rows:
         res = method.measure(load_image(r.frame, reduce=k))
@@ -64,14 +69,16 @@ def _renamed(frame: ScoredFrame, method: str, area_px: float) -> ScoredFrame:
 
 
 def evaluate(
-    sessions: Mapping[str, Sequence[IndexRow]], model: str | os.PathLike[str] | None
+    sessions: Mapping[str, Sequence[IndexRow]],
+    model: str | os.PathLike[str] | None,
+    use_reference: bool = True,
 ) -> list[ScoredFrame]:
     """Measure every frame of every session with every method (``METHODS``), one thread."""
     frames: list[ScoredFrame] = []
     for name in METHODS:
         method = make_method(name, model, threads=1)
         for rows in sessions.values():
-            frames.extend(score_session(method, name, rows))
+            frames.extend(score_session(method, name, rows, use_reference))
     return frames
 
 

@@ -23,6 +23,11 @@ def add_parsers(sub: argparse._SubParsersAction) -> None:
     )
     b.add_argument("--out", type=Path, required=True, help="report folder")
     b.add_argument("--model", type=Path, help="ONNX model (default: shipped)")
+    b.add_argument(
+        "--no-reference",
+        action="store_true",
+        help="measure accuracy without the sessions' zero-pressure frames",
+    )
     b.add_argument("--repeats", type=int, default=5, help="timing runs; median (default 5)")
     b.add_argument("--timing-frames", type=int, default=6, help="frames per timing run")
     b.add_argument(
@@ -49,6 +54,7 @@ def _cmd_bench(args: argparse.Namespace) -> int:
         repeats=args.repeats,
         timing_frames=args.timing_frames,
         robustness_frames=_robustness_frames(args),
+        use_reference=not args.no_reference,
     )
     model = None if args.model is None else str(args.model)
     res = run_bench(args.data, args.out, model, cfg, args.crosscheck)

@@ -48,15 +48,16 @@ def score_dataset(
     sessions: Mapping[str, Sequence[IndexRow]],
     model: str | os.PathLike[str] | None,
     bins: Sequence[tuple[float, float]],
+    use_reference: bool = True,
 ) -> tuple[dict[str, Any], list[ScoredFrame]]:
-    """Score every method on one cross-check dataset.
+    """Score every method on one cross-check dataset (with or without reference frames).
 
     Returns:
         Its results (``label``, ``data``, ``sessions``, ``frames``, ``records``, ``onset``,
         ``bins``, ``hard``, ``coverage``: the keys of the main dataset's results, less timing)
         and the scored frames.
     """
-    frames = evaluate(sessions, model)
+    frames = evaluate(sessions, model, use_reference)
     onset = onset_errors(frames)
     results = {
         "label": label,

@@ -199,7 +199,8 @@ def report_text(results: Mapping[str, Any]) -> str:
     sections = [
         "# contactcal benchmark\n\n"
         f"Data: `{results['data']}` — {results['sessions']} sessions, {results['frames']} frames.\n"
-        f"Model: `{results['model']}`. Areas are compared in input pixels with the exact masks; "
+        f"Model: `{results['model']}`. Reference frame: {results['reference']}."
+        " Areas are compared in input pixels with the exact masks; "
         "relative\nerrors over frames with true contact. Timing: median of "
         f"{cfg['repeats']} runs over\n{cfg['timing_frames']} frames upscaled to {w}×{h}, "
         "in one process.",

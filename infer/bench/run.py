@@ -62,11 +62,12 @@ def run_bench(
     config = config or BenchConfig()
     sessions = sessions_of(read_index(data))
     others = [read_sessions(c) for c in crosscheck]  # every folder checked before any work
-    frames = evaluate(sessions, model)
+    frames = evaluate(sessions, model, config.use_reference)
     onset = onset_errors(frames)
     results: dict[str, Any] = {
         "data": str(Path(data).resolve()),
         "model": "shipped" if model is None else os.fspath(model),
+        "reference": "session zero-pressure frame" if config.use_reference else "none",
         "sessions": len(sessions),
         "frames": sum(len(v) for v in sessions.values()),
         "config": {
@@ -107,7 +108,9 @@ def _crosscheck(
     scored = {names[0]: frames}
     results["crosscheck"] = []
     for name, folder, sess in zip(names[1:], folders, sessions, strict=True):
-        res, scored[name] = score_dataset(name, folder, sess, model, config.bins)
+        res, scored[name] = score_dataset(
+            name, folder, sess, model, config.bins, config.use_reference
+        )
         results["crosscheck"].append(res)
     results["side_by_side"] = side_by_side(scored, config.bins)
     return crosscheck_text(results, names[0])
