@@ -278,3 +278,30 @@ def test_no_reference_mode(bench: tuple[Path, Path, dict[str, Any]], tmp_path: P
     b = {key(r): r["area_px"] for r in res["records"]}
     assert a.keys() == b.keys()
     assert any(a[k] != b[k] for k in a if k[0] == "unet")  # the U-Net's input did change
+
+
+def test_variant_is_scored_and_timed_beside_the_model(
+    bench: tuple[Path, Path, dict[str, Any]], tmp_path: Path
+) -> None:
+    """A variant (here the shipped model again) gets its own rows, identical to ``unet``'s."""
+    from contactcal.infer.methods.unet.runner import DEFAULT_MODEL
+
+    data, _, _ = bench
+    cfg = dataclasses_replace(TINY, variants=(("copy", str(DEFAULT_MODEL)),))
+    res = run_bench(data, tmp_path / "out", config=cfg)
+    rows = {(r["method"], r["frame"]): r["area_px"] for r in res["records"]}
+    unet = {f: a for (m, f), a in rows.items() if m == "unet"}
+    copy = {f: a for (m, f), a in rows.items() if m == "unet[copy]"}
+    assert unet and copy == unet
+    assert any(t["config"] == "unet[copy]" for t in res["timing"])
+    assert any(b["method"] == "unet[copy]" for b in res["bins"])
+    assert any(
+        label.startswith("unet[copy]") for label, *_ in pareto_points(res["bins"], res["timing"])
+    )
+
+
+def test_cli_rejects_a_bad_variant(tmp_path: Path) -> None:
+    data = write_dataset(tmp_path / "data")
+    for bad in ("int8", "=x.onnx", f"int8={tmp_path / 'missing.onnx'}"):
+        argv = ["bench", "--data", str(data), "--out", str(tmp_path / "o"), "--variant", bad]
+        assert main(argv) == 2

@@ -54,7 +54,7 @@ def score_session(
             area_interval_px=res.area_interval_px,
         )
         out.append(scored)
-        if res.soft_area_px is not None or name == "unet":
+        if res.soft_area_px is not None or name.startswith("unet"):
             # The same prediction measured by its probability mass (0 without contact); the
             # stated interval is the pixel count's, not the soft area's.
             soft = float(res.soft_area_px) if res.soft_area_px is not None else 0.0
@@ -72,14 +72,24 @@ def evaluate(
     sessions: Mapping[str, Sequence[IndexRow]],
     model: str | os.PathLike[str] | None,
     use_reference: bool = True,
+    variants: Sequence[tuple[str, str]] = (),
 ) -> list[ScoredFrame]:
-    """Measure every frame of every session with every method (``METHODS``), one thread."""
+    """Measure every frame of every session with every method (``METHODS``), one thread.
+
+    ``variants`` are further U-Net models ``(label, path)``, scored as method ``unet[label]``.
+    """
     frames: list[ScoredFrame] = []
-    for name in METHODS:
-        method = make_method(name, model, threads=1)
+    methods = [(name, make_method(name, model, threads=1)) for name in METHODS]
+    methods += [(variant_name(label), make_method("unet", path, 1)) for label, path in variants]
+    for name, method in methods:
         for rows in sessions.values():
             frames.extend(score_session(method, name, rows, use_reference))
     return frames
+
+
+def variant_name(label: str) -> str:
+    """Method name of a U-Net variant in the tables: ``unet[label]``."""
+    return f"unet[{label}]"
 
 
 def onset_errors(frames: Sequence[ScoredFrame]) -> list[dict[str, Any]]:

@@ -24,6 +24,14 @@ def add_parsers(sub: argparse._SubParsersAction) -> None:
     b.add_argument("--out", type=Path, required=True, help="report folder")
     b.add_argument("--model", type=Path, help="ONNX model (default: shipped)")
     b.add_argument(
+        "--variant",
+        action="append",
+        default=[],
+        metavar="LABEL=MODEL",
+        help="a further U-Net model scored and timed beside --model as unet[LABEL] "
+        "(e.g. int8=models/contact_unet_int8.onnx); repeatable",
+    )
+    b.add_argument(
         "--no-reference",
         action="store_true",
         help="measure accuracy without the sessions' zero-pressure frames",
@@ -55,6 +63,7 @@ def _cmd_bench(args: argparse.Namespace) -> int:
         timing_frames=args.timing_frames,
         robustness_frames=_robustness_frames(args),
         use_reference=not args.no_reference,
+        variants=tuple(_variant(v) for v in args.variant),
     )
     model = None if args.model is None else str(args.model)
     res = run_bench(args.data, args.out, model, cfg, args.crosscheck)
@@ -70,6 +79,16 @@ def _cmd_bench(args: argparse.Namespace) -> int:
         )
     print(f"report: {args.out / 'report.md'}")
     return 0
+
+
+def _variant(text: str) -> tuple[str, str]:
+    """``LABEL=MODEL`` → ``(label, path)``; the file must exist."""
+    label, sep, path = text.partition("=")
+    if not sep or not label or not path:
+        raise ValueError(f"--variant {text!r}: expected LABEL=MODEL.onnx, e.g. int8=m_int8.onnx")
+    if not Path(path).is_file():
+        raise ValueError(f"--variant {text!r}: {path}: no such model file")
+    return label, path
 
 
 def _robustness_frames(args: argparse.Namespace) -> int:

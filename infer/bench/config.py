@@ -20,6 +20,8 @@ class BenchConfig:
     robustness_frames: int = 0  # frames of the robustness suite (0: not run); each costs
     #   ~50 perturbed measurements per method, so more frames steady the medians but cost time
     seed: int = 0  # seed of the robustness suite's random perturbations (noise, angles)
+    variants: tuple[tuple[str, str], ...] = ()  # further U-Net models (label, ONNX path),
+    #   scored and timed beside the main one as method ``unet[label]`` (e.g. an INT8 variant)
     use_reference: bool = True  # False: every method measures without the session's
     #   zero-pressure frame (the U-Net then gets its no-reference placeholder)
 

@@ -49,6 +49,7 @@ def score_dataset(
     model: str | os.PathLike[str] | None,
     bins: Sequence[tuple[float, float]],
     use_reference: bool = True,
+    variants: Sequence[tuple[str, str]] = (),
 ) -> tuple[dict[str, Any], list[ScoredFrame]]:
     """Score every method on one cross-check dataset (with or without reference frames).
 
@@ -57,7 +58,7 @@ def score_dataset(
         ``bins``, ``hard``, ``coverage``: the keys of the main dataset's results, less timing)
         and the scored frames.
     """
-    frames = evaluate(sessions, model, use_reference)
+    frames = evaluate(sessions, model, use_reference, variants)
     onset = onset_errors(frames)
     results = {
         "label": label,

@@ -62,7 +62,7 @@ def run_bench(
     config = config or BenchConfig()
     sessions = sessions_of(read_index(data))
     others = [read_sessions(c) for c in crosscheck]  # every folder checked before any work
-    frames = evaluate(sessions, model, config.use_reference)
+    frames = evaluate(sessions, model, config.use_reference, config.variants)
     onset = onset_errors(frames)
     results: dict[str, Any] = {
         "data": str(Path(data).resolve()),
@@ -109,7 +109,7 @@ def _crosscheck(
     results["crosscheck"] = []
     for name, folder, sess in zip(names[1:], folders, sessions, strict=True):
         res, scored[name] = score_dataset(
-            name, folder, sess, model, config.bins, config.use_reference
+            name, folder, sess, model, config.bins, config.use_reference, config.variants
         )
         results["crosscheck"].append(res)
     results["side_by_side"] = side_by_side(scored, config.bins)

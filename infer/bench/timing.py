@@ -108,6 +108,12 @@ def timed_configs(
         out.append(Timed("unet", t, UnetMethod(model, threads=t), 1))
         if k > 1:
             out.append(Timed(f"unet+reduced-decode 1/{k}", t, UnetMethod(model, threads=t), k))
+    for label, path in config.variants:  # one thread, like the error table's scoring
+        name = f"unet[{label}]"
+        out.append(Timed(name, 1, UnetMethod(path, threads=1), 1))
+        kv = UnetMethod(path).start(frames.files[".jpg"], None)
+        if kv > 1:
+            out.append(Timed(f"{name}+reduced-decode 1/{kv}", 1, UnetMethod(path, threads=1), kv))
     return out
 
 
