@@ -1,4 +1,4 @@
-"""``contactcal train`` and ``contactcal export`` subcommands.
+"""``contactcal train``, ``contactcal export`` and ``contactcal quantize`` subcommands.
 
 This module imports neither torch nor onnx: the handlers import them when they run, so the
 deployment CLI stays fast and works without the ``train`` extra installed.
@@ -15,7 +15,7 @@ from contactcal.infer.errors import require_extra
 
 
 def add_parsers(sub: Any) -> None:
-    """Add ``train`` and ``export`` to the CLI's subparsers object.
+    """Add ``train``, ``export`` and ``quantize`` to the CLI's subparsers object.
 
     Args:
         sub: what ``ArgumentParser.add_subparsers()`` returned.
@@ -63,6 +63,24 @@ def add_parsers(sub: Any) -> None:
         help="choose the no-contact minimum area on the run's validation fingers",
     )
     e.set_defaults(func=_cmd_export)
+    _add_quantize_parser(sub)
+
+
+def _add_quantize_parser(sub: Any) -> None:
+    """``contactcal quantize``: the INT8 variant of an exported model."""
+    q = sub.add_parser("quantize", help="write the INT8 variant of an exported model")
+    q.add_argument("model", type=Path, metavar="MODEL.onnx", help="float model (contactcal export)")
+    q.add_argument("--out", type=Path, required=True, metavar="INT8.onnx", help="output model")
+    q.add_argument(
+        "--data",
+        nargs="+",
+        type=Path,
+        required=True,
+        metavar="DIR",
+        help="calibration datasets (validation renders; never the benchmark or cross-check sets)",
+    )
+    q.add_argument("--frames", type=int, default=64, help="calibration frames (default 64)")
+    q.set_defaults(func=_cmd_quantize)
 
 
 #: Modules of the ``train`` extra that training and export need (checked before anything runs).
@@ -161,4 +179,22 @@ def _cmd_export(args: argparse.Namespace) -> int:
         print(f"minimum contact area tuned on the validation fingers: {summary}")
     path = export_onnx(args.run_dir, args.out, opset=args.opset, min_contact_area_px=min_area)
     print(f"wrote {path}")
+    return 0
+
+
+def _cmd_quantize(args: argparse.Namespace) -> int:
+    require_extra("quantize", "train", ("onnx",))
+    _check_dirs(list(args.data))
+    if args.frames < 1:
+        raise ValueError(f"--frames must be >= 1, got {args.frames}")
+    from contactcal.train.quantize import quantize_model
+
+    check = quantize_model(args.model, args.out, args.data, args.frames)
+    ratio = check["median_area_ratio"]
+    ratio_text = "no frame where both see contact" if ratio is None else f"{ratio:.4f}"
+    print(
+        f"wrote {args.out}: on {check['frames']:.0f} calibration frames the INT8 model makes the "
+        f"float model's contact decision in {100 * check['contact_agreement']:.1f} %, median "
+        f"area ratio {ratio_text}"
+    )
     return 0

@@ -1,0 +1,41 @@
+"""``contactcal quantize``: the INT8 variant loads with the same spec and decides like the float."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import pytest
+from procedural import write_dataset
+from test_one_path import _example_dataset
+
+pytest.importorskip("onnx")
+
+from contactcal.infer.cli import main
+from contactcal.infer.methods.unet.runner import DEFAULT_MODEL, OnnxSegmenter
+from contactcal.train.quantize import quantize_model
+
+
+def test_int8_variant_keeps_the_spec_and_the_decisions(tmp_path: Path) -> None:
+    data = _example_dataset(tmp_path / "data")  # rendered frames, as calibration should use
+    out = tmp_path / "int8.onnx"
+    check = quantize_model(DEFAULT_MODEL, out, [data], frames=6)
+    assert OnnxSegmenter(out).spec == OnnxSegmenter(DEFAULT_MODEL).spec  # same metadata
+    assert out.stat().st_size < 0.6 * Path(DEFAULT_MODEL).stat().st_size  # weights in int8
+    assert check["frames"] == 6 and check["contact_agreement"] == 1.0
+    ratio = check["median_area_ratio"]
+    assert ratio is not None and 0.95 <= ratio <= 1.05
+    assert not any(p.name.endswith(".tmp") for p in tmp_path.iterdir())
+
+
+def test_refuses_to_overwrite_the_float_model(tmp_path: Path) -> None:
+    data = write_dataset(tmp_path / "data")
+    with pytest.raises(ValueError, match="overwrite"):
+        quantize_model(DEFAULT_MODEL, DEFAULT_MODEL, [data], frames=2)
+
+
+def test_cli_bad_input(tmp_path: Path) -> None:
+    argv = ["quantize", str(DEFAULT_MODEL), "--out", str(tmp_path / "q.onnx")]
+    assert main([*argv, "--data", str(tmp_path / "missing")]) == 2
+    data = write_dataset(tmp_path / "data")
+    assert main([*argv, "--data", str(data), "--frames", "0"]) == 2
+    assert not (tmp_path / "q.onnx").exists()

@@ -1,0 +1,125 @@
+"""INT8 variant of an exported model (onnxruntime static quantization, QDQ format).
+
+Calibration inputs come from the one preprocessing (``session_reference`` → ``prepare``) on
+frames of the given datasets, so the activation ranges are those deployment will see; the
+caller must pass data that is neither a benchmark nor a cross-check set (validation renders).
+The metadata is copied unchanged from the float model (the strict spec of
+``contactcal.infer.methods.unet.spec`` reads both alike), then the file is checked: it loads,
+reads as a spec, and its decisions are compared with the float model's on the calibration frames.
+"""
+
+from __future__ import annotations
+
+import os
+import tempfile
+from collections.abc import Iterator, Sequence
+from pathlib import Path
+
+import numpy as np
+
+from contactcal.infer.bench.dataset import read_datasets, sessions_of
+from contactcal.infer.files.atomic import atomic_path
+from contactcal.infer.image.read import load_image
+from contactcal.infer.methods.unet.config import PreprocessConfig
+from contactcal.infer.methods.unet.prepare import SessionReference, prepare, session_reference
+from contactcal.infer.methods.unet.runner import OnnxSegmenter
+
+__all__ = ["calibration_frames", "quantize_model"]
+
+
+def calibration_frames(
+    preprocess: PreprocessConfig, data: Sequence[str | os.PathLike[str]], frames: int
+) -> list[tuple[np.ndarray, SessionReference]]:
+    """Up to ``frames`` ``(frame (H, W) uint8, session reference)`` pairs, spread evenly."""
+    sessions = sessions_of(read_datasets([Path(d) for d in data]))
+    pairs = [(rows[0], r) for rows in sessions.values() for r in rows]
+    step = max(1, len(pairs) // frames)
+    refs: dict[str, SessionReference] = {}
+    out = []
+    for ref_row, row in pairs[::step][:frames]:
+        key = ref_row.session_key
+        if key not in refs:
+            refs[key] = session_reference(load_image(ref_row.frame), preprocess)
+        out.append((load_image(row.frame), refs[key]))
+    return out
+
+
+class _Reader:
+    """onnxruntime ``CalibrationDataReader`` over prepared inputs."""
+
+    def __init__(self, name: str, inputs: list[np.ndarray]) -> None:
+        self._it: Iterator[np.ndarray] = iter(inputs)
+        self._name = name
+
+    def get_next(self) -> dict[str, np.ndarray] | None:
+        x = next(self._it, None)
+        return None if x is None else {self._name: x}
+
+
+def quantize_model(
+    model: str | os.PathLike[str],
+    out: str | os.PathLike[str],
+    data: Sequence[str | os.PathLike[str]],
+    frames: int = 64,
+) -> dict[str, float | None]:
+    """Write the INT8 (QDQ, per-channel weights) variant of ``model`` to ``out``, atomically.
+
+    Args:
+        model: float ONNX model exported by ``contactcal export``.
+        out: destination (never ``model`` itself).
+        data: dataset folders for calibration (validation renders, not benchmark data).
+        frames: calibration frames.
+
+    Returns:
+        ``{"frames", "contact_agreement", "median_area_ratio"}``: on the calibration frames, the
+        share of frames where both models make the same contact decision, and the median of
+        INT8 area / float area over the frames both call contact (None if there are none).
+
+    Raises:
+        ValueError: ``out`` is the input, or no calibration frames.
+    """
+    from onnx import load, save
+    from onnxruntime.quantization import QuantFormat, QuantType, quantize_static
+
+    if Path(out).resolve() == Path(model).resolve():
+        raise ValueError(f"{out}: would overwrite the float model; choose another --out")
+    float_seg = OnnxSegmenter(model, threads=1)
+    spec = float_seg.spec
+    pairs = calibration_frames(spec.preprocess, data, frames)
+    if not pairs:
+        raise ValueError(f"no calibration frames in {', '.join(map(str, data))}")
+    inputs = [prepare(g, r, spec.preprocess, spec.channels).x[None] for g, r in pairs]
+    with tempfile.TemporaryDirectory() as tmp:
+        q = Path(tmp) / "q.onnx"
+        quantize_static(
+            str(model),
+            str(q),
+            _Reader(float_seg.input_name, inputs),
+            quant_format=QuantFormat.QDQ,
+            activation_type=QuantType.QUInt8,
+            weight_type=QuantType.QInt8,
+            per_channel=True,
+        )
+        qm, fm = load(str(q)), load(str(model))
+        del qm.metadata_props[:]
+        qm.metadata_props.extend(fm.metadata_props)
+        with atomic_path(out, protect=[model]) as tmp_out:
+            save(qm, str(tmp_out))
+    return _agreement(float_seg, OnnxSegmenter(out, threads=1), pairs)
+
+
+def _agreement(
+    a: OnnxSegmenter, b: OnnxSegmenter, pairs: list[tuple[np.ndarray, SessionReference]]
+) -> dict[str, float | None]:
+    """Contact agreement and area ratio of two segmenters, each making the deployed decision."""
+    same, ratios = 0, []
+    for gray, ref in pairs:
+        sa, sb = a.segment(gray, ref), b.segment(gray, ref)
+        same += sa.contact == sb.contact
+        if sa.contact and sb.contact:
+            ratios.append(sb.area_px / sa.area_px)
+    return {
+        "frames": float(len(pairs)),
+        "contact_agreement": same / len(pairs),
+        "median_area_ratio": float(np.median(ratios)) if ratios else None,
+    }
