@@ -26,7 +26,12 @@ from dataclasses import dataclass
 import cv2
 import numpy as np
 
-from contactcal.infer.methods.classical import ClassicalConfig, find_roi, measure_classical
+from contactcal.infer.methods.classical import (
+    ClassicalConfig,
+    find_roi,
+    measure_classical,
+    ring_pixels,
+)
 from contactcal.synth.camera import tilt_homography
 from contactcal.synth.mechanics import solve_contact
 from contactcal.synth.randomize import SessionParams
@@ -150,7 +155,7 @@ def measure_session(
         c_err = math.hypot(roi.cx - cx, roi.cy - cy) / r
         r_err = abs(roi.ring_radius - r) / r
     gray = cv2.cvtColor(ref.frame, cv2.COLOR_RGB2GRAY)
-    bright = _eroded_bright(gray, config)
+    bright = ring_pixels(gray, config) > 0
     band = _ring_band(session, w, h)
     in_ring = float(np.mean(band[bright])) if bright.any() else 0.0
     interior = _disc(gray.shape, cx, cy, r) & ~cv2.dilate(band.astype(np.uint8), None).astype(bool)
@@ -183,14 +188,6 @@ def measure_session(
         patch_in_roi=tuple(inside),
         blob_encloses=tuple(encl),
     )
-
-
-def _eroded_bright(gray: np.ndarray, config: ClassicalConfig) -> np.ndarray:
-    """The ROI step's binary image after its erosion (``(H, W) bool``)."""
-    k = max(1, round(config.ring_erode_px * gray.shape[1] / config.reference_width_px))
-    kernel = cv2.getStructuringElement(cv2.MORPH_ELLIPSE, (k, k))
-    _, ring = cv2.threshold(gray, config.ring_threshold, 255, cv2.THRESH_BINARY)
-    return cv2.erode(ring, kernel) > 0
 
 
 def _ring_band(session: SessionParams, w: int, h: int) -> np.ndarray:

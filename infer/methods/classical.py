@@ -110,6 +110,20 @@ def _work_image(image: np.ndarray, config: ClassicalConfig) -> np.ndarray:
     return gray
 
 
+def ring_pixels(gray: np.ndarray, config: ClassicalConfig = ClassicalConfig()) -> np.ndarray:
+    """The ROI step's binary image: threshold at ``ring_threshold``, then the circular erosion.
+
+    Args:
+        gray: ``(H, W) uint8`` working image (kernel sizes scale with its width).
+        config: routine constants.
+
+    Returns:
+        ``(H, W) uint8`` binary image (255 = kept).
+    """
+    _, ring = cv2.threshold(gray, config.ring_threshold, 255, cv2.THRESH_BINARY)
+    return cv2.erode(ring, _kernel(config.ring_erode_px, _scale_of(gray.shape[1], config)))
+
+
 def find_roi(reference: np.ndarray, config: ClassicalConfig = ClassicalConfig()) -> Roi | None:
     """ROI from the zero-pressure frame's bright window ring.
 
@@ -122,10 +136,7 @@ def find_roi(reference: np.ndarray, config: ClassicalConfig = ClassicalConfig())
     """
     gray = _work_image(reference, config)
     s = config.work_scale
-    scale = _scale_of(gray.shape[1], config)
-    _, ring = cv2.threshold(gray, config.ring_threshold, 255, cv2.THRESH_BINARY)
-    ring = cv2.erode(ring, _kernel(config.ring_erode_px, scale))
-    contour = _largest_contour(ring)
+    contour = _largest_contour(ring_pixels(gray, config))
     if contour is None:
         return None
     (cx, cy), r = cv2.minEnclosingCircle(contour)
