@@ -2,6 +2,9 @@
 
 from __future__ import annotations
 
+import json
+from pathlib import Path
+
 import numpy as np
 import pytest
 
@@ -79,3 +82,23 @@ def test_train_config_resolves_the_placeholder() -> None:
         TrainConfig(reference_dropout=0.3, use_reference=False)
     with pytest.raises(ValueError, match="reference_dropout"):
         TrainConfig(reference_dropout=1.0)
+
+
+@pytest.mark.parametrize(
+    ("mode", "words"), [("self", "its own reference"), ("blank", "placeholder")]
+)
+def test_measure_note_says_what_stood_in_for_the_reference(
+    tmp_path: Path, mode: str, words: str
+) -> None:
+    """The note a frame measured without a reference gets follows the model's own mode."""
+    onnx = pytest.importorskip("onnx")
+    from contactcal.infer.methods.unet.method import UnetMethod
+    from contactcal.infer.methods.unet.runner import DEFAULT_MODEL
+
+    model = onnx.load(str(DEFAULT_MODEL))
+    for prop in model.metadata_props:
+        if prop.key == "preprocess":
+            prop.value = json.dumps({**json.loads(prop.value), "no_reference": mode})
+    path = tmp_path / f"{mode}.onnx"
+    onnx.save(model, str(path))
+    assert words in UnetMethod(path).NO_REFERENCE

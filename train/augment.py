@@ -17,13 +17,14 @@ from __future__ import annotations
 
 from collections.abc import Iterator
 from contextlib import contextmanager
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import kornia.augmentation as K
 import torch
 
 from contactcal.infer.methods.unet.config import PreprocessConfig
 from contactcal.infer.methods.unet.prepare import network_to_unit, unit_to_network
+from contactcal.train.contact_look import ContactLookConfig, contact_look
 
 
 @dataclass(frozen=True)
@@ -44,6 +45,8 @@ class AugmentConfig:
     blur_p: float = 0.3  # probability of a blur
     noise_std: float = 0.02  # in [0, 1] units; sensor noise
     noise_p: float = 0.5  # probability of added noise
+    contact: ContactLookConfig = field(default_factory=ContactLookConfig)  # the contact region's
+    #   brightness and ridge contrast (``contact_look``), after the warp, before the camera ops
 
     def __post_init__(self) -> None:
         if not (0 < self.gamma[0] <= self.gamma[1] and 0 < self.scale[0] <= self.scale[1]):
@@ -80,7 +83,7 @@ class Augmenter(torch.nn.Module):
         self.preprocess = preprocess
         self.generator = torch.Generator().manual_seed(seed)
         c = config
-        ops = [
+        geometric = [
             K.RandomHorizontalFlip(p=c.flip_p),
             K.RandomVerticalFlip(p=c.flip_p),
             K.RandomAffine(
@@ -90,35 +93,48 @@ class Augmenter(torch.nn.Module):
                 padding_mode="zeros",
                 p=c.affine_p,
             ),
+        ]
+        camera = [
             K.RandomBrightness(brightness=(1.0 - c.brightness, 1.0 + c.brightness), p=0.8),
             K.RandomContrast(contrast=(1.0 - c.contrast, 1.0 + c.contrast), p=0.8),
             K.RandomGamma(gamma=c.gamma, p=0.8),
             K.RandomGaussianBlur(kernel_size=(5, 5), sigma=c.blur_sigma, p=c.blur_p),
             K.RandomGaussianNoise(mean=0.0, std=c.noise_std, p=c.noise_p),
         ]
-        self.seq = K.AugmentationSequential(*ops, data_keys=["input", "mask"])
+        self.geometric = K.AugmentationSequential(*geometric, data_keys=["input", "mask"])
+        self.camera = K.AugmentationSequential(*camera, data_keys=["input"])
 
     def forward(self, x: torch.Tensor, mask: torch.Tensor) -> tuple[torch.Tensor, torch.Tensor]:
         """Augment one batch.
 
         Args:
-            x: ``(N, C, S, S) float32`` normalised network inputs (all channels get the same
-                transform, so the reference channel stays registered with the frame).
+            x: ``(N, C, S, S) float32`` normalised network inputs: frame[, reference][, ridge
+                energy] (``prepare``). Every channel gets the same warp (the reference and the
+                ridge energy stay registered with the frame); the camera operations change the
+                image channels only (the ridge energy keeps the renderer's camera);
+                :func:`contact_look` changes the frame and the ridge energy.
             mask: ``(N, 1, S, S) float32`` in {0, 1}; warped with nearest-neighbour sampling.
 
         Returns:
             ``(x, mask)`` of the same shapes and dtypes; mask stays binary.
         """
-        u = network_to_unit(x, self.preprocess).clamp(0.0, 1.0)
+        ridge = self.preprocess.ridge_work_px > 0
+        n_img = x.shape[1] - int(ridge)  # image channels (frame[, reference]), intensities
+        u = torch.cat(
+            [network_to_unit(x[:, :n_img], self.preprocess).clamp(0.0, 1.0), x[:, n_img:]], 1
+        )
         m = mask
         if self.config.enabled:
             with self._seeded(x.device):
-                u, m = self.seq(u, mask)
-            u = u.clamp(0.0, 1.0)
-        if self.reference_dropout > 0.0 and u.shape[1] == 2:
+                u, m = self.geometric(u, mask)
+                m = (m > 0.5).to(u.dtype)
+                u = contact_look(u, m, self.config.contact, self.generator, ridge=ridge)
+                u = torch.cat([self.camera(u[:, :n_img]).clamp(0.0, 1.0), u[:, n_img:]], 1)
+        if self.reference_dropout > 0.0 and n_img == 2:
             drop = torch.rand(u.shape[0], generator=self.generator) < self.reference_dropout
             u[drop.to(u.device), 1] = 0.0  # prepare.blank_reference: black, after the warp
-        return unit_to_network(u, self.preprocess), (m > 0.5).to(mask.dtype)
+        x_out = torch.cat([unit_to_network(u[:, :n_img], self.preprocess), u[:, n_img:]], 1)
+        return x_out, (m > 0.5).to(mask.dtype)
 
     @contextmanager
     def _seeded(self, device: torch.device) -> Iterator[None]:

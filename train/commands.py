@@ -37,6 +37,14 @@ def add_parsers(sub: Any) -> None:
         "--input-size", type=int, metavar="S", help="network input side, px (default 256)"
     )
     _add_reference_args(t)
+    t.add_argument(
+        "--ridge-channel",
+        dest="ridge_work_px",
+        type=int,
+        metavar="W",
+        help="add the ridge-energy channel, measured on the crop resampled to W px "
+        "(>= the input size; default off)",
+    )
     t.add_argument("--seed", type=int, help="split/init/shuffle/augmentation seed (default 0)")
     t.add_argument("--batch-size", type=int, metavar="B", help="frames per step (default 16)")
     # dest differs from the deployment commands' --threads (onnxruntime threads, an int >= 1
@@ -123,6 +131,7 @@ def build_config(args: argparse.Namespace) -> Any:
         "input_size": args.input_size,
         "use_reference": args.reference,
         "reference_dropout": args.reference_dropout,
+        "ridge_work_px": args.ridge_work_px,
         "seed": args.seed,
         "batch_size": args.batch_size,
         "num_threads": args.torch_threads,

@@ -28,6 +28,8 @@ class TrainConfig:
     reference_dropout: float = 0.0  # share of training frames whose reference channel is the
     #   blank placeholder (deployment without a reference frame); more = better without a
     #   reference, less use of the reference's onset cue
+    ridge_work_px: int = 0  # px; > 0 adds the ridge-energy channel measured at this crop side
+    #   (``infer.methods.unet.ridge``); finer ridges, a finer JPEG decode at deployment
     bce_weight: float = 1.0  # weight of per-pixel BCE (calibration, stable gradients)
     dice_weight: float = 1.0  # weight of per-frame soft Dice (small contacts count fully)
     device: str = "auto"  # "cpu", "cuda" or "auto" (cuda when available)
@@ -36,7 +38,7 @@ class TrainConfig:
     prob_threshold: float = 0.5  # probability above which a pixel is contact
     min_contact_area_px: float = 30.0  # network px at input_size; smaller predicted regions are
     #   "no contact" (higher misses the onset, lower reports specks as contact)
-    model: UNetConfig = field(default_factory=UNetConfig)  # in_channels is set from use_reference
+    model: UNetConfig = field(default_factory=UNetConfig)  # in_channels: from use_reference, ridge
     preprocess: PreprocessConfig = field(default_factory=PreprocessConfig)  # size from input_size
     augment: AugmentConfig = field(default_factory=AugmentConfig)  # training-time only
 
@@ -57,6 +59,11 @@ class TrainConfig:
             raise ValueError(f"reference_dropout must be in [0, 1), got {self.reference_dropout}")
         if self.reference_dropout > 0.0 and not self.use_reference:
             raise ValueError("reference_dropout needs the reference channel (use_reference)")
+        if self.ridge_work_px < 0 or 0 < self.ridge_work_px < self.input_size:
+            raise ValueError(
+                f"ridge_work_px must be 0 (off) or >= input_size {self.input_size}, "
+                f"got {self.ridge_work_px}"
+            )
         if not 0.0 < self.prob_threshold < 1.0:
             raise ValueError(f"prob_threshold must be in (0, 1), got {self.prob_threshold}")
 
@@ -64,10 +71,14 @@ class TrainConfig:
         """Copy with the derived fields of the nested configs made consistent."""
         return dataclasses.replace(
             self,
-            model=dataclasses.replace(self.model, in_channels=2 if self.use_reference else 1),
+            model=dataclasses.replace(
+                self.model,
+                in_channels=1 + int(self.use_reference) + int(self.ridge_work_px > 0),
+            ),
             preprocess=dataclasses.replace(
                 self.preprocess,
                 input_size=self.input_size,
+                ridge_work_px=self.ridge_work_px,
                 no_reference="blank" if self.reference_dropout > 0.0 else "self",
             ),
         )

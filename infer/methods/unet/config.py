@@ -29,6 +29,14 @@ class PreprocessConfig:
     #   ellipses and blobs, lower rejects slightly broken rings
     ring_work_px: int = 512  # px, longest side the ring search works at; smaller is faster, coarser
     fallback_radius_fraction: float = 0.45  # of min(H, W), ring radius assumed when none is found
+    ridge_work_px: int = 0  # px, side the ridge-energy channel is measured at (``ridge.py``);
+    #   0 = no ridge channel; larger resolves finer ridges but needs a finer JPEG decode
+    ridge_sigma_fine_px: float = 0.6  # px at ridge_work_px, DoG inner σ; with the coarse σ it
+    #   passes ridge periods of ~3-7 px (0.35-0.55 mm at 288 px across 2.2 ring radii)
+    ridge_sigma_coarse_px: float = 1.3  # px at ridge_work_px, DoG outer σ (see fine)
+    ridge_smooth_px: float = 2.0  # px at ridge_work_px, σ of the energy smoothing; larger is
+    #   steadier but blurs the contact edge
+    ridge_norm: float = 0.02  # RMS ridge amplitude / bright level mapped to 1 (typical contact)
     no_reference: str = "self"  # a 2-channel model's reference channel without a reference frame:
     #   "self" = the frame itself (models trained without reference dropout), "blank" = a
     #   constant black plane, the placeholder a model trained with reference dropout has seen
@@ -37,6 +45,17 @@ class PreprocessConfig:
         if self.no_reference not in NO_REFERENCE_MODES:
             raise ValueError(
                 f"no_reference must be one of {NO_REFERENCE_MODES}, got {self.no_reference!r}"
+            )
+        if self.ridge_work_px < 0 or (0 < self.ridge_work_px < self.input_size):
+            raise ValueError(
+                f"ridge_work_px must be 0 (off) or >= input_size ({self.input_size}), "
+                f"got {self.ridge_work_px}"
+            )
+        ridge = (self.ridge_sigma_fine_px, self.ridge_sigma_coarse_px, self.ridge_smooth_px)
+        if not (0.0 < ridge[0] < ridge[1] and ridge[2] > 0.0 and self.ridge_norm > 0.0):
+            raise ValueError(
+                "ridge band must satisfy 0 < ridge_sigma_fine_px < ridge_sigma_coarse_px, "
+                f"ridge_smooth_px > 0 and ridge_norm > 0, got {ridge}, {self.ridge_norm}"
             )
         if self.input_size < 8:
             raise ValueError(f"input_size must be >= 8 px, got {self.input_size}")

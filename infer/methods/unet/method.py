@@ -39,15 +39,22 @@ class UnetMethod:
     """
 
     name = "unet"
-    NO_REFERENCE = (
-        "no reference frame: the frame served as its own reference (the model expects the "
-        "session's 0 kPa frame; expect larger errors)"
-    )
+    #: The note of a frame measured without a reference frame, by what the model does then.
+    NO_REFERENCE_NOTES = {
+        "self": "no reference frame: the frame served as its own reference (the model expects "
+        "the session's 0 kPa frame; expect larger errors)",
+        "blank": "no reference frame: the blank placeholder stood in for it (the model was "
+        "trained for this with reference dropout); crop from the frame's own ring",
+        "none": "no reference frame: crop from the frame's own ring (a single-frame model)",
+    }
 
     def __init__(
         self, model: str | os.PathLike[str] | None = None, threads: int = 1, outline: bool = False
     ) -> None:
         self.segmenter = OnnxSegmenter(model, threads=threads)
+        spec = self.segmenter.spec
+        mode = spec.preprocess.no_reference if spec.uses_reference else "none"
+        self.NO_REFERENCE = self.NO_REFERENCE_NOTES[mode]
         self.outline = outline
         self.reference = session_reference(None)
         self.reduction = 1
@@ -58,8 +65,9 @@ class UnetMethod:
         """Choose the decode reduction from the ring's size, then prepare the reference.
 
         A reduction k > 1 is used only when every file is a JPEG of one size divisible by k (so
-        areas scale back exactly by k²) and the ring crop stays >= the network input at 1/k. The
-        ring is searched on the 1/8 decode; at k = 8 that search is the session's.
+        areas scale back exactly by k²) and the ring crop stays >= the network input (and >= the
+        ridge channel's work side) at 1/k. The ring is searched on the 1/8 decode; at k = 8 that
+        search is the session's.
         """
         paths = [*files, *([reference] if reference is not None else [])]
         jpegs = bool(paths) and all(p.suffix.lower() in (".jpg", ".jpeg") for p in paths)
@@ -73,7 +81,8 @@ class UnetMethod:
         k = 1
         if coarse.box is not None:  # the ring was found
             side = coarse.box.side * 8  # crop side in file pixels
-            fits = [k for k in REDUCTIONS if side / k >= cfg.input_size]
+            need = max(cfg.input_size, cfg.ridge_work_px)  # px the crop must keep
+            fits = [k for k in REDUCTIONS if side / k >= need]
             k = next((k for k in fits if h % k == 0 and w % k == 0), 1)
         if k == 8 and reference is not None:
             self.reference, self.reduction = coarse, 8

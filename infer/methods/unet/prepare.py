@@ -26,6 +26,7 @@ import numpy as np
 
 from contactcal.infer.image.gray import to_gray_u8
 from contactcal.infer.methods.unet.config import PreprocessConfig
+from contactcal.infer.methods.unet.ridge import ridge_energy
 from contactcal.infer.methods.unet.ring import RingFit, locate_ring
 
 T = TypeVar("T")
@@ -65,7 +66,7 @@ class SessionReference:
 class Prepared:
     """A frame ready for the network."""
 
-    x: np.ndarray  # (C, S, S) float32; C = 1 (frame) or 2 (frame, reference)
+    x: np.ndarray  # (C, S, S) float32; frame[, reference][, ridge energy] (``prepare``)
     box: CropBox
     ring: RingFit
 
@@ -158,15 +159,21 @@ def to_network(
     Returns:
         ``(S, S) float32`` network input, ``S = config.input_size``.
     """
-    gray = to_gray_u8(gray, name="to_network input")
+    return _to_network(to_gray_u8(gray, name="to_network input"), box, config)[0]
+
+
+def _to_network(
+    gray: np.ndarray, box: CropBox, config: PreprocessConfig
+) -> tuple[np.ndarray, float]:
+    """:func:`to_network` of a ``(H, W) uint8`` frame, and the bright level P it divided by."""
     s = config.input_size
     crop = crop_resize(gray, box, s)
     inside = crop[valid_window(box, gray.shape, s)]
     # No network pixel inside the image: nothing to normalise to; postprocess then reports no
     # contact (it ignores every network pixel outside the image), so the scale is immaterial.
-    ref = float(np.percentile(inside, config.norm_percentile)) if inside.size else 1.0
-    u = np.clip(crop / max(ref, 1.0), 0.0, 1.0)
-    return unit_to_network(u, config).astype(np.float32)
+    level = max(float(np.percentile(inside, config.norm_percentile)) if inside.size else 1.0, 1.0)
+    u = np.clip(crop / level, 0.0, 1.0)
+    return unit_to_network(u, config).astype(np.float32), level
 
 
 def from_network(prob: np.ndarray, box: CropBox, out_shape: tuple[int, ...]) -> np.ndarray:
@@ -251,7 +258,9 @@ def prepare(
         reference: from :func:`session_reference` (same image size as ``gray``).
         config: preprocessing.
         channels: 1 (frame) or 2 (frame, reference; without a reference frame, the frame itself
-            or :func:`blank_reference`, as ``config.no_reference`` says).
+            or :func:`blank_reference`, as ``config.no_reference`` says), plus 1 when
+            ``config.ridge_work_px > 0``: the frame's ridge energy
+            (:func:`~contactcal.infer.methods.unet.ridge.ridge_energy`), always last.
 
     Returns:
         :class:`Prepared` with ``x`` of shape ``(channels, S, S)``.
@@ -270,12 +279,21 @@ def prepare(
         own = locate_ring(gray, config)
         ring = own if own.found or ring is None else ring
         box = crop_box(ring, gray.shape, config)
-    x = to_network(gray, box, config)
+    x, level = _to_network(gray, box, config)
     chans = [x]
-    if channels == 2:
+    ridge = config.ridge_work_px > 0
+    if channels - ridge not in (1, 2):
+        raise ValueError(
+            f"channels must be {1 + ridge} or {2 + ridge} with ridge_work_px "
+            f"{config.ridge_work_px}, got {channels}"
+        )
+    if channels - ridge == 2:
         if ref_x is None and reference.gray is not None:
             ref_x = to_network(reference.gray, box, config)
         elif ref_x is None:
             ref_x = x if config.no_reference == "self" else blank_reference(config)
         chans.append(ref_x)
+    if ridge:
+        work = crop_resize(gray, box, config.ridge_work_px)
+        chans.append(ridge_energy(work, config, level))
     return Prepared(np.stack(chans), box, ring)

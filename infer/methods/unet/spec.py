@@ -72,7 +72,14 @@ class IntervalSpec:
 class ModelSpec:
     """What the model's metadata says about its input and output."""
 
-    channels: int  # 1 = frame only, 2 = frame + the session's zero-pressure frame
+    channels: int  # frame [+ the session's zero-pressure frame] [+ ridge energy, when
+    #   preprocess.ridge_work_px > 0]
+
+    @property
+    def uses_reference(self) -> bool:
+        """True when one input channel is the session's zero-pressure frame."""
+        return self.channels - (self.preprocess.ridge_work_px > 0) == 2
+
     preprocess: PreprocessConfig  # crop, input size and normalisation used in training
     threshold: float  # probability above which a network pixel is contact
     min_contact_area_px: float  # network pixels; smaller predicted regions are "no contact"
@@ -80,8 +87,12 @@ class ModelSpec:
     interval: IntervalSpec | None = None
 
     def __post_init__(self) -> None:
-        if self.channels not in (1, 2):
-            raise ValueError(f"channels must be 1 or 2, got {self.channels}")
+        ridge = self.preprocess.ridge_work_px > 0
+        if self.channels - ridge not in (1, 2):
+            raise ValueError(
+                f"channels must be {1 + ridge} or {2 + ridge} (frame[, reference]"
+                f"{', ridge energy' if ridge else ''}), got {self.channels}"
+            )
         if not 0.0 < self.threshold < 1.0:
             raise ValueError(f"threshold must be in (0, 1), got {self.threshold}")
         if not (math.isfinite(self.min_contact_area_px) and self.min_contact_area_px >= 0.0):

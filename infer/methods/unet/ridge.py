@@ -1,0 +1,59 @@
+"""The ridge-energy channel: fingerprint-ridge contrast measured finer than the network input.
+
+Fingerprint ridges are the evidence that defines contact, but at a 192² input they sit near the
+sampling limit (period ~2.8 network pixels across 2.2 ring radii). This channel measures them at
+``ridge_work_px`` (the crop resampled to that side, where the period is ~4-5 px), then shrinks
+the result to the network input:
+
+1. crop the frame on the session's box and resample it to ``W = ridge_work_px`` (INTER_AREA when
+   shrinking a 2592-wide frame, linear when enlarging a 400-wide render), normalised by the
+   same percentile as the frame channel (``norm_percentile``: exposure invariant);
+2. band-pass at the ridge frequency: difference of Gaussians σ ``ridge_sigma_fine_px`` −
+   ``ridge_sigma_coarse_px`` (work pixels; the DoG passes periods of ~3-7 px at W = 288);
+3. local energy: square, Gaussian smoothing σ ``ridge_smooth_px`` (work px), square root (RMS
+   ridge amplitude, in units of the crop's bright level);
+4. area-resize to ``(S, S)`` and divide by ``ridge_norm`` (the typical RMS inside a contact, so
+   values are ~1 on ridges and ~0 on a smooth membrane).
+
+The window ring's edges and coating sparkle pass the band too; the network learns to tell them
+apart, this channel only makes the ridges visible at its input size.
+"""
+
+from __future__ import annotations
+
+import cv2
+import numpy as np
+
+from contactcal.infer.methods.unet.config import PreprocessConfig
+
+
+def ridge_energy(work: np.ndarray, config: PreprocessConfig, reference_level: float) -> np.ndarray:
+    """The ridge-energy channel of one frame (steps 2-4; ``prepare`` does step 1).
+
+    Args:
+        work: ``(W, W) float32`` the frame's crop resampled to ``W = config.ridge_work_px``
+            (``prepare.crop_resize``), grey levels.
+        config: ``ridge_work_px`` (> 0), the band and the normalisation.
+        reference_level: the crop's bright level ``P`` (grey levels) the frame channel was
+            divided by; energies are relative to it.
+
+    Returns:
+        ``(S, S) float32`` ridge energy in network units (≥ 0), ``S = config.input_size``.
+
+    Raises:
+        ValueError: the config has no ridge channel, or ``work`` is not ``(W, W)``.
+    """
+    w = config.ridge_work_px
+    if w <= 0:
+        raise ValueError("ridge_energy: config.ridge_work_px is 0 (no ridge channel)")
+    if work.shape != (w, w):
+        raise ValueError(f"ridge_energy: expected a ({w}, {w}) crop, got shape {work.shape}")
+    work = work.astype(np.float32) / max(reference_level, 1.0)
+    fine = cv2.GaussianBlur(work, (0, 0), config.ridge_sigma_fine_px)
+    coarse = cv2.GaussianBlur(work, (0, 0), config.ridge_sigma_coarse_px)
+    band = fine - coarse
+    energy = np.sqrt(cv2.GaussianBlur(band * band, (0, 0), config.ridge_smooth_px))
+    s = config.input_size
+    interp = cv2.INTER_AREA if w > s else cv2.INTER_LINEAR
+    small = cv2.resize(energy, (s, s), interpolation=interp)
+    return (small / config.ridge_norm).astype(np.float32)

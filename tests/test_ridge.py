@@ -1,0 +1,115 @@
+"""The ridge-energy channel: band-pass reference values, channel layout, spec and training."""
+
+from __future__ import annotations
+
+import dataclasses
+
+import numpy as np
+import pytest
+
+from contactcal.infer.methods.unet.config import PreprocessConfig
+from contactcal.infer.methods.unet.prepare import prepare, session_reference
+from contactcal.infer.methods.unet.ridge import ridge_energy
+from contactcal.infer.methods.unet.spec import ModelSpec
+
+SIZE, WORK = 32, 64
+CFG = PreprocessConfig(input_size=SIZE, ridge_work_px=WORK)
+
+
+def _gain(period_px: float, cfg: PreprocessConfig) -> float:
+    """The DoG's amplitude response at ``period_px`` (Gaussian transfer functions)."""
+    f2 = (1.0 / period_px) ** 2
+    fine, coarse = cfg.ridge_sigma_fine_px, cfg.ridge_sigma_coarse_px
+    return float(np.exp(-2 * np.pi**2 * fine**2 * f2) - np.exp(-2 * np.pi**2 * coarse**2 * f2))
+
+
+def _ring_frame(ridges: float = 0.0) -> np.ndarray:
+    """``(120, 160) uint8``: a bright ring; inside, a flat disc with optional stripes."""
+    yy, xx = np.mgrid[:120, :160].astype(np.float64)
+    r = np.hypot(xx - 80, yy - 60)
+    img = np.where((r > 40) & (r < 50), 230.0, 20.0)
+    disc = r < 32
+    img[disc] = 100.0 + ridges * np.sin(2 * np.pi * xx[disc] / 7.0)  # ~4.5 px at WORK
+    return np.clip(img, 0, 255).astype(np.uint8)
+
+
+@pytest.mark.parametrize("period", [4.0, 5.0, 7.0])
+def test_sinusoid_reference_values(period: float) -> None:
+    """A sinusoid of amplitude a: energy = a · |DoG(f)| / √2 / level / ridge_norm."""
+    x = np.arange(WORK, dtype=np.float32)
+    a, level = 20.0, 200.0
+    work = np.broadcast_to(100.0 + a * np.sin(2 * np.pi * x / period), (WORK, WORK))
+    e = ridge_energy(np.ascontiguousarray(work, np.float32), CFG, level)
+    assert e.shape == (SIZE, SIZE) and e.dtype == np.float32
+    expected = a * _gain(period, CFG) / np.sqrt(2.0) / level / CFG.ridge_norm
+    centre = e[SIZE // 4 : -SIZE // 4, SIZE // 4 : -SIZE // 4]
+    assert float(np.median(centre)) == pytest.approx(expected, rel=0.05)
+
+
+def test_flat_crop_has_no_energy() -> None:
+    e = ridge_energy(np.full((WORK, WORK), 90.0, np.float32), CFG, 200.0)
+    assert float(np.abs(e).max()) < 1e-4  # float32 rounding of the blurs
+
+
+def test_bad_input() -> None:
+    with pytest.raises(ValueError, match="ridge_work_px is 0"):
+        ridge_energy(np.zeros((WORK, WORK), np.float32), PreprocessConfig(), 1.0)
+    with pytest.raises(ValueError, match=r"expected a \(64, 64\) crop"):
+        ridge_energy(np.zeros((WORK, WORK + 1), np.float32), CFG, 1.0)
+    with pytest.raises(ValueError, match="ridge_work_px must be 0"):
+        PreprocessConfig(input_size=SIZE, ridge_work_px=SIZE - 1)
+    with pytest.raises(ValueError, match="ridge band"):
+        PreprocessConfig(ridge_sigma_fine_px=2.0, ridge_sigma_coarse_px=1.0)
+
+
+def test_prepare_appends_the_ridge_channel_last() -> None:
+    """Frame and reference channels are those of the model without ridge; ridged contact lights
+    the last channel, a flat one does not."""
+    flat, striped = _ring_frame(0.0), _ring_frame(40.0)
+    ref = session_reference(flat, CFG)
+    x3 = prepare(striped, ref, CFG, channels=3).x
+    x2 = prepare(
+        striped,
+        session_reference(flat, dataclasses.replace(CFG, ridge_work_px=0)),
+        dataclasses.replace(CFG, ridge_work_px=0),
+        channels=2,
+    ).x
+    assert x3.shape == (3, SIZE, SIZE)
+    np.testing.assert_array_equal(x3[:2], x2)
+    centre = (slice(SIZE // 2 - 1, SIZE // 2 + 1),) * 2
+    lit = float(x3[2][centre].mean())
+    dark = float(prepare(flat, ref, CFG, channels=3).x[2][centre].mean())
+    assert lit > 1.0 and dark < 0.01
+    assert prepare(striped, ref, CFG, channels=2).x.shape == (2, SIZE, SIZE)  # frame + ridge
+    with pytest.raises(ValueError, match="channels must be 2 or 3"):
+        prepare(striped, ref, CFG, channels=1)
+
+
+def test_spec_channels_follow_the_ridge_setting() -> None:
+    assert ModelSpec(3, CFG, 0.5, 10.0).uses_reference
+    assert not ModelSpec(2, CFG, 0.5, 10.0).uses_reference
+    assert ModelSpec(2, PreprocessConfig(), 0.5, 10.0).uses_reference
+    with pytest.raises(ValueError, match="channels must be 2 or 3"):
+        ModelSpec(4, CFG, 0.5, 10.0)
+    with pytest.raises(ValueError, match="channels must be 1 or 2"):
+        ModelSpec(3, PreprocessConfig(), 0.5, 10.0)
+
+
+def test_train_config_and_augmenter_with_ridge() -> None:
+    torch = pytest.importorskip("torch")
+    pytest.importorskip("kornia")
+    from contactcal.train.augment import AugmentConfig, Augmenter
+    from contactcal.train.config import TrainConfig
+
+    cfg = TrainConfig(input_size=SIZE, ridge_work_px=WORK).resolved()
+    assert cfg.model.in_channels == 3 and cfg.preprocess.ridge_work_px == WORK
+    assert cfg.spec().channels == 3
+    with pytest.raises(ValueError, match="ridge_work_px must be 0"):
+        TrainConfig(input_size=SIZE, ridge_work_px=SIZE // 2)
+    x = torch.randn((4, 3, SIZE, SIZE)).abs()
+    m = torch.zeros((4, 1, SIZE, SIZE))
+    geometry_off = AugmentConfig(flip_p=0.0, affine_p=0.0)
+    out, _ = Augmenter(geometry_off, cfg.preprocess, seed=1)(x, m)
+    assert out.shape == x.shape
+    torch.testing.assert_close(out[:, 2], x[:, 2])  # camera ops leave the ridge energy alone
+    assert not torch.allclose(out[:, 0], x[:, 0])
