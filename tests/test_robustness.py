@@ -15,9 +15,10 @@ from contactcal.infer.bench import config as bench_config
 from contactcal.infer.bench import run as bench_run
 from contactcal.infer.bench.config import BenchConfig
 from contactcal.infer.bench.dataset import read_index, sessions_of
-from contactcal.infer.bench.perturb import PERTURBATIONS, Perturbation, offset, resolution
+from contactcal.infer.bench.perturb import offset, resolution
 from contactcal.infer.bench.robustness import Sample, load_sample, perturbed, sample_rows
 from contactcal.infer.bench.run import run_bench
+from contactcal.infer.bench.suite import PERTURBATIONS, Perturbation
 from contactcal.infer.cli import main
 from contactcal.infer.methods.unet.ring import RingFit, locate_ring
 
@@ -173,3 +174,15 @@ def test_off_by_default_and_cli(
     assert main([*args, "--out", str(out), "--robustness", "--robustness-frames", "0"]) == 2
     with pytest.raises(ValueError, match="robustness_frames"):
         BenchConfig(robustness_frames=-1)
+
+
+def test_randomised_ranges_mark_the_levels_where_the_target_applies() -> None:
+    """Baselines are always in range; the documented ranges include the levels they name and
+    exclude the extremes beyond them; offset is not randomised at all."""
+    by_name = {p.name: p for p in PERTURBATIONS}
+    assert all(p.in_range(p.baseline) for p in PERTURBATIONS)
+    assert by_name["exposure"].in_range(-2.0) and by_name["exposure"].in_range(2.0)
+    assert not by_name["contrast"].in_range(2.0) and by_name["contrast"].in_range(0.75)
+    assert by_name["JPEG"].in_range(50.0) and not by_name["JPEG"].in_range(25.0)
+    assert not by_name["offset"].in_range(0.02)
+    assert not by_name["no reference"].in_range(1.0)

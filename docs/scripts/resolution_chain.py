@@ -7,7 +7,8 @@ seed): at 2592×1944 (saved as JPEG q90 like the rig's camera, decoded by ``cont
 reduction deployment picks for the network input) and at 400×300 (the training frames). Both go
 through the one preprocessing (`prepare`) to the network input; the script prints, per input
 size, the ridge contrast inside the contact (RMS of a band-pass at the ridge frequency, in network
-units) and the ridge period in network pixels.
+units), and for the ridge-energy channel (192² input, measured at 288 px) its median inside the
+eroded contact and on the membrane around it.
 
 Run from the repository root (slow: one 5 MP render takes about a minute on 2 cores):
 ``python docs/scripts/resolution_chain.py [--sessions 2] [--spp 8]``.
@@ -40,9 +41,19 @@ def _ridge_contrast(x: np.ndarray, mask: np.ndarray) -> float:
     return float(np.sqrt(np.mean(dog[inner] ** 2))) if inner.any() else float("nan")
 
 
-def _network_views(frames, reduce: int, size: int, tmp: Path, tag: str):
+def _ridge_channel(x: np.ndarray, mask: np.ndarray) -> str:
+    """Median ridge energy inside the eroded contact / on the membrane ring around it."""
+    m = mask.astype(np.uint8)
+    inner = cv2.erode(m, np.ones((5, 5), np.uint8)) > 0
+    around = (cv2.dilate(m, np.ones((25, 25), np.uint8)) > 0) & ~(
+        cv2.dilate(m, np.ones((7, 7), np.uint8)) > 0
+    )
+    return f"{np.median(x[inner]):.2f} / {np.median(x[around]):.2f}"
+
+
+def _network_views(frames, reduce: int, size: int, tmp: Path, tag: str, ridge: int = 0):
     """Save frames (JPEG q90), decode at 1/reduce, prepare; yield (x, mask) in network pixels."""
-    cfg = PreprocessConfig(input_size=size)
+    cfg = PreprocessConfig(input_size=size, ridge_work_px=ridge)
     paths = []
     for f in frames:
         p = tmp / f"{tag}_{f.pressure_kpa:04.1f}.jpg"
@@ -51,7 +62,7 @@ def _network_views(frames, reduce: int, size: int, tmp: Path, tag: str):
     ref = session_reference(load_image(paths[0], reduce=reduce), cfg)
     for f, p in zip(frames, paths, strict=True):
         gray = load_image(p, reduce=reduce)
-        x = prepare(gray, ref, cfg, channels=1).x[0]
+        x = prepare(gray, ref, cfg, channels=1 + (ridge > 0)).x[-1]
         m = cv2.resize(f.mask.astype(np.float32), gray.shape[::-1], interpolation=cv2.INTER_AREA)
         yield f.pressure_kpa, x, crop_resize(m, ref.box, size) > 0.5
 
@@ -71,16 +82,15 @@ def main() -> None:
             for size, weight in ((FULL, 2048), (SMALL, 1024)):
                 rc = RenderConfig(*size, spp=args.spp, weight_size=weight)
                 renders[size] = list(render_session(session, PRESSURES, rc, (9000, finger)))
-            for net, reduce in ((192, 8), (384, 4)):
-                rows = {
-                    "2592×1944 JPEG": _network_views(renders[FULL], reduce, net, Path(tmp), "f"),
-                    "400×300": _network_views(renders[SMALL], 1, net, Path(tmp), "s"),
-                }
-                for name, views in rows.items():
+            for net, reduce, ridge in ((192, 8, 0), (384, 4, 0), (192, 4, 288)):
+                full = _network_views(renders[FULL], reduce, net, Path(tmp), "f", ridge)
+                small = _network_views(renders[SMALL], 1, net, Path(tmp), "s", ridge)
+                label = f"{net}²" + (f" ridge channel @{ridge}" if ridge else "")
+                for name, views in (("2592×1944 JPEG", full), ("400×300", small)):
                     for kpa, x, m in views:
                         if kpa > 0:
-                            c = _ridge_contrast(x, m)
-                            print(f"| {finger} | {kpa:g} | {net}² | {name} | {c:.3f} |")
+                            c = _ridge_channel(x, m) if ridge else f"{_ridge_contrast(x, m):.3f}"
+                            print(f"| {finger} | {kpa:g} | {label} | {name} | {c} |")
 
 
 if __name__ == "__main__":

@@ -47,8 +47,6 @@ frame the mask area × the pixel-count ratio ``(w'·h') / (w·h)``; of every oth
 from __future__ import annotations
 
 import math
-from collections.abc import Callable
-from dataclasses import dataclass
 
 import cv2
 import numpy as np
@@ -188,95 +186,3 @@ def unchanged(gray: np.ndarray, level: float, rng: np.random.Generator) -> np.nd
     """The frame as it is (the "no reference" case changes the reference, not the frame)."""
     _check(level, 0.0, 1.0, "no reference")
     return gray.copy()
-
-
-#: How a perturbation treats the session's reference frame.
-REFERENCE_MODES = {
-    "same": "perturbed as the frame, identically seeded",
-    "independent": "perturbed as the frame, independently seeded",
-    "kept": "unperturbed",
-    "dropped": "none given above the baseline level",
-}
-
-
-@dataclass(frozen=True)
-class Perturbation:
-    """One perturbation of the suite and its levels."""
-
-    name: str
-    apply: Callable[..., np.ndarray]  # (gray, level, rng[, ring=RingFit]) -> gray, pure
-    levels: tuple[float, ...]  # in the order shown; more levels cost more frames measured
-    baseline: float  # the unperturbed level (one of ``levels``): each row's own baseline
-    unit: str  # what a level is
-    reference: str  # key of REFERENCE_MODES
-    needs_ring: bool = False  # ``apply`` takes the session's ring as ``ring=``
-    moves_mask: bool = False  # the mask is perturbed too (else its area scales with the size)
-    names: tuple[tuple[float, str], ...] = ()  # levels shown as words
-
-    def __post_init__(self) -> None:
-        if self.baseline not in self.levels:
-            raise ValueError(f"{self.name}: baseline {self.baseline} not in levels {self.levels}")
-        if self.reference not in REFERENCE_MODES:
-            raise ValueError(f"{self.name}: unknown reference mode {self.reference!r}")
-
-    def label(self, level: float) -> str:
-        """The level as shown in tables and figures."""
-        return dict(self.names).get(level, f"{level:g}")
-
-
-#: The suite, in report order.
-PERTURBATIONS: tuple[Perturbation, ...] = (
-    Perturbation("contrast", contrast, (0.5, 0.75, 1.0, 1.5, 2.0), 1.0, "× about grey 128", "same"),
-    Perturbation("gamma", gamma, (0.5, 0.7, 1.0, 1.4, 2.0), 1.0, "exponent", "same"),
-    Perturbation("exposure", exposure, (-2.0, -1.0, 0.0, 1.0, 2.0), 0.0, "stops", "same"),
-    Perturbation("blur", blur, (0.0, 3.0, 6.0, 12.0, 24.0), 0.0, "σ, px at 2592 wide", "same"),
-    Perturbation(
-        "noise", noise, (0.0, 3.0, 6.0, 12.0, 24.0), 0.0, "sd, grey levels", "independent"
-    ),
-    Perturbation(
-        "JPEG",
-        jpeg,
-        (0.0, 95.0, 75.0, 50.0, 25.0, 10.0),
-        0.0,
-        "quality",
-        "same",
-        names=((0, "off"),),
-    ),
-    Perturbation(
-        "resolution",
-        resolution,
-        (0.0, 400.0, 648.0, 1296.0, 2592.0),
-        0.0,
-        "width, px",
-        "same",
-        names=((0, "native"),),
-    ),
-    Perturbation(
-        "dimmed sector",
-        dim_sector,
-        (0.0, 0.3, 0.6, 0.9),
-        0.0,
-        f"fraction, {SECTOR_DEG:g}° of the ring",
-        "same",
-        needs_ring=True,
-    ),
-    Perturbation(
-        "offset",
-        offset,
-        (0.0, 0.02, 0.05, 0.1),
-        0.0,
-        "× ring radius",
-        "kept",
-        needs_ring=True,
-        moves_mask=True,
-    ),
-    Perturbation(
-        "no reference",
-        unchanged,
-        (0.0, 1.0),
-        0.0,
-        "reference frame",
-        "dropped",
-        names=((0, "with"), (1, "without")),
-    ),
-)

@@ -158,7 +158,8 @@ def plot_pareto(
 
 def plot_robustness(path: str | os.PathLike[str], robustness: Mapping[str, Any]) -> None:
     """Median |relative area error| at ≥ 5 kPa vs level, one panel per perturbation, one line
-    per method, log y (errors floored at ``FLOOR_PCT``); the dashed line marks the baseline.
+    per method, log y (errors floored at ``FLOOR_PCT``); the dashed line marks the baseline, the
+    grey span the levels the training randomises (where the 2× target applies).
 
     Args:
         path: PNG to write.
@@ -183,6 +184,12 @@ def plot_robustness(path: str | os.PathLike[str], robustness: Mapping[str, Any])
                 x, y = zip(*pts, strict=True)
                 ax.plot(x, np.maximum(y, FLOOR_PCT), color=f"C{i}", marker="o", ms=3, label=method)
         ax.axvline(p["levels"].index(p["baseline"]), color="0.5", ls="--", lw=0.8)
+        inside = [
+            p["levels"].index(r["level"])
+            for r in robustness["rows"]
+            if r["perturbation"] == p["name"] and r["in_range"]
+        ]
+        ax.axvspan(min(inside) - 0.3, max(inside) + 0.3, color="0.9", zorder=0)
         ax.set_xticks(range(len(p["levels"])), p["labels"], fontsize=7)
         ax.set_yscale("log")
         _plain_log_ticks(ax)

@@ -24,8 +24,8 @@ from typing import Any
 import numpy as np
 
 from contactcal.infer.bench.dataset import IndexRow
-from contactcal.infer.bench.perturb import PERTURBATIONS, REFERENCE_MODES, Perturbation
 from contactcal.infer.bench.scoring import ScoredFrame, bin_row
+from contactcal.infer.bench.suite import PERTURBATIONS, REFERENCE_MODES, Perturbation
 from contactcal.infer.image.read import load_image
 from contactcal.infer.methods.base import Method
 from contactcal.infer.methods.registry import METHODS, make_method
@@ -164,6 +164,7 @@ def summary_rows(
                         "level": level,
                         "label": p.label(level),
                         "baseline": level == p.baseline,
+                        "in_range": p.in_range(level),
                         "method": method,
                         "contact_frames_ge5": high["contact_frames"],
                         "median_abs_rel_error_ge5": err,
@@ -204,6 +205,7 @@ def run_robustness(
                 "baseline": p.baseline,
                 "unit": p.unit,
                 "reference": REFERENCE_MODES[p.reference],
+                "randomised": None if p.randomised is None else list(p.randomised),
             }
             for p in PERTURBATIONS
         ],

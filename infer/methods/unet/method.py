@@ -11,6 +11,7 @@ import dataclasses
 import os
 from collections.abc import Sequence
 from pathlib import Path
+from types import MappingProxyType
 from typing import Any
 
 import cv2
@@ -28,6 +29,18 @@ from contactcal.infer.methods.unet.runner import OnnxSegmenter
 REDUCTIONS = (8, 4, 2)
 
 
+#: The note of a frame measured without a reference frame, by what the model does then.
+NO_REFERENCE_NOTES = MappingProxyType(
+    {
+        "self": "no reference frame: the frame served as its own reference (the model expects "
+        "the session's 0 kPa frame; expect larger errors)",
+        "blank": "no reference frame: the blank placeholder stood in for it (the model was "
+        "trained for this with reference dropout); crop from the frame's own ring",
+        "none": "no reference frame: crop from the frame's own ring (a single-frame model)",
+    }
+)
+
+
 class UnetMethod:
     """The ONNX U-Net (:class:`~contactcal.infer.methods.unet.runner.OnnxSegmenter`).
 
@@ -39,14 +52,6 @@ class UnetMethod:
     """
 
     name = "unet"
-    #: The note of a frame measured without a reference frame, by what the model does then.
-    NO_REFERENCE_NOTES = {
-        "self": "no reference frame: the frame served as its own reference (the model expects "
-        "the session's 0 kPa frame; expect larger errors)",
-        "blank": "no reference frame: the blank placeholder stood in for it (the model was "
-        "trained for this with reference dropout); crop from the frame's own ring",
-        "none": "no reference frame: crop from the frame's own ring (a single-frame model)",
-    }
 
     def __init__(
         self, model: str | os.PathLike[str] | None = None, threads: int = 1, outline: bool = False
@@ -54,7 +59,7 @@ class UnetMethod:
         self.segmenter = OnnxSegmenter(model, threads=threads)
         spec = self.segmenter.spec
         mode = spec.preprocess.no_reference if spec.uses_reference else "none"
-        self.NO_REFERENCE = self.NO_REFERENCE_NOTES[mode]
+        self.NO_REFERENCE = NO_REFERENCE_NOTES[mode]
         self.outline = outline
         self.reference = session_reference(None)
         self.reduction = 1
