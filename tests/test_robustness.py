@@ -122,6 +122,12 @@ def test_report_figure_and_results(bench: tuple[Path, dict[str, Any]]) -> None:
     assert (out / "robustness.png").read_bytes().startswith(PNG_MAGIC)
     report = (out / "report.md").read_text(encoding="utf-8")
     assert "## Robustness to perturbed frames" in report and "](robustness.png)" in report
+    assert (
+        report.count("worst ratio inside the randomised ranges")
+        + report.count("no randomised level with a defined error ratio")
+        == 2
+    )  # one line per method
+    assert "| randomised |" in report
     rob = json.loads((out / "results.json").read_text())["robustness"]
     assert rob == json.loads(json.dumps(results["robustness"]))
     assert len(rob["frames"]) == 4 and rob["seed"] == 0
