@@ -1,6 +1,7 @@
 """Render the bundled example session: one finger, 0-20 kPa in 1 kPa steps, 400×300 px.
 
-Frames are stored as JPEG (quality 85) to keep the repository small; masks (exact truth) as PNG.
+Frames are stored as JPEG (quality 75, a typical camera setting) to keep the repository small;
+masks (exact truth) as PNG.
 Run from the repository root (needs the ``synth`` extra): ``python examples/make_example.py``.
 """
 
@@ -20,6 +21,7 @@ from contactcal.synth.session import RenderConfig
 
 OUT = Path(__file__).resolve().parent / "session"
 SEED = 24  # dataset seed of the example (finger 0); not used by any training set
+JPEG_QUALITY = 75  # the frames as a rig camera saves them; keeps the session ~0.6 MB
 CONFIG = DatasetConfig(
     fingers=1,
     pressures_kpa=parse_pressures("0:20:1"),
@@ -43,7 +45,7 @@ def main() -> None:
         for r in rows:
             stem = Path(r["frame"]).stem
             img = cv2.imread(str(Path(tmp) / r["frame"]), cv2.IMREAD_COLOR)
-            cv2.imwrite(str(OUT / f"{stem}.jpg"), img, [cv2.IMWRITE_JPEG_QUALITY, 85])
+            cv2.imwrite(str(OUT / f"{stem}.jpg"), img, [cv2.IMWRITE_JPEG_QUALITY, JPEG_QUALITY])
             shutil.copy(Path(tmp) / r["mask"], OUT / "masks" / f"{stem}.png")
             manifest.append(f"{stem}.jpg,{r['pressure_kpa']}")
             cells = (f"{stem}.jpg", r["pressure_kpa"], r["contact"], r["area_px"], r["area_mm2"])

@@ -207,7 +207,7 @@ def test_calibration_records_provenance(tmp_path: Path) -> None:
     assert cfg["model_sha256"] == hashlib.sha256(DEFAULT_MODEL.read_bytes()).hexdigest()
     meta = OnnxSegmenter().metadata
     assert cfg["data_digest"] == meta["data_digest"] and len(cfg["data_digest"]) > 0
-    assert cfg["spec"]["channels"] in (1, 2) and cfg["spec"]["threshold"] == float(
+    assert cfg["spec"]["channels"] == int(meta["channels"]) and cfg["spec"]["threshold"] == float(
         meta["threshold"]
     )
     assert cfg["spec"]["preprocess"] == json.loads(meta["preprocess"])

@@ -115,7 +115,7 @@ def test_training_and_deployment_agree(tmp_path: Path, case: str) -> None:
     reference = None if case == "no reference" else rows[0].frame
     x_train, a_train = _training(unet, rows, reference is not None)
     x_dep, a_dep = _deployed(unet, rows, reference)
-    assert x_dep.shape == x_train.shape == (len(rows), 2, 192, 192)
+    assert x_dep.shape == x_train.shape == (len(rows), unet.segmenter.spec.channels, 192, 192)
     np.testing.assert_array_equal(x_dep, x_train)
     assert a_dep == a_train
     if case == "reference":  # the shared path also measures well here
