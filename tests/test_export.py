@@ -114,15 +114,18 @@ def test_tune_min_area_never_worse(run_dir: Path, tmp_path: Path) -> None:
 
 
 def test_widest_margin_reference_values() -> None:
-    """Fewest errors on [3, 54) (false regions 0-2 px, smallest contact 53 px) → sqrt(3 · 54);
+    """Fewest errors for 3-53 px (false regions 0-2 px, smallest contact 53 px) → sqrt(3 · 53);
     a tie further up (177-271) is not chosen; without any rise the lowest optimum is kept."""
     pytest.importorskip("torch")
     from contactcal.train.threshold import widest_margin
 
     areas = np.array([0, 0, 1, 2, 119, 176, 611, 53, 110, 270, 335], float)
     contact = np.array([False] * 7 + [True] * 4)
-    assert widest_margin(areas, contact, 30.0) == pytest.approx(np.sqrt(3.0 * 54.0))
+    assert widest_margin(areas, contact, 30.0) == pytest.approx(np.sqrt(3.0 * 53.0))
     clean = np.array([0, 0, 40, 50], float)
     assert widest_margin(clean, np.array([False, False, True, True]), 30.0) == pytest.approx(
-        np.sqrt(1.0 * 41.0)
+        np.sqrt(1.0 * 40.0)
     )
+    # a one-pixel optimum (false region 9 px, contact 10 px) keeps the 10-px contact
+    tight = np.array([9, 10, 50], float)
+    assert widest_margin(tight, np.array([False, True, True]), 30.0) == 10.0

@@ -103,7 +103,8 @@ def build_cache(
     Args:
         rows: frames (whole sessions: each session's lowest-pressure frame is its reference).
         config: preprocessing (``input_size`` = S).
-        channels: network input channels, 1 (frame) or 2 (frame, session reference).
+        channels: network input channels: frame [, session reference] [, ridge energy]
+            (``prepare``).
         progress: show a tqdm bar.
 
     Returns:

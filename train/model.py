@@ -18,7 +18,7 @@ from torch import nn
 class UNetConfig:
     """Architecture; channels at level ``l`` are ``base · 2**l`` (bottleneck: ``l = levels``)."""
 
-    in_channels: int = 1  # 1 (frame) or 2 (frame + session reference)
+    in_channels: int = 1  # frame [+ session reference] [+ ridge energy] (TrainConfig.resolved)
     base: int = 8  # channels at full resolution; ×2 ≈ ×4 parameters and ×2-4 time
     levels: int = 3  # poolings; each doubles the receptive field, costs little (low resolution)
     depthwise: bool = (

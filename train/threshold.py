@@ -66,7 +66,8 @@ def widest_margin(areas: np.ndarray, contact: np.ndarray, default: float) -> flo
 
     Returns:
         ``sqrt(lo · hi)``: ``lo`` the smallest value with the fewest false + missed contacts,
-        ``hi`` the next region size where that count rises (``lo`` when it never rises).
+        ``hi`` the largest such value below the next rise of that count (region sizes are whole
+        pixels; ``lo`` when it never rises), so the pick keeps the fewest errors.
     """
 
     def errors(t: float) -> int:
@@ -78,8 +79,10 @@ def widest_margin(areas: np.ndarray, contact: np.ndarray, default: float) -> flo
     counts = [errors(t) for t in candidates]
     i = counts.index(min(counts))
     j = next((k for k in range(i + 1, len(candidates)) if counts[k] > counts[i]), None)
-    hi = candidates[j] if j is not None else candidates[i]
-    return float(np.sqrt(candidates[i] * hi))
+    # Region sizes are whole pixels: every value in [lo, next rise − 1] keeps the same decisions.
+    lo = candidates[i]
+    hi = max(lo, candidates[j] - 1.0) if j is not None else lo
+    return float(np.sqrt(lo * hi))
 
 
 def tune_min_area(run_dir: str | os.PathLike[str]) -> tuple[float, dict[str, Any]]:
