@@ -74,17 +74,16 @@ class ModelSpec:
 
     channels: int  # frame [+ the session's zero-pressure frame] [+ ridge energy, when
     #   preprocess.ridge_work_px > 0]
-
-    @property
-    def uses_reference(self) -> bool:
-        """True when one input channel is the session's zero-pressure frame."""
-        return self.channels - (self.preprocess.ridge_work_px > 0) == 2
-
     preprocess: PreprocessConfig  # crop, input size and normalisation used in training
     threshold: float  # probability above which a network pixel is contact
     min_contact_area_px: float  # network pixels; smaller predicted regions are "no contact"
     #: None only before calibration (training's validation); every exported model states one.
     interval: IntervalSpec | None = None
+
+    @property
+    def uses_reference(self) -> bool:
+        """True when one input channel is the session's zero-pressure frame."""
+        return self.channels - (self.preprocess.ridge_work_px > 0) == 2
 
     def __post_init__(self) -> None:
         ridge = self.preprocess.ridge_work_px > 0
