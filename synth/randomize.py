@@ -29,6 +29,8 @@ from contactcal.synth.ranges import (
     LED_COUNT,
     LOOK_DRAWS,
     SKIN_DRAWS,
+    SMOOTH_DRAWS,
+    SMOOTH_PROBABILITY,
     STRAY_PROBABILITY,
     Draw,
 )
@@ -133,12 +135,13 @@ def _camera(v: dict[str, Any], jpeg_quality: int) -> CameraEffects:
 def _optics(v: dict[str, Any]) -> MembraneOptics:
     skin = np.clip(np.array([0.62, 0.42, 0.36]) * v["skin_gain"] ** 0.3, 0.0, 1.0)
     refl = float(v["coating_reflectance"])
+    smooth = v["smooth_draw"] < SMOOTH_PROBABILITY
     return MembraneOptics(
         particle_density_per_mm2=float(v["particle_density_per_mm2"]),
-        particle_tilt_deg=float(v["particle_tilt_deg"]),
+        particle_tilt_deg=float(v["smooth_tilt_deg" if smooth else "particle_tilt_deg"]),
         sparkle_fraction=float(v["sparkle_fraction"]),
         sparkle_tilt_deg=float(v["sparkle_tilt_deg"]),
-        roughness_alpha=float(v["roughness_alpha"]),
+        roughness_alpha=float(v["smooth_alpha" if smooth else "roughness_alpha"]),
         coating_reflectance=(refl, refl, refl * float(v["blue_per_red_reflectance"])),
         coating_diffuse=float(v["coating_diffuse"]),
         skin_rgb=(float(skin[0]), float(skin[1]), float(skin[2])),
@@ -164,6 +167,7 @@ def sample_session(rng: np.random.Generator, hard: bool = False) -> SessionParam
     v |= _draw(rng, LOOK_DRAWS, hard)
     v |= _draw(rng, SKIN_DRAWS, hard)
     v |= _draw(rng, CAMERA2_DRAWS, hard)  # v2 appearance, last: earlier draws keep their values
+    v |= _draw(rng, SMOOTH_DRAWS, hard)  # smooth coating, after v2: earlier draws keep theirs
     membrane, rig = _membrane_and_rig(v)
     return SessionParams(
         finger=_finger(v),

@@ -56,6 +56,24 @@ def test_reduction_not_used_when_unsafe(tmp_path: Path) -> None:
     assert np.isfinite(measure_files([odd], unet)[0].result.area_px)
 
 
+def test_decoded_frames_are_shrunk_like_a_reduced_decode(tmp_path: Path) -> None:
+    ref, frame = _upscaled(tmp_path, 0, (1600, 1200)), _upscaled(tmp_path, 12, (1600, 1200))
+    unet = UnetMethod()
+    k = unet.start([frame], ref)
+    fast = measure_files([frame], unet, ref)[0].result
+    unet.set_reference(load_image(ref))  # decoded at full size: the method shrinks it itself
+    assert unet.shrink == k and unet.reference.gray.shape == (1200 // k, 1600 // k)
+    full = unet.measure(load_image(frame))
+    assert full.area_px == pytest.approx(fast.area_px, rel=0.01)
+    alone = UnetMethod()
+    alone.set_reference(None)
+    assert alone.shrink is None  # no reference: the first frame decides
+    assert alone.measure(load_image(frame)).area_px == pytest.approx(fast.area_px, rel=0.03)
+    assert alone.shrink == k
+    with pytest.raises(ValueError, match="differs from the reference frame size 1600×1200"):
+        unet.measure(cv2.resize(load_image(frame), (800, 600)))
+
+
 def _cut_in_half(tmp_path: Path, src: Path = EXAMPLE / "p10.0kpa.jpg") -> Path:
     """The frame cut in half with the end-of-image marker re-added (libjpeg only warns)."""
     data = src.read_bytes()

@@ -11,7 +11,10 @@ units), and for the ridge-energy channel (192² input, measured at 288 px) its m
 eroded contact and on the membrane around it.
 
 Run from the repository root (slow: one 5 MP render takes about a minute on 2 cores):
-``python docs/scripts/resolution_chain.py [--sessions 2] [--spp 8]``.
+``python docs/scripts/resolution_chain.py [--sessions 2] [--spp 8] [--full-from DIR]``;
+``--full-from`` reads the 2592×1944 frames of those sessions from a dataset rendered with
+``contactcal synth --fingers 2 --pressures 0:20:5 --size 2592x1944 --spp 8 --seed 9000
+--hard-fraction 0`` instead of rendering them again.
 """
 
 from __future__ import annotations
@@ -19,6 +22,7 @@ from __future__ import annotations
 import argparse
 import tempfile
 from pathlib import Path
+from types import SimpleNamespace
 
 import cv2
 import numpy as np
@@ -67,10 +71,23 @@ def _network_views(frames, reduce: int, size: int, tmp: Path, tag: str, ridge: i
         yield f.pressure_kpa, x, crop_resize(m, ref.box, size) > 0.5
 
 
+def _from_dataset(folder: Path, finger: int) -> list[SimpleNamespace]:
+    """The session's frames at :data:`PRESSURES` from a dataset folder (RGB frame, bool mask)."""
+    out = []
+    for kpa in PRESSURES:
+        name = f"p{kpa:04.1f}kpa.png"
+        d = folder / f"finger_{finger:04d}"
+        frame = cv2.imread(str(d / "frames" / name), cv2.IMREAD_COLOR)[:, :, ::-1]
+        mask = cv2.imread(str(d / "masks" / name), cv2.IMREAD_GRAYSCALE) > 127
+        out.append(SimpleNamespace(pressure_kpa=kpa, frame=frame, mask=mask))
+    return out
+
+
 def main() -> None:
     ap = argparse.ArgumentParser()
     ap.add_argument("--sessions", type=int, default=2)
     ap.add_argument("--spp", type=int, default=8)
+    ap.add_argument("--full-from", type=Path, default=None, help="dataset of the 2592 frames")
     args = ap.parse_args()
     data = DatasetConfig(fingers=args.sessions, pressures_kpa=PRESSURES, seed=9000, hard_fraction=0)
     print("| session | kPa | input | from | ridge contrast | ")
@@ -80,12 +97,15 @@ def main() -> None:
             session = session_params(data, finger)
             renders = {}
             for size, weight in ((FULL, 2048), (SMALL, 1024)):
+                if size == FULL and args.full_from is not None:
+                    renders[size] = _from_dataset(args.full_from, finger)
+                    continue
                 rc = RenderConfig(*size, spp=args.spp, weight_size=weight)
                 renders[size] = list(render_session(session, PRESSURES, rc, (9000, finger)))
-            for net, reduce, ridge in ((192, 8, 0), (384, 4, 0), (192, 4, 288)):
+            for net, reduce, ridge in ((192, 8, 0), (384, 4, 0), (192, 4, 288), (192, 8, 288)):
                 full = _network_views(renders[FULL], reduce, net, Path(tmp), "f", ridge)
                 small = _network_views(renders[SMALL], 1, net, Path(tmp), "s", ridge)
-                label = f"{net}²" + (f" ridge channel @{ridge}" if ridge else "")
+                label = f"{net}²" + (f" ridge channel @{ridge}, 1/{reduce} decode" if ridge else "")
                 for name, views in (("2592×1944 JPEG", full), ("400×300", small)):
                     for kpa, x, m in views:
                         if kpa > 0:

@@ -20,7 +20,7 @@ import cv2
 import numpy as np
 
 from contactcal.infer.image.decode import decode_strict
-from contactcal.infer.image.gray import ImageError, to_gray_u8
+from contactcal.infer.image.gray import ImageError, reduce_area, to_gray_u8
 from contactcal.infer.image.png import png_significant_bits
 
 #: File suffixes accepted by :func:`load_image` (lower case).
@@ -178,8 +178,4 @@ def load_image(
     _check_frame_shape(p, img.shape[0] * k, img.shape[1] * k)
     img = _scale_depth(p, img, *_stated_depth(p, data, bit_depth))
     gray = to_gray_u8(img, name=str(p), bgr=True)
-    if reduce > 1 and not jpeg:
-        h, w = gray.shape
-        size = (max(1, round(w / reduce)), max(1, round(h / reduce)))
-        gray = cv2.resize(gray, size, interpolation=cv2.INTER_AREA)
-    return gray
+    return gray if jpeg else reduce_area(gray, reduce)

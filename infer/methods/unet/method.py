@@ -18,15 +18,32 @@ import cv2
 import numpy as np
 
 from contactcal.infer.files.digest import sha256_file
+from contactcal.infer.image.gray import reduce_area, to_gray_u8
 from contactcal.infer.image.jpeg import jpeg_size
 from contactcal.infer.image.read import load_image
 from contactcal.infer.methods.base import AreaResult, load_reference
+from contactcal.infer.methods.unet.config import PreprocessConfig
 from contactcal.infer.methods.unet.postprocess import mask_in_input
 from contactcal.infer.methods.unet.prepare import session_reference
 from contactcal.infer.methods.unet.runner import OnnxSegmenter
 
-#: JPEG decode reductions tried, cheapest first.
+#: JPEG decode reductions (and shrink factors of decoded frames) tried, cheapest first.
 REDUCTIONS = (8, 4, 2)
+
+
+def fitting_reduction(side: float, shape: tuple[int, ...], config: PreprocessConfig) -> int:
+    """The largest of :data:`REDUCTIONS` that keeps the crop at least as large as what the
+    model resamples it to (its input, and the ridge channel's work side) and divides both sides
+    of the frame exactly (so areas scale back by exactly k²); 1 when none does.
+
+    Args:
+        side: ring crop side in pixels of the frame (``CropBox.side``; 0 when no ring).
+        shape: the frame's ``(H, W)``.
+        config: the model's preprocessing.
+    """
+    need = max(config.input_size, config.ridge_work_px)
+    h, w = int(shape[0]), int(shape[1])
+    return next((k for k in REDUCTIONS if side / k >= need and h % k == 0 and w % k == 0), 1)
 
 
 #: The note of a frame measured without a reference frame, by what the model does then.
@@ -62,7 +79,8 @@ class UnetMethod:
         self.NO_REFERENCE = NO_REFERENCE_NOTES[mode]
         self.outline = outline
         self.reference = session_reference(None)
-        self.reduction = 1
+        self.reduction = 1  # the frames arrive decoded at 1/reduction (reduced JPEG decode)
+        self.shrink: int | None = None  # the method shrinks them further (None: not decided)
 
     def start(
         self, files: Sequence[Path], reference: Path | None, bit_depth: int | None = None
@@ -85,20 +103,50 @@ class UnetMethod:
         coarse = session_reference(load_image(paths[-1], reduce=8, bit_depth=bit_depth), cfg)
         k = 1
         if coarse.box is not None:  # the ring was found
-            side = coarse.box.side * 8  # crop side in file pixels
-            need = max(cfg.input_size, cfg.ridge_work_px)  # px the crop must keep
-            fits = [k for k in REDUCTIONS if side / k >= need]
-            k = next((k for k in fits if h % k == 0 and w % k == 0), 1)
+            k = fitting_reduction(coarse.box.side * 8, (h, w), cfg)
         if k == 8 and reference is not None:
-            self.reference, self.reduction = coarse, 8
+            self.reference, self.reduction, self.shrink = coarse, 8, 1
         else:
             self.set_reference(load_reference(reference, k, bit_depth), k)
         return k
 
     def set_reference(self, reference: np.ndarray | None, reduction: int = 1) -> None:
-        """Fix the crop and the reference channel from the session's zero-pressure frame."""
-        self.reference = session_reference(reference, self.segmenter.spec.preprocess)
-        self.reduction = reduction
+        """Fix the crop and the reference channel from the session's zero-pressure frame.
+
+        Frames decoded at full size (``reduction`` 1 and no reduced JPEG decode) are shrunk by
+        the method itself, by the integer factor the reduced JPEG decode would have used
+        (:func:`fitting_reduction`, :func:`~contactcal.infer.image.gray.reduce_area`): what
+        the network sees then does not depend on how the frame was decoded, and two
+        full-resolution resizes of the crop (~9 ms each at 2592×1944) become one cheap
+        integer one. Without a reference the first measured frame's ring decides.
+        """
+        cfg = self.segmenter.spec.preprocess
+        self.reduction, self.shrink = reduction, None if reference is None else 1
+        self.reference = session_reference(reference, cfg)
+        if reference is None or self.reference.box is None:
+            return
+        gray = self.reference.gray
+        self.shrink = fitting_reduction(self.reference.box.side, gray.shape, cfg)
+        if self.shrink > 1:
+            self.reference = session_reference(reduce_area(gray, self.shrink), cfg)
+
+    def _shrunk(self, image: np.ndarray) -> tuple[np.ndarray, int]:
+        """The frame at the session's shrink factor, and that factor (decided here when there
+        is no reference; a frame whose sides it does not divide is not shrunk)."""
+        gray = to_gray_u8(image, name="frame")
+        cfg = self.segmenter.spec.preprocess
+        if self.shrink is None:
+            own = session_reference(gray, cfg)
+            self.shrink = fitting_reduction(own.box.side if own.box else 0, gray.shape, cfg)
+        k, full = self.shrink, self.reference.gray
+        if k > 1 and full is not None and gray.shape != (full.shape[0] * k, full.shape[1] * k):
+            raise ValueError(
+                f"frame size {gray.shape[1]}×{gray.shape[0]} differs from the reference "
+                f"frame size {full.shape[1] * k}×{full.shape[0] * k}"
+            )
+        if gray.shape[0] % k or gray.shape[1] % k:
+            return gray, 1
+        return reduce_area(gray, k), k
 
     def measure(self, image: np.ndarray) -> AreaResult:
         """Segment; the contour is the kept region's outline in input pixels.
@@ -106,17 +154,19 @@ class UnetMethod:
         The result carries the model's stated interval of the area (``area_interval_px``,
         :func:`~contactcal.infer.methods.unet.postprocess.boundary_band`).
         """
+        image, shrink = self._shrunk(image)
+        k = self.reduction * shrink
         seg = self.segmenter.segment(image, self.reference)
         if not seg.contact:
             res = AreaResult(False, 0.0, "no contact", None, area_interval_px=seg.interval_px)
-            return res.upscaled(self.reduction)
+            return res.upscaled(k)
         contour = None
         if self.outline:
             mask = mask_in_input(seg, image.shape[:2]).astype(np.uint8)
             contours, _ = cv2.findContours(mask, cv2.RETR_EXTERNAL, cv2.CHAIN_APPROX_SIMPLE)
             contour = max(contours, key=cv2.contourArea) if contours else None
         res = AreaResult(True, seg.area_px, "", contour, seg.soft_area_px, seg.interval_px)
-        return res.upscaled(self.reduction)
+        return res.upscaled(k)
 
     def describe(self) -> dict[str, Any]:
         """The model file, its sha256, its training ``data_digest`` and its deployment spec."""
