@@ -32,18 +32,23 @@ REDUCTIONS = (8, 4, 2)
 
 
 def fitting_reduction(side: float, shape: tuple[int, ...], config: PreprocessConfig) -> int:
-    """The largest of :data:`REDUCTIONS` that keeps the crop at least as large as what the
-    model resamples it to (its input, and the ridge channel's work side) and divides both sides
-    of the frame exactly (so areas scale back by exactly k²); 1 when none does.
+    """The largest of :data:`REDUCTIONS` that keeps the ring crop at least the network's input
+    size and divides both sides of the frame exactly (so areas scale back by exactly k²); 1
+    when none does.
+
+    The ridge channel's work side (288 px) may be larger than the reduced crop: it is then
+    interpolated up, exactly as from the 400×300 training renders (crop ~280 px). Measured
+    through the rig's chain (``docs/synth.md``, "Resolution chain"), the 1/8 decode gives a ridge
+    channel within 0.9-1.8× of the training renders', the 1/4 decode 1.5-2.5×.
 
     Args:
         side: ring crop side in pixels of the frame (``CropBox.side``; 0 when no ring).
         shape: the frame's ``(H, W)``.
-        config: the model's preprocessing.
+        config: the model's preprocessing (``input_size``).
     """
-    need = max(config.input_size, config.ridge_work_px)
     h, w = int(shape[0]), int(shape[1])
-    return next((k for k in REDUCTIONS if side / k >= need and h % k == 0 and w % k == 0), 1)
+    fits = (k for k in REDUCTIONS if side / k >= config.input_size and h % k == 0 and w % k == 0)
+    return next(fits, 1)
 
 
 #: The note of a frame measured without a reference frame, by what the model does then.
@@ -88,8 +93,8 @@ class UnetMethod:
         """Choose the decode reduction from the ring's size, then prepare the reference.
 
         A reduction k > 1 is used only when every file is a JPEG of one size divisible by k (so
-        areas scale back exactly by k²) and the ring crop stays >= the network input (and >= the
-        ridge channel's work side) at 1/k. The ring is searched on the 1/8 decode; at k = 8 that
+        areas scale back exactly by k²) and the ring crop stays >= the network input at 1/k
+        (:func:`fitting_reduction`). The ring is searched on the 1/8 decode; at k = 8 that
         search is the session's.
         """
         paths = [*files, *([reference] if reference is not None else [])]
