@@ -9,7 +9,7 @@ import cv2
 import numpy as np
 import pytest
 
-from contactcal.infer.image.gray import ImageError
+from contactcal.infer.image.gray import ImageError, reduce_area
 from contactcal.infer.image.jpeg import jpeg_size
 from contactcal.infer.image.read import load_image
 from contactcal.infer.methods.classical import ClassicalMethod
@@ -54,6 +54,16 @@ def test_reduction_not_used_when_unsafe(tmp_path: Path) -> None:
     assert unet.start([png], None) == 1
     assert ClassicalMethod().start([_upscaled(tmp_path, 5, (1600, 1200))], None) == 1
     assert np.isfinite(measure_files([odd], unet)[0].result.area_px)
+
+
+def test_reduce_area_averages_blocks() -> None:
+    gray = np.arange(48, dtype=np.uint8).reshape(6, 8)
+    small = reduce_area(gray, 2)
+    assert small.shape == (3, 4) and small.dtype == np.uint8
+    assert small[0, 0] == 5 and small[2, 3] == 43  # 2×2 block means, half rounded up
+    assert reduce_area(gray, 1) is gray
+    with pytest.raises(ValueError, match="k must be >= 1"):
+        reduce_area(gray, 0)
 
 
 def test_decoded_frames_are_shrunk_like_a_reduced_decode(tmp_path: Path) -> None:
