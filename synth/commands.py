@@ -17,6 +17,12 @@ def add_parsers(sub: argparse._SubParsersAction) -> None:
     s.add_argument("--spp", type=int, default=16, help="samples per pixel (default 16)")
     s.add_argument("--seed", type=int, default=0, help="dataset seed (default 0)")
     s.add_argument("--hard-fraction", type=float, default=0.25, help="share of hard sessions")
+    s.add_argument(
+        "--smooth-fraction",
+        type=float,
+        default=0.0,
+        help="share of the hard sessions with a smooth coating (sharp ring before contact)",
+    )
     s.add_argument("--out", type=Path, required=True, help="dataset folder")
     s.add_argument("--workers", type=int, default=1, help="worker processes (default 1)")
     s.add_argument("--shard", default="0/1", help="render only shard i of n (i/n)")
@@ -47,6 +53,7 @@ def _cmd_synth(args: argparse.Namespace) -> int:
         pressures_kpa=parse_pressures(args.pressures),
         seed=args.seed,
         hard_fraction=args.hard_fraction,
+        smooth_fraction=args.smooth_fraction,
         render=RenderConfig(width=width, height=height, spp=args.spp, variant=args.variant),
     )
     shard = parse_shard(args.shard)

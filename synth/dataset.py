@@ -42,19 +42,24 @@ class DatasetConfig:
     pressures_kpa: tuple[float, ...]  # pressure steps of every session, kPa
     seed: int  # dataset seed; finger f uses (seed, f)
     hard_fraction: float = 0.25  # share of sessions from the hard-case distribution
+    # share of the hard sessions with a smooth coating (thin sharp ring before contact,
+    # docs/synth.md); 0 keeps the v2 world the shipped model was trained on
+    smooth_fraction: float = 0.0
     render: RenderConfig = field(default_factory=RenderConfig)  # size, spp, mesh, variant
 
     def __post_init__(self) -> None:
         check_sweep(self.fingers, self.pressures_kpa)
         if not 0.0 <= self.hard_fraction <= 1.0:
             raise ValueError(f"--hard-fraction must be in [0, 1], got {self.hard_fraction}")
+        if not 0.0 <= self.smooth_fraction <= 1.0:
+            raise ValueError(f"--smooth-fraction must be in [0, 1], got {self.smooth_fraction}")
 
 
 def session_params(config: DatasetConfig, finger: int) -> SessionParams:
     """The deterministic parameters of finger ``finger``."""
     rng = np.random.default_rng([config.seed, finger])
     hard = bool(rng.random() < config.hard_fraction)
-    return sample_session(rng, hard=hard)
+    return sample_session(rng, hard=hard, smooth_fraction=config.smooth_fraction)
 
 
 def _truth(out: FrameOutput, finger: int, hard: bool) -> dict[str, Any]:
@@ -193,7 +198,10 @@ def _check_config_matches(root: Path, config: DatasetConfig) -> None:
     data = jsonable(asdict(config))
     if path.is_file():
         old = json.loads(path.read_text())
-        if old != json.loads(json.dumps(data)):
+        new = json.loads(json.dumps(data))
+        if old.get("smooth_fraction", 0.0) == 0.0:  # folders rendered before the option existed
+            old["smooth_fraction"] = 0.0
+        if old != new:
             raise ValueError(
                 f"{path}: this folder was rendered with a different config; use a new --out "
                 "or the same arguments to resume"

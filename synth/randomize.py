@@ -30,7 +30,6 @@ from contactcal.synth.ranges import (
     LOOK_DRAWS,
     SKIN_DRAWS,
     SMOOTH_DRAWS,
-    SMOOTH_PROBABILITY,
     STRAY_PROBABILITY,
     Draw,
 )
@@ -132,10 +131,10 @@ def _camera(v: dict[str, Any], jpeg_quality: int) -> CameraEffects:
     )
 
 
-def _optics(v: dict[str, Any]) -> MembraneOptics:
+def _optics(v: dict[str, Any], smooth_fraction: float) -> MembraneOptics:
     skin = np.clip(np.array([0.62, 0.42, 0.36]) * v["skin_gain"] ** 0.3, 0.0, 1.0)
     refl = float(v["coating_reflectance"])
-    smooth = v["smooth_draw"] < SMOOTH_PROBABILITY
+    smooth = v["smooth_draw"] < smooth_fraction
     return MembraneOptics(
         particle_density_per_mm2=float(v["particle_density_per_mm2"]),
         particle_tilt_deg=float(v["smooth_tilt_deg" if smooth else "particle_tilt_deg"]),
@@ -148,12 +147,16 @@ def _optics(v: dict[str, Any]) -> MembraneOptics:
     )
 
 
-def sample_session(rng: np.random.Generator, hard: bool = False) -> SessionParams:
+def sample_session(
+    rng: np.random.Generator, hard: bool = False, smooth_fraction: float = 0.0
+) -> SessionParams:
     """Draw one session's parameters (``ranges``' tables, in order, plus conditional draws).
 
     Args:
         rng: the session's generator (e.g. ``default_rng([seed, finger_index])``).
         hard: draw from the hard-case distribution.
+        smooth_fraction: share of hard sessions with a smooth coating (``SMOOTH_DRAWS``: a thin
+            sharp inner ring before contact); 0 = none, as in the shipped model's data.
 
     Returns:
         The session parameters.
@@ -177,7 +180,7 @@ def sample_session(rng: np.random.Generator, hard: bool = False) -> SessionParam
         fingerprint_seed=v["fingerprint_seed"],
         ridge_contrast=float(v["ridge_contrast"]),
         particle_seed=v["particle_seed"],
-        optics=_optics(v),
+        optics=_optics(v, smooth_fraction),
         lgp_radiance=float(v["lgp_radiance"]),
         lgp_profile=tuple(float(x) for x in np.clip(profile, 0.05, None)),
         camera=_camera(v, jpeg_quality),

@@ -161,15 +161,14 @@ CAMERA2_DRAWS = (
     _uniform("stray_amplitude", 0.0, 0.0, hard=(0.0, 0.15)),  # fraction of white
     Draw("look_seed", "seed"),
 )
-# Smooth coating (hard only; drawn after every other table): flat flakes and a near-mirror GGX
-# lobe turn the inner ring before contact into a thin sharp ring (the paper's "internal luminous
-# ring") instead of a halo, so a sharp ring is no evidence of contact (docs/synth.md, ablation).
+# Smooth coating (hard sessions, opt-in: ``DatasetConfig.smooth_fraction``; drawn after every
+# other table): flat flakes and a near-mirror GGX lobe turn the inner ring before contact into a
+# thin sharp ring (the paper's "internal luminous ring") instead of a halo (docs/synth.md).
 SMOOTH_DRAWS = (
-    _uniform("smooth_draw", 1.0, 1.0, hard=(0.0, 1.0)),  # < SMOOTH_PROBABILITY → smooth coating
+    _uniform("smooth_draw", 1.0, 1.0, hard=(0.0, 1.0)),  # < smooth_fraction → smooth coating
     _uniform("smooth_tilt_deg", 0.1, 0.5),  # rms flake tilt (nominal 0.5-1.5°); less = sharper
     Draw("smooth_alpha", "loguniform", (0.005, 0.02)),  # GGX α (nominal 0.02-0.06)
 )
-SMOOTH_PROBABILITY = 0.5  # hard only: share of sessions with a smooth coating
 STRAY_PROBABILITY = 0.3  # hard only: share of sessions with a stray reflection
 DIM_SECTOR_PROBABILITY = 0.3  # hard only: share of sessions with a dim LED sector
 JPEG_PROBABILITY = 0.5  # share of sessions saved as JPEG (else lossless)

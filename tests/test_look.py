@@ -165,15 +165,18 @@ def test_sessions_draw_looks_in_range() -> None:
         assert rig.lgp_inner_radius_mm == 11.5
 
 
-def test_smooth_coating_in_half_the_hard_sessions_only() -> None:
+def test_smooth_coating_in_the_chosen_share_of_hard_sessions_only() -> None:
     smooth = 0
     for seed in range(60):
         nominal = sample_session(np.random.default_rng([seed, 1])).optics
         assert 0.5 <= nominal.particle_tilt_deg <= 1.5 and 0.02 <= nominal.roughness_alpha <= 0.06
-        hard = sample_session(np.random.default_rng([seed, 1]), hard=True).optics
+        rng = np.random.default_rng([seed, 1])
+        hard = sample_session(rng, hard=True, smooth_fraction=0.5).optics
+        plain = sample_session(np.random.default_rng([seed, 1]), hard=True).optics  # option off
+        assert 1.0 <= plain.particle_tilt_deg <= 4.0 and plain.roughness_alpha >= 0.03
         if hard.roughness_alpha < 0.02:  # smooth: both the tilt and α come from SMOOTH_DRAWS
             assert 0.1 <= hard.particle_tilt_deg <= 0.5 and hard.roughness_alpha >= 0.005
             smooth += 1
         else:
             assert 1.0 <= hard.particle_tilt_deg <= 4.0 and hard.roughness_alpha <= 0.15
-    assert 18 <= smooth <= 42  # SMOOTH_PROBABILITY 0.5 of 60
+    assert 18 <= smooth <= 42  # smooth_fraction 0.5 of 60

@@ -127,6 +127,16 @@ def test_bad_arguments(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> No
         build_dataset(
             tmp_path / "a", dataclasses.replace(CONFIG, fingers=1, seed=9), progress=False
         )
+    with pytest.raises(ValueError, match="smooth-fraction"):
+        dataclasses.replace(CONFIG, smooth_fraction=1.5)
+    smooth = dataclasses.replace(CONFIG, fingers=1, smooth_fraction=0.5)
+    with pytest.raises(ValueError, match="different config"):
+        build_dataset(tmp_path / "a", smooth, progress=False)
+    cfg = tmp_path / "a" / "config.json"  # a folder rendered before the option existed
+    old = json.loads(cfg.read_text())
+    del old["smooth_fraction"]
+    cfg.write_text(json.dumps(old))
+    build_dataset(tmp_path / "a", dataclasses.replace(CONFIG, fingers=1), progress=False)
 
 
 def test_pressures_that_share_a_frame_name_are_refused(
