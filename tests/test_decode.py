@@ -84,6 +84,16 @@ def test_decoded_frames_are_shrunk_like_a_reduced_decode(tmp_path: Path) -> None
         unet.measure(cv2.resize(load_image(frame), (800, 600)))
 
 
+def test_shrink_without_a_ring_uses_the_fallback_crop() -> None:
+    blank = np.full((1200, 1600), 40, np.uint8)  # no ring anywhere: the fallback crop
+    unet = UnetMethod()
+    unet.set_reference(blank)
+    assert not unet.reference.ring.found
+    assert unet.shrink == 4  # fallback crop ~1190 px: 1/4 keeps >= 192 px, 1/8 would not
+    result = unet.measure(blank)
+    assert not result.contact and result.area_px == 0.0
+
+
 def _cut_in_half(tmp_path: Path, src: Path = EXAMPLE / "p10.0kpa.jpg") -> Path:
     """The frame cut in half with the end-of-image marker re-added (libjpeg only warns)."""
     data = src.read_bytes()

@@ -129,14 +129,16 @@ def plot_pareto(
 ) -> None:
     """Speed vs error: one colour per configuration (legend), circle = decoded frame, square =
     including the JPEG decode, joined by a line; no in-plot text, so nothing overlaps."""
+    from matplotlib import colormaps
     from matplotlib.lines import Line2D
 
+    palette = colormaps["tab20"].colors  # 20 distinct colours: every configuration its own
     fig = _figure(8.5, 4.5)
     ax = fig.add_subplot()
     points = pareto_points(bins, timing)
     handles = []
     for i, (label, ms, ms_jpg, err) in enumerate(points):
-        colour = f"C{i % 10}"
+        colour = palette[(2 * i + i // 10) % 20]  # dark shades first, then the light ones
         ax.plot([ms, ms_jpg], [err, err], color=colour, lw=1, alpha=0.6)
         ax.scatter([ms], [err], marker="o", color=colour, zorder=3)
         ax.scatter([ms_jpg], [err], marker="s", color=colour, zorder=3)

@@ -24,7 +24,7 @@ from contactcal.infer.image.read import load_image
 from contactcal.infer.methods.base import AreaResult, load_reference
 from contactcal.infer.methods.unet.config import PreprocessConfig
 from contactcal.infer.methods.unet.postprocess import mask_in_input
-from contactcal.infer.methods.unet.prepare import session_reference
+from contactcal.infer.methods.unet.prepare import SessionReference, crop_box, session_reference
 from contactcal.infer.methods.unet.runner import OnnxSegmenter
 
 #: JPEG decode reductions (and shrink factors of decoded frames) tried, cheapest first.
@@ -128,12 +128,19 @@ class UnetMethod:
         cfg = self.segmenter.spec.preprocess
         self.reduction, self.shrink = reduction, None if reference is None else 1
         self.reference = session_reference(reference, cfg)
-        if reference is None or self.reference.box is None:
+        if reference is None:
             return
         gray = self.reference.gray
-        self.shrink = fitting_reduction(self.reference.box.side, gray.shape, cfg)
+        self.shrink = self._fitting_shrink(self.reference, gray.shape)
         if self.shrink > 1:
             self.reference = session_reference(reduce_area(gray, self.shrink), cfg)
+
+    def _fitting_shrink(self, ref: SessionReference, shape: tuple[int, ...]) -> int:
+        """:func:`fitting_reduction` for the crop a frame of ``shape`` gets with ``ref``'s ring
+        (the fallback ring's crop when none was found: what ``prepare`` then uses too)."""
+        cfg = self.segmenter.spec.preprocess
+        box = ref.box or (crop_box(ref.ring, shape, cfg) if ref.ring is not None else None)
+        return fitting_reduction(box.side if box is not None else 0, shape, cfg)
 
     def _shrunk(self, image: np.ndarray) -> tuple[np.ndarray, int]:
         """The frame at the session's shrink factor, and that factor (decided here when there
@@ -141,8 +148,7 @@ class UnetMethod:
         gray = to_gray_u8(image, name="frame")
         cfg = self.segmenter.spec.preprocess
         if self.shrink is None:
-            own = session_reference(gray, cfg)
-            self.shrink = fitting_reduction(own.box.side if own.box else 0, gray.shape, cfg)
+            self.shrink = self._fitting_shrink(session_reference(gray, cfg), gray.shape)
         k, full = self.shrink, self.reference.gray
         if k > 1 and full is not None and gray.shape != (full.shape[0] * k, full.shape[1] * k):
             raise ValueError(
