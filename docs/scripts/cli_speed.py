@@ -1,0 +1,70 @@
+"""Time ``contactcal measure`` end to end, process start-up included, U-Net against classical.
+
+The example session (20 frames + its 0 kPa reference) is upscaled to the rig's 2592×1944 and
+written as JPEG q95 and as PNG into a temporary folder; each method measures the session through
+the CLI, the two methods alternating, ``--runs`` times per format; the medians and their ratio
+are printed (issue target: JPEG ≤ 0.6×, PNG ≤ 1.0×). Run on an idle machine:
+
+    .venv/bin/python docs/scripts/cli_speed.py [--runs 5]
+"""
+
+from __future__ import annotations
+
+import argparse
+import statistics
+import subprocess
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+import cv2
+
+from contactcal.infer.image.read import load_image
+
+ROOT = Path(__file__).resolve().parents[2]
+SIZE = (2592, 1944)
+FORMATS = {".jpg": [cv2.IMWRITE_JPEG_QUALITY, 95], ".png": []}
+
+
+def _session(folder: Path, ext: str) -> list[Path]:
+    """The example frames upscaled to :data:`SIZE`, reference first."""
+    out = []
+    for src in sorted((ROOT / "examples" / "session").glob("p*.jpg")):
+        gray = cv2.resize(load_image(src), SIZE, interpolation=cv2.INTER_CUBIC)
+        dst = folder / (src.stem + ext)
+        cv2.imwrite(str(dst), gray, FORMATS[ext])
+        out.append(dst)
+    return out
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser()
+    ap.add_argument("--runs", type=int, default=5)
+    args = ap.parse_args()
+    cli = Path(sys.executable).with_name("contactcal")
+    with tempfile.TemporaryDirectory() as tmp:
+        for ext in FORMATS:
+            paths = _session(Path(tmp), ext)
+            times: dict[str, list[float]] = {"unet": [], "classical": []}
+            for _ in range(args.runs):
+                for method, runs in times.items():
+                    out = Path(tmp) / f"{method}{ext}.json"
+                    out.unlink(missing_ok=True)
+                    cmd = [str(cli), "measure", "--method", method, "--reference", str(paths[0])]
+                    t0 = time.perf_counter()
+                    subprocess.run(
+                        [*cmd, "--out", str(out), *map(str, paths[1:])],
+                        check=True,
+                        capture_output=True,
+                    )
+                    runs.append(time.perf_counter() - t0)
+            u, c = (statistics.median(times[m]) for m in ("unet", "classical"))
+            print(
+                f"{ext}: {len(paths) - 1} frames + reference, median of {args.runs}: "
+                f"unet {u:.2f} s, classical {c:.2f} s, ratio {u / c:.2f}"
+            )
+
+
+if __name__ == "__main__":
+    main()
