@@ -39,7 +39,7 @@ def fitting_reduction(side: float, shape: tuple[int, ...], config: PreprocessCon
     The ridge channel's work side (288 px) may be larger than the reduced crop: it is then
     interpolated up, exactly as from the 400×300 training renders (crop ~280 px). Measured
     through the rig's chain (``docs/synth.md``, "Resolution chain"), the 1/8 decode gives a ridge
-    channel within 0.9-1.8× of the training renders', the 1/4 decode 1.5-2.5×.
+    channel within 1.1-1.8× of the training renders', the 1/4 decode 1.5-2.5×.
 
     Args:
         side: ring crop side in pixels of the frame (``CropBox.side``; 0 when no ring).
