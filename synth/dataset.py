@@ -199,8 +199,7 @@ def _check_config_matches(root: Path, config: DatasetConfig) -> None:
     if path.is_file():
         old = json.loads(path.read_text())
         new = json.loads(json.dumps(data))
-        if old.get("smooth_fraction", 0.0) == 0.0:  # folders rendered before the option existed
-            old["smooth_fraction"] = 0.0
+        old.setdefault("smooth_fraction", 0.0)  # folders rendered before the option existed
         if old != new:
             raise ValueError(
                 f"{path}: this folder was rendered with a different config; use a new --out "
