@@ -24,7 +24,8 @@ from contactcal.infer.image.read import load_image
 from contactcal.infer.methods.base import AreaResult, load_reference
 from contactcal.infer.methods.unet.config import PreprocessConfig
 from contactcal.infer.methods.unet.postprocess import mask_in_input
-from contactcal.infer.methods.unet.prepare import SessionReference, crop_box, session_reference
+from contactcal.infer.methods.unet.prepare import crop_box, session_reference
+from contactcal.infer.methods.unet.ring import locate_ring
 from contactcal.infer.methods.unet.runner import OnnxSegmenter
 
 #: JPEG decode reductions (and shrink factors of decoded frames) tried, cheapest first.
@@ -126,29 +127,27 @@ class UnetMethod:
         integer one. Without a reference the first measured frame's ring decides.
         """
         cfg = self.segmenter.spec.preprocess
-        self.reduction, self.shrink = reduction, None if reference is None else 1
+        self.reduction, self.shrink = reduction, None
+        if reference is not None:
+            gray = to_gray_u8(reference, name="reference frame")
+            self.shrink = self._fitting_shrink(gray)
+            reference = reduce_area(gray, self.shrink)
         self.reference = session_reference(reference, cfg)
-        if reference is None:
-            return
-        gray = self.reference.gray
-        self.shrink = self._fitting_shrink(self.reference, gray.shape)
-        if self.shrink > 1:
-            self.reference = session_reference(reduce_area(gray, self.shrink), cfg)
 
-    def _fitting_shrink(self, ref: SessionReference, shape: tuple[int, ...]) -> int:
-        """:func:`fitting_reduction` for the crop a frame of ``shape`` gets with ``ref``'s ring
-        (the fallback ring's crop when none was found: what ``prepare`` then uses too)."""
+    def _fitting_shrink(self, gray: np.ndarray) -> int:
+        """:func:`fitting_reduction` for the crop of ``gray``'s ring (``(H, W) uint8``; the
+        fallback ring's crop when none is found: what ``prepare`` then uses too). Only the ring
+        search runs at full size, not the preparation of the network input."""
         cfg = self.segmenter.spec.preprocess
-        box = ref.box or (crop_box(ref.ring, shape, cfg) if ref.ring is not None else None)
-        return fitting_reduction(box.side if box is not None else 0, shape, cfg)
+        box = crop_box(locate_ring(gray, cfg), gray.shape, cfg)
+        return fitting_reduction(box.side, gray.shape, cfg)
 
     def _shrunk(self, image: np.ndarray) -> tuple[np.ndarray, int]:
         """The frame at the session's shrink factor, and that factor (decided here when there
         is no reference; a frame whose sides it does not divide is not shrunk)."""
         gray = to_gray_u8(image, name="frame")
-        cfg = self.segmenter.spec.preprocess
         if self.shrink is None:
-            self.shrink = self._fitting_shrink(session_reference(gray, cfg), gray.shape)
+            self.shrink = self._fitting_shrink(gray)
         k, full = self.shrink, self.reference.gray
         if k > 1 and full is not None and gray.shape != (full.shape[0] * k, full.shape[1] * k):
             raise ValueError(
