@@ -14,7 +14,7 @@ def add_parsers(sub: argparse._SubParsersAction) -> None:
     s.add_argument("--fingers", type=int, required=True, help="sessions in the whole set")
     s.add_argument("--pressures", default="0:20:1", help="kPa, start:stop:step or a,b,c")
     s.add_argument("--size", default="320x240", help="frame size W[xH], 4:3 (default 320x240)")
-    s.add_argument("--spp", type=int, default=16, help="samples per pixel (default 16)")
+    s.add_argument("--spp", type=int, default=8, help="samples per pixel (default 8)")
     s.add_argument("--seed", type=int, default=0, help="dataset seed (default 0)")
     s.add_argument("--hard-fraction", type=float, default=0.25, help="share of hard sessions")
     s.add_argument(

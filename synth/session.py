@@ -33,7 +33,8 @@ class RenderConfig:
 
     width: int = 320  # px; 4:3. Ridges (0.4-0.5 mm) span ~4.5 px at 320 — near the limit
     height: int = 240  # px
-    spp: int = 16  # samples per pixel; lower is faster and noisier (sensor noise is added anyway)
+    spp: int = 8  # samples per pixel; time ∝ spp; at 8 the network's areas differ from 64 spp
+    #   as little as at 16 (docs/synth.md, "Samples per pixel"); the camera adds noise anyway
     n_rings: int = 96  # membrane mesh rings; fewer facets the inner ring
     n_sectors: int = 256  # membrane mesh sectors
     weight_size: int = 1024  # contact texture texels over the membrane (~40/mm: ~18 per ridge)

@@ -25,6 +25,7 @@ import torch
 from contactcal.infer.methods.unet.config import PreprocessConfig
 from contactcal.infer.methods.unet.prepare import network_to_unit, unit_to_network
 from contactcal.train.contact_look import ContactLookConfig, contact_look
+from contactcal.train.ridgeless import RidgelessConfig, ridgeless
 
 
 @dataclass(frozen=True)
@@ -47,6 +48,8 @@ class AugmentConfig:
     noise_p: float = 0.5  # probability of added noise
     contact: ContactLookConfig = field(default_factory=ContactLookConfig)  # the contact region's
     #   brightness and ridge contrast (``contact_look``), after the warp, before the camera ops
+    ridgeless: RidgelessConfig = field(default_factory=RidgelessConfig)  # contact patches with
+    #   their ridges erased, labelled "no contact" (``ridgeless``; needs the ridge channel)
 
     def __post_init__(self) -> None:
         if not (0 < self.gamma[0] <= self.gamma[1] and 0 < self.scale[0] <= self.scale[1]):
@@ -112,7 +115,9 @@ class Augmenter(torch.nn.Module):
                 energy] (``prepare``). Every channel gets the same warp (the reference and the
                 ridge energy stay registered with the frame); the camera operations change the
                 image channels only (the ridge energy keeps the renderer's camera);
-                :func:`contact_look` changes the frame and the ridge energy.
+                :func:`contact_look` changes the frame and the ridge energy, and
+                :func:`~contactcal.train.ridgeless.ridgeless` erases the ridges of some contact
+                patches and empties their masks (models with a ridge channel).
             mask: ``(N, 1, S, S) float32`` in {0, 1}; warped with nearest-neighbour sampling.
 
         Returns:
@@ -129,6 +134,10 @@ class Augmenter(torch.nn.Module):
                 u, m = self.geometric(u, mask)
                 m = (m > 0.5).to(u.dtype)
                 u = contact_look(u, m, self.config.contact, self.generator, ridge=ridge)
+                if ridge:
+                    u, m = ridgeless(
+                        u, m, self.config.ridgeless, self.generator, self.preprocess.crop_factor
+                    )
                 u = torch.cat([self.camera(u[:, :n_img]).clamp(0.0, 1.0), u[:, n_img:]], 1)
         if self.reference_dropout > 0.0 and n_img == 2:
             drop = torch.rand(u.shape[0], generator=self.generator) < self.reference_dropout

@@ -45,6 +45,13 @@ def add_parsers(sub: Any) -> None:
         help="add the ridge-energy channel, measured on the crop resampled to W px "
         "(>= the input size; default off)",
     )
+    t.add_argument(
+        "--ridgeless",
+        type=float,
+        metavar="P",
+        help="share of contact frames with visible ridges whose ridges are erased and which are "
+        "labelled no contact (needs --ridge-channel; default 0)",
+    )
     t.add_argument("--seed", type=int, help="split/init/shuffle/augmentation seed (default 0)")
     t.add_argument("--batch-size", type=int, metavar="B", help="frames per step (default 16)")
     # dest differs from the deployment commands' --threads (onnxruntime threads, an int >= 1
@@ -137,6 +144,9 @@ def build_config(args: argparse.Namespace) -> Any:
         "num_threads": args.torch_threads,
     }
     cfg = dataclasses.replace(base, **{k: v for k, v in given.items() if v is not None})
+    if args.ridgeless is not None:
+        erase = dataclasses.replace(cfg.augment.ridgeless, p=args.ridgeless)
+        cfg = dataclasses.replace(cfg, augment=dataclasses.replace(cfg.augment, ridgeless=erase))
     arch = {"base": args.base, "levels": args.levels}
     arch = {k: v for k, v in arch.items() if v is not None}
     return dataclasses.replace(cfg, model=dataclasses.replace(cfg.model, **arch)) if arch else cfg

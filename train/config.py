@@ -59,6 +59,11 @@ class TrainConfig:
             raise ValueError(f"reference_dropout must be in [0, 1), got {self.reference_dropout}")
         if self.reference_dropout > 0.0 and not self.use_reference:
             raise ValueError("reference_dropout needs the reference channel (use_reference)")
+        if self.augment.ridgeless.p > 0.0 and self.ridge_work_px <= 0:
+            raise ValueError(
+                "augment.ridgeless.p > 0 needs the ridge-energy channel (ridge_work_px > 0, "
+                "contactcal train --ridge-channel W)"
+            )
         if self.ridge_work_px < 0 or 0 < self.ridge_work_px < self.input_size:
             raise ValueError(
                 f"ridge_work_px must be 0 (off) or >= input_size {self.input_size}, "

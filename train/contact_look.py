@@ -45,14 +45,14 @@ class ContactLookConfig:
             raise ValueError("ContactLookConfig: edge_sigma_px and low_sigma_px must be > 0")
 
 
-def _log_uniform(n: int, lo: float, hi: float, generator: torch.Generator) -> torch.Tensor:
+def log_uniform(n: int, lo: float, hi: float, generator: torch.Generator) -> torch.Tensor:
     """``(n,)`` float32 factors, log-uniform in ``[lo, hi]``."""
     r = torch.rand(n, generator=generator)
     lo_t, hi_t = torch.log(torch.tensor(lo)), torch.log(torch.tensor(hi))
     return torch.exp(lo_t + r * (hi_t - lo_t))
 
 
-def _blur(x: torch.Tensor, sigma: float) -> torch.Tensor:
+def blur(x: torch.Tensor, sigma: float) -> torch.Tensor:
     """Gaussian blur of ``(N, C, S, S)`` with a kernel of ±3σ (odd size)."""
     k = 2 * max(1, round(3.0 * sigma)) + 1
     return KF.gaussian_blur2d(x, (k, k), (sigma, sigma), border_type="replicate")
@@ -81,17 +81,17 @@ def contact_look(
     """
     n = u.shape[0]
     apply = torch.rand(n, generator=generator) < config.p
-    gain = _log_uniform(n, *config.gain, generator)
-    detail = _log_uniform(n, *config.detail, generator)
+    gain = log_uniform(n, *config.gain, generator)
+    detail = log_uniform(n, *config.detail, generator)
     if not bool(apply.any()):
         return u
     dev = u.device
     frame = u[:, :1]
-    low = _blur(frame, config.low_sigma_px)
+    low = blur(frame, config.low_sigma_px)
     g = gain.to(dev).view(n, 1, 1, 1)
     k = detail.to(dev).view(n, 1, 1, 1)
     changed = (g * (low + k * (frame - low))).clamp(0.0, 1.0)
-    soft = _blur(mask.to(frame.dtype), config.edge_sigma_px) * apply.to(dev).view(n, 1, 1, 1)
+    soft = blur(mask.to(frame.dtype), config.edge_sigma_px) * apply.to(dev).view(n, 1, 1, 1)
     out = u.clone()
     out[:, :1] = frame + soft * (changed - frame)
     if ridge:
