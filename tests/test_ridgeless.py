@@ -90,6 +90,9 @@ def test_cli_option_sets_the_share() -> None:
     base = ["train", "--data", "a", "--out", "r", "--input-size", "64"]
     cfg = build_config(parser.parse_args([*base, "--ridge-channel", "96", "--ridgeless", "0.3"]))
     assert cfg.augment.ridgeless.p == 0.3 and cfg.augment.ridgeless.min_ratio == 1.5
+    assert cfg.augment.ridgeless.flatten == 0.0
+    argv = [*base, "--ridge-channel", "96", "--ridgeless", "0.3", "--ridgeless-flatten", "0.5"]
+    assert build_config(parser.parse_args(argv)).augment.ridgeless.flatten == 0.5
     assert build_config(parser.parse_args(base)).augment.ridgeless.p == 0.0
     with pytest.raises(ValueError, match="ridge-energy channel"):
         build_config(parser.parse_args([*base, "--ridgeless", "0.3"]))
@@ -108,4 +111,14 @@ def test_augmenter_empties_erased_masks() -> None:
     x = torch.cat([unit_to_network(u[:, :2], pre), u[:, 2:]], 1)
     out, mo = Augmenter(aug, pre, seed=0)(x, m)
     assert out.shape == x.shape and set(mo.unique().tolist()) <= {0.0, 1.0}
+    assert float(mo.sum()) == 0.0
+
+
+def test_flatten_gives_the_patch_the_membrane_level() -> None:
+    """flatten = 1: the patch's grey level becomes the membrane's (0.3 × level 1), ridges gone."""
+    u, m = _batch()
+    cfg = RidgelessConfig(p=1.0, keep=(0.0, 0.0), level=(1.0, 1.0), flatten=1.0)
+    out, mo = ridgeless(u, m, cfg, torch.Generator().manual_seed(0), CROP)
+    core = out[:, 0, S // 2 - 2 : S // 2 + 2, S // 2 - 2 : S // 2 + 2]
+    assert torch.allclose(core, torch.full_like(core, 0.3), atol=0.02)
     assert float(mo.sum()) == 0.0

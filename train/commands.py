@@ -37,21 +37,7 @@ def add_parsers(sub: Any) -> None:
         "--input-size", type=int, metavar="S", help="network input side, px (default 256)"
     )
     _add_reference_args(t)
-    t.add_argument(
-        "--ridge-channel",
-        dest="ridge_work_px",
-        type=int,
-        metavar="W",
-        help="add the ridge-energy channel, measured on the crop resampled to W px "
-        "(>= the input size; default off)",
-    )
-    t.add_argument(
-        "--ridgeless",
-        type=float,
-        metavar="P",
-        help="share of contact frames with visible ridges whose ridges are erased and which are "
-        "labelled no contact (needs --ridge-channel; default 0)",
-    )
+    _add_ridge_args(t)
     t.add_argument("--seed", type=int, help="split/init/shuffle/augmentation seed (default 0)")
     t.add_argument("--batch-size", type=int, metavar="B", help="frames per step (default 16)")
     # dest differs from the deployment commands' --threads (onnxruntime threads, an int >= 1
@@ -144,12 +130,40 @@ def build_config(args: argparse.Namespace) -> Any:
         "num_threads": args.torch_threads,
     }
     cfg = dataclasses.replace(base, **{k: v for k, v in given.items() if v is not None})
-    if args.ridgeless is not None:
-        erase = dataclasses.replace(cfg.augment.ridgeless, p=args.ridgeless)
-        cfg = dataclasses.replace(cfg, augment=dataclasses.replace(cfg.augment, ridgeless=erase))
+    erase = {"p": args.ridgeless, "flatten": args.ridgeless_flatten}
+    erase = {k: v for k, v in erase.items() if v is not None}
+    if erase:
+        rl = dataclasses.replace(cfg.augment.ridgeless, **erase)
+        cfg = dataclasses.replace(cfg, augment=dataclasses.replace(cfg.augment, ridgeless=rl))
     arch = {"base": args.base, "levels": args.levels}
     arch = {k: v for k, v in arch.items() if v is not None}
     return dataclasses.replace(cfg, model=dataclasses.replace(cfg.model, **arch)) if arch else cfg
+
+
+def _add_ridge_args(t: argparse.ArgumentParser) -> None:
+    """``--ridge-channel``, ``--ridgeless`` and ``--ridgeless-flatten``."""
+    t.add_argument(
+        "--ridge-channel",
+        dest="ridge_work_px",
+        type=int,
+        metavar="W",
+        help="add the ridge-energy channel, measured on the crop resampled to W px "
+        "(>= the input size; default off)",
+    )
+    t.add_argument(
+        "--ridgeless",
+        type=float,
+        metavar="P",
+        help="share of contact frames with visible ridges whose ridges are erased and which are "
+        "labelled no contact (needs --ridge-channel; default 0)",
+    )
+    t.add_argument(
+        "--ridgeless-flatten",
+        type=float,
+        metavar="F",
+        help="share of the erased patches whose brightness also becomes the membrane's, leaving "
+        "only the ring around them (default 0)",
+    )
 
 
 def _add_reference_args(t: argparse.ArgumentParser) -> None:

@@ -11,6 +11,9 @@ around it), and labels it "no contact":
 
 - frame channel, inside the mask (soft edge): local level (Gaussian σ ``low_sigma_px``) plus
   ``keep`` × the detail, ``keep`` drawn in ``config.keep`` (0 = smooth, a little = faded);
+- with probability ``flatten`` the patch also loses its own brightness: its level becomes the
+  membrane's outside it (× a factor in ``level``), so only the ring around it is left — the
+  look of the inner ring before contact, shrinking around a membrane that touches nothing;
 - ridge-energy channel, inside the mask: rescaled so its median becomes the frame's membrane
   level outside the patch (× a factor in ``config.level``), i.e. the energy of a smooth membrane
   with its noise and sparkle;
@@ -40,6 +43,9 @@ class RidgelessConfig:
     keep: tuple[float, float] = (0.0, 0.2)  # × detail left inside the patch; > 0 keeps a
     #   trace of noise and sparkle so the patch is not suspiciously smooth
     level: tuple[float, float] = (0.7, 1.4)  # × outside membrane level = ridge energy inside
+    #   (and, when flattened, the patch's grey level)
+    flatten: float = 0.0  # share of erased patches whose brightness also becomes the membrane's;
+    #   0 keeps the renderer's bright (or dark) patch, 1 leaves only the ring around it
     min_ratio: float = 1.5  # inside/outside median ridge energy needed to take part; 0 = every
     #   contact frame (then renders with invisible ridges are labelled both ways)
     membrane_radius: float = 0.8  # × the ring radius: the "outside" disc (crop = 2.2 radii)
@@ -55,27 +61,37 @@ class RidgelessConfig:
         lo, hi = self.level
         if not 0.0 < lo <= hi:
             raise ValueError(f"RidgelessConfig.level must be 0 < lo <= hi, got {self.level}")
+        if not 0.0 <= self.flatten <= 1.0:
+            raise ValueError(f"RidgelessConfig.flatten must be in [0, 1], got {self.flatten}")
         if self.min_ratio < 0.0 or not 0.0 < self.membrane_radius <= 1.0:
             raise ValueError("RidgelessConfig: min_ratio >= 0 and 0 < membrane_radius <= 1")
         if not (self.low_sigma_px > 0.0 and self.edge_sigma_px > 0.0):
             raise ValueError("RidgelessConfig: low_sigma_px and edge_sigma_px must be > 0")
 
 
-def _ridge_levels(
-    ridge: torch.Tensor, mask: torch.Tensor, config: RidgelessConfig, crop_factor: float
+def _levels(
+    planes: torch.Tensor, mask: torch.Tensor, config: RidgelessConfig, crop_factor: float
 ) -> tuple[torch.Tensor, torch.Tensor]:
-    """Median ridge energy inside the mask and on the membrane outside it, per frame ``(N,)``."""
-    n, _, s, _ = ridge.shape
-    c = (torch.arange(s, device=ridge.device, dtype=ridge.dtype) + 0.5) - s / 2
+    """Medians inside the mask and on the membrane outside it.
+
+    Args:
+        planes: ``(N, K, S, S)``; each of the K planes is measured.
+        mask: ``(N, 1, S, S)`` in {0, 1}.
+
+    Returns:
+        ``(inside, outside)``, each ``(N, K)`` on the CPU; zeros where either region is empty.
+    """
+    n, k, s, _ = planes.shape
+    c = (torch.arange(s, device=planes.device, dtype=planes.dtype) + 0.5) - s / 2
     r = torch.sqrt(c.view(-1, 1) ** 2 + c.view(1, -1) ** 2)
     disc = r < config.membrane_radius * s / crop_factor
     near = F.max_pool2d(mask, 7, stride=1, padding=3) > 0.5  # the patch and its ring
-    inside, outside = torch.zeros(n), torch.zeros(n)
+    inside, outside = torch.zeros(n, k), torch.zeros(n, k)
     for i in range(n):
         m_in, m_out = mask[i, 0] > 0.5, disc & ~near[i, 0]
         if bool(m_in.any()) and bool(m_out.any()):
-            inside[i] = ridge[i, 0][m_in].median().cpu()
-            outside[i] = ridge[i, 0][m_out].median().cpu()
+            inside[i] = planes[i][:, m_in].median(dim=1).values.cpu()
+            outside[i] = planes[i][:, m_out].median(dim=1).values.cpu()
     return inside, outside
 
 
@@ -93,7 +109,8 @@ def ridgeless(
             channel the ridge energy (network units, ``infer.methods.unet.ridge``).
         mask: ``(N, 1, S, S) float32`` contact mask in {0, 1}, registered with ``u``.
         config: ranges; with ``config.p == 0`` nothing is drawn and ``(u, mask)`` is returned.
-        generator: CPU generator of the per-frame draws (3 draws of ``N`` values).
+        generator: CPU generator of the per-frame draws (3 draws of ``N`` values, a 4th when
+            ``config.flatten > 0``).
         crop_factor: crop side / ring radius of the preprocessing (the membrane's extent).
 
     Returns:
@@ -105,8 +122,9 @@ def ridgeless(
     draw = torch.rand(n, generator=generator) < config.p
     keep = config.keep[0] + torch.rand(n, generator=generator) * (config.keep[1] - config.keep[0])
     level = log_uniform(n, *config.level, generator)
-    inside, outside = _ridge_levels(u[:, -1:], mask, config, crop_factor)
-    erase = draw & (inside > 0) & (inside >= config.min_ratio * outside)
+    flat = torch.rand(n, generator=generator) < config.flatten if config.flatten > 0 else None
+    inside, outside = _levels(torch.cat([u[:, -1:], u[:, :1]], 1), mask, config, crop_factor)
+    erase = draw & (inside[:, 0] > 0) & (inside[:, 0] >= config.min_ratio * outside[:, 0])
     if not bool(erase.any()):
         return u, mask
     dev = u.device
@@ -114,8 +132,12 @@ def ridgeless(
     soft = blur(mask, config.edge_sigma_px) * on
     frame = u[:, :1]
     low = blur(frame, config.low_sigma_px)
-    smooth = low + keep.to(dev).view(n, 1, 1, 1) * (frame - low)
-    scale = torch.where(erase, level * outside / inside.clamp_min(1e-6), torch.ones(n))
+    detail = frame - low
+    if flat is not None:  # the patch's level → the membrane's: × target / the patch's median
+        gain = torch.where(flat, level * outside[:, 1] / inside[:, 1].clamp_min(1e-3), 1.0)
+        low = low * gain.to(dev).view(n, 1, 1, 1)
+    smooth = (low + keep.to(dev).view(n, 1, 1, 1) * detail).clamp(0.0, 1.0)
+    scale = torch.where(erase, level * outside[:, 0] / inside[:, 0].clamp_min(1e-6), 1.0)
     out = u.clone()
     out[:, :1] = frame + soft * (smooth - frame)
     out[:, -1:] = u[:, -1:] * (1.0 + soft * (scale.to(dev).view(n, 1, 1, 1) - 1.0))
