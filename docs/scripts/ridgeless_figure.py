@@ -12,7 +12,6 @@ it is and keeps its label; the others become "no contact". Takes a few seconds.
 
 from __future__ import annotations
 
-import os
 import sys
 from pathlib import Path
 
@@ -22,6 +21,7 @@ import torch
 
 from contactcal.infer.bench.dataset import read_datasets, sessions_of
 from contactcal.infer.image.read import load_image
+from contactcal.infer.image.write import write_image
 from contactcal.infer.methods.unet.prepare import (
     crop_resize,
     network_to_unit,
@@ -73,9 +73,7 @@ def main() -> None:
     sheet = np.vstack(rows)
     for k, name in enumerate(("frame", "erased", "ridge energy", "erased")):
         cv2.putText(sheet, name, (k * cfg.input_size + 4, 14), 0, 0.45, (255, 255, 255), 1)
-    tmp = OUT.with_name(f".{OUT.name}.{os.getpid()}.tmp.jpg")
-    cv2.imwrite(str(tmp), sheet, [cv2.IMWRITE_JPEG_QUALITY, 85])
-    os.replace(tmp, OUT)
+    write_image(OUT, sheet, (cv2.IMWRITE_JPEG_QUALITY, 85))
     print(f"wrote {OUT}")
 
 

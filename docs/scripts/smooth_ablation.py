@@ -11,13 +11,13 @@ the mask and everything else are the same. Takes about a minute.
 
 from __future__ import annotations
 
-import os
 from dataclasses import replace
 from pathlib import Path
 
 import cv2
 import numpy as np
 
+from contactcal.infer.image.write import write_image
 from contactcal.synth.dataset import DatasetConfig, session_params
 from contactcal.synth.session import RenderConfig, render_session
 
@@ -42,9 +42,7 @@ def main() -> None:
     strip = np.vstack(rows)
     for k, p in enumerate(PRESSURES):
         cv2.putText(strip, f"{p:g} kPa", (k * 300 + 6, 18), 0, 0.5, (255, 255, 255), 1)
-    tmp = OUT.with_name(f".{OUT.name}.{os.getpid()}.tmp.jpg")
-    cv2.imwrite(str(tmp), strip, [cv2.IMWRITE_JPEG_QUALITY, 85])
-    os.replace(tmp, OUT)
+    write_image(OUT, strip, (cv2.IMWRITE_JPEG_QUALITY, 85))
     print(f"wrote {OUT}")
 
 
