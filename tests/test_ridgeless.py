@@ -63,7 +63,16 @@ def test_share_and_determinism() -> None:
 
 @pytest.mark.parametrize(
     "bad",
-    [{"p": 1.5}, {"keep": (0.3, 0.1)}, {"level": (0.0, 1.0)}, {"min_ratio": -1.0}],
+    [
+        {"p": 1.5},
+        {"keep": (0.3, 0.1)},
+        {"level": (0.0, 1.0)},
+        {"min_ratio": -1.0},
+        {"flatten": 2.0},
+        {"membrane_radius": 0.0},
+        {"low_sigma_px": 0.0},
+        {"edge_sigma_px": -1.0},
+    ],
 )
 def test_bad_config(bad: dict) -> None:
     with pytest.raises(ValueError, match="RidgelessConfig"):
@@ -78,6 +87,17 @@ def test_needs_ridge_channel() -> None:
     with pytest.raises(ValueError, match="ridge-energy channel"):
         TrainConfig(augment=aug)
     TrainConfig(augment=aug, ridge_work_px=288, input_size=192)
+    flat_only = AugmentConfig(ridgeless=RidgelessConfig(flatten=0.5))
+    with pytest.raises(ValueError, match="--ridgeless P"):
+        TrainConfig(augment=flat_only, ridge_work_px=288, input_size=192)
+
+
+def test_no_membrane_energy_outside_leaves_the_frame() -> None:
+    """A ridge channel of 0 outside the patch gives no level to erase to: nothing changes."""
+    u, m = _batch()
+    u[:, 2] = u[:, 2] * m[:, 0]  # energy inside only
+    out, mo = ridgeless(u, m, RidgelessConfig(p=1.0), torch.Generator().manual_seed(0), CROP)
+    assert torch.equal(out, u) and torch.equal(mo, m)
 
 
 def test_cli_option_sets_the_share() -> None:

@@ -59,6 +59,11 @@ class TrainConfig:
             raise ValueError(f"reference_dropout must be in [0, 1), got {self.reference_dropout}")
         if self.reference_dropout > 0.0 and not self.use_reference:
             raise ValueError("reference_dropout needs the reference channel (use_reference)")
+        if self.augment.ridgeless.flatten > 0.0 and self.augment.ridgeless.p == 0.0:
+            raise ValueError(
+                "augment.ridgeless.flatten > 0 does nothing without ridgeless patches: give "
+                "augment.ridgeless.p > 0 (contactcal train --ridgeless P)"
+            )
         if self.augment.ridgeless.p > 0.0 and self.ridge_work_px <= 0:
             raise ValueError(
                 "augment.ridgeless.p > 0 needs the ridge-energy channel (ridge_work_px > 0, "

@@ -47,7 +47,7 @@ class RidgelessConfig:
     flatten: float = 0.0  # share of erased patches whose brightness also becomes the membrane's;
     #   0 keeps the renderer's bright (or dark) patch, 1 leaves only the ring around it
     min_ratio: float = 1.5  # inside/outside median ridge energy needed to take part; 0 = every
-    #   contact frame (then renders with invisible ridges are labelled both ways)
+    #   contact frame with ridge energy on both sides (invisible ridges then get both labels)
     membrane_radius: float = 0.8  # × the ring radius: the "outside" disc (crop = 2.2 radii)
     low_sigma_px: float = 1.5  # px at input size, local level that separates ridges from level
     edge_sigma_px: float = 1.0  # px at input size, softness of the patch edge
@@ -124,7 +124,8 @@ def ridgeless(
     level = log_uniform(n, *config.level, generator)
     flat = torch.rand(n, generator=generator) < config.flatten if config.flatten > 0 else None
     inside, outside = _levels(torch.cat([u[:, -1:], u[:, :1]], 1), mask, config, crop_factor)
-    erase = draw & (inside[:, 0] > 0) & (inside[:, 0] >= config.min_ratio * outside[:, 0])
+    ridge_in, ridge_out = inside[:, 0], outside[:, 0]
+    erase = draw & (ridge_out > 0) & (ridge_in >= config.min_ratio * ridge_out)
     if not bool(erase.any()):
         return u, mask
     dev = u.device
@@ -137,7 +138,7 @@ def ridgeless(
         gain = torch.where(flat, level * outside[:, 1] / inside[:, 1].clamp_min(1e-3), 1.0)
         low = low * gain.to(dev).view(n, 1, 1, 1)
     smooth = (low + keep.to(dev).view(n, 1, 1, 1) * detail).clamp(0.0, 1.0)
-    scale = torch.where(erase, level * outside[:, 0] / inside[:, 0].clamp_min(1e-6), 1.0)
+    scale = torch.where(erase, level * ridge_out / ridge_in.clamp_min(1e-6), 1.0)
     out = u.clone()
     out[:, :1] = frame + soft * (smooth - frame)
     out[:, -1:] = u[:, -1:] * (1.0 + soft * (scale.to(dev).view(n, 1, 1, 1) - 1.0))
