@@ -70,16 +70,22 @@ class RidgelessConfig:
 
 
 def _levels(
-    planes: torch.Tensor, mask: torch.Tensor, config: RidgelessConfig, crop_factor: float
+    planes: torch.Tensor,
+    mask: torch.Tensor,
+    which: torch.Tensor,
+    config: RidgelessConfig,
+    crop_factor: float,
 ) -> tuple[torch.Tensor, torch.Tensor]:
-    """Medians inside the mask and on the membrane outside it.
+    """Medians inside the mask and on the membrane outside it, for the frames in ``which``.
 
     Args:
         planes: ``(N, K, S, S)``; each of the K planes is measured.
         mask: ``(N, 1, S, S)`` in {0, 1}.
+        which: ``(N,)`` bool (CPU), the frames to measure (the drawn ones).
 
     Returns:
-        ``(inside, outside)``, each ``(N, K)`` on the CPU; zeros where either region is empty.
+        ``(inside, outside)``, each ``(N, K)`` on the CPU; zeros for frames not in ``which`` and
+        where either region is empty.
     """
     n, k, s, _ = planes.shape
     c = (torch.arange(s, device=planes.device, dtype=planes.dtype) + 0.5) - s / 2
@@ -87,7 +93,7 @@ def _levels(
     disc = r < config.membrane_radius * s / crop_factor
     near = F.max_pool2d(mask, 7, stride=1, padding=3) > 0.5  # the patch and its ring
     inside, outside = torch.zeros(n, k), torch.zeros(n, k)
-    for i in range(n):
+    for i in torch.nonzero(which).flatten().tolist():
         m_in, m_out = mask[i, 0] > 0.5, disc & ~near[i, 0]
         if bool(m_in.any()) and bool(m_out.any()):
             inside[i] = planes[i][:, m_in].median(dim=1).values.cpu()
@@ -123,7 +129,10 @@ def ridgeless(
     keep = config.keep[0] + torch.rand(n, generator=generator) * (config.keep[1] - config.keep[0])
     level = log_uniform(n, *config.level, generator)
     flat = torch.rand(n, generator=generator) < config.flatten if config.flatten > 0 else None
-    inside, outside = _levels(torch.cat([u[:, -1:], u[:, :1]], 1), mask, config, crop_factor)
+    if not bool(draw.any()):
+        return u, mask
+    planes = torch.cat([u[:, -1:], u[:, :1]], 1)
+    inside, outside = _levels(planes, mask, draw, config, crop_factor)
     ridge_in, ridge_out = inside[:, 0], outside[:, 0]
     erase = draw & (ridge_out > 0) & (ridge_in >= config.min_ratio * ridge_out)
     if not bool(erase.any()):
