@@ -66,3 +66,18 @@ def test_deterministic_per_generator_seed() -> None:
 def test_bad_config(kwargs: dict[str, object]) -> None:
     with pytest.raises(ValueError, match="ContactLookConfig"):
         ContactLookConfig(**kwargs)  # type: ignore[arg-type]
+
+
+def test_cli_contact_gain() -> None:
+    import argparse
+
+    from contactcal.train.commands import add_parsers, build_config
+
+    parser = argparse.ArgumentParser()
+    add_parsers(parser.add_subparsers())
+    base = ["train", "--data", "d", "--out", "r"]
+    assert build_config(parser.parse_args(base)).augment.contact.gain == (0.6, 1.5)
+    cfg = build_config(parser.parse_args([*base, "--contact-gain", "0.3", "1.5"]))
+    assert cfg.augment.contact.gain == (0.3, 1.5) and cfg.augment.contact.detail == (0.5, 3.0)
+    with pytest.raises(ValueError, match="gain must be 0 < lo <= hi"):
+        build_config(parser.parse_args([*base, "--contact-gain", "1.5", "0.3"]))

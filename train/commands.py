@@ -38,6 +38,7 @@ def add_parsers(sub: Any) -> None:
     )
     _add_reference_args(t)
     _add_ridge_args(t)
+    _add_look_args(t)
     t.add_argument("--seed", type=int, help="split/init/shuffle/augmentation seed (default 0)")
     t.add_argument("--batch-size", type=int, metavar="B", help="frames per step (default 16)")
     # dest differs from the deployment commands' --threads (onnxruntime threads, an int >= 1
@@ -135,6 +136,9 @@ def build_config(args: argparse.Namespace) -> Any:
     if erase:
         rl = dataclasses.replace(cfg.augment.ridgeless, **erase)
         cfg = dataclasses.replace(cfg, augment=dataclasses.replace(cfg.augment, ridgeless=rl))
+    if args.contact_gain is not None:
+        look = dataclasses.replace(cfg.augment.contact, gain=tuple(args.contact_gain))
+        cfg = dataclasses.replace(cfg, augment=dataclasses.replace(cfg.augment, contact=look))
     arch = {"base": args.base, "levels": args.levels}
     arch = {k: v for k, v in arch.items() if v is not None}
     return dataclasses.replace(cfg, model=dataclasses.replace(cfg.model, **arch)) if arch else cfg
@@ -163,6 +167,19 @@ def _add_ridge_args(t: argparse.ArgumentParser) -> None:
         metavar="F",
         help="share of the erased patches whose brightness also becomes the membrane's, leaving "
         "only the ring around them (default 0)",
+    )
+
+
+def _add_look_args(t: argparse.ArgumentParser) -> None:
+    """``--contact-gain``."""
+    t.add_argument(
+        "--contact-gain",
+        type=float,
+        nargs=2,
+        metavar=("LO", "HI"),
+        help="range of the contact region's brightness factor in the contact appearance "
+        "augmentation, log-uniform (default 0.6 1.5; below ~0.5 the skin is darker than the "
+        "membrane)",
     )
 
 

@@ -3,10 +3,11 @@
 Every frame goes through :func:`contactcal.infer.methods.unet.prepare.prepare`, the deployment
 code path: its session's lowest-pressure frame (the first row of
 :func:`~contactcal.infer.bench.dataset.sessions_of`) is the session reference, computed once with
-:func:`~contactcal.infer.methods.unet.prepare.session_reference`; it fixes the crop (and, for a
-2-channel model, the reference channel) of all of the session's frames. The mask is cropped with
-the same box (area resize, threshold 0.5). Train/validation split is by finger, never by frame:
-frames of one finger share its fingerprint texture and would leak.
+:func:`~contactcal.infer.methods.unet.prepare.session_reference`; it fixes the shrink of large
+frames (:func:`~contactcal.infer.methods.unet.shrink.deployed_shrink`), the crop (and, for a
+2-channel model, the reference channel) of all of the session's frames. The mask is shrunk and
+cropped the same way (area resize, threshold 0.5). Train/validation split is by finger, never by
+frame: frames of one finger share its fingerprint texture and would leak.
 """
 
 from __future__ import annotations
@@ -22,6 +23,7 @@ import torch
 from tqdm import tqdm
 
 from contactcal.infer.bench.dataset import IndexRow, sessions_of
+from contactcal.infer.image.gray import reduce_area
 from contactcal.infer.image.read import load_image
 from contactcal.infer.methods.unet.config import PreprocessConfig
 from contactcal.infer.methods.unet.prepare import (
@@ -31,6 +33,7 @@ from contactcal.infer.methods.unet.prepare import (
     prepare,
     session_reference,
 )
+from contactcal.infer.methods.unet.shrink import deployed_shrink
 
 
 @dataclass
@@ -39,9 +42,9 @@ class CachedSet:
 
     x: torch.Tensor  # (N, C, S, S) float32 network inputs, exactly as deployment feeds them
     y: torch.Tensor  # (N, 1, S, S) uint8 masks in network pixels (0/1)
-    area_px: torch.Tensor  # (N,) float32, true mask area in INPUT pixels (mask pixel count)
+    area_px: torch.Tensor  # (N,) float32, true mask area in INPUT pixels (of the shrunk frame)
     boxes: list[CropBox]  # crop of each frame (network → input pixels)
-    shapes: list[tuple[int, int]]  # input (H, W) of each frame
+    shapes: list[tuple[int, int]]  # input (H, W) of each frame (after the session's shrink)
     rows: list[IndexRow]  # the index row of each frame (session, pressure, mm/px, onset, ...)
 
     def __len__(self) -> int:
@@ -82,14 +85,29 @@ def dataset_digest(data_dirs: Sequence[str | os.PathLike[str]]) -> str:
     return h.hexdigest()
 
 
-def session_references(
-    rows: Sequence[IndexRow], config: PreprocessConfig
-) -> dict[str, SessionReference]:
-    """Each session's reference: its lowest-pressure frame, preprocessed once."""
-    return {
-        key: session_reference(load_image(frames[0].frame), config)
-        for key, frames in sessions_of(rows).items()
-    }
+@dataclass(frozen=True)
+class SessionInput:
+    """A session's preparation, fixed by its lowest-pressure frame, as deployment fixes it."""
+
+    reference: SessionReference  # of the shrunk reference frame
+    shrink: int  # every frame is shrunk by this factor first (deployed_shrink; 1, 2, 4 or 8)
+
+    def frame(self, path: str | os.PathLike[str]) -> np.ndarray:
+        """``path`` decoded and shrunk: the ``(H / k, W / k) uint8`` frame deployment prepares."""
+        return reduce_area(load_image(path), self.shrink)
+
+
+def session_inputs(rows: Sequence[IndexRow], config: PreprocessConfig) -> dict[str, SessionInput]:
+    """Each session's :class:`SessionInput`: the shrink deployment would choose for its
+    lowest-pressure frame (:func:`~contactcal.infer.methods.unet.shrink.deployed_shrink`) and
+    that frame, shrunk, as reference. A 1296×972 render is thus prepared at 324×243, as a
+    2592×1944 rig frame decoded at 1/8 is."""
+    out = {}
+    for key, frames in sessions_of(rows).items():
+        gray = load_image(frames[0].frame)
+        k = deployed_shrink(gray, config)
+        out[key] = SessionInput(session_reference(reduce_area(gray, k), config), k)
+    return out
 
 
 def build_cache(
@@ -114,20 +132,22 @@ def build_cache(
         ValueError: unreadable image, or a mask or frame of another size than its reference.
     """
     s = config.input_size
-    refs = session_references(rows, config)
+    sessions = session_inputs(rows, config)
     xs = torch.empty((len(rows), channels, s, s), dtype=torch.float32)
     ys = torch.empty((len(rows), 1, s, s), dtype=torch.uint8)
     areas, boxes, shapes = [], [], []
     for i, r in enumerate(tqdm(rows, desc="preprocess", disable=not progress, leave=False)):
-        gray = load_image(r.frame)
-        prep = prepare(gray, refs[r.session_key], config, channels)
+        sess = sessions[r.session_key]
+        gray = sess.frame(r.frame)
+        prep = prepare(gray, sess.reference, config, channels)
         mask = load_image(r.mask) > 127
-        if mask.shape != gray.shape:
-            raise ValueError(f"{r.mask}: mask shape {mask.shape} differs from frame {gray.shape}")
-        net_mask = crop_resize(mask.astype(np.float32), prep.box, s) > 0.5
+        small = reduce_area(mask.astype(np.uint8) * 255, sess.shrink).astype(np.float32) / 255
+        if small.shape != gray.shape:
+            raise ValueError(f"{r.mask}: mask shape {mask.shape} differs from its frame's")
+        net_mask = crop_resize(small, prep.box, s) > 0.5
         xs[i] = torch.from_numpy(prep.x)
         ys[i, 0] = torch.from_numpy(net_mask.astype(np.uint8))
-        areas.append(float(mask.sum()))
+        areas.append(float(mask.sum()) / sess.shrink**2)
         boxes.append(prep.box)
         shapes.append((int(gray.shape[0]), int(gray.shape[1])))
     return CachedSet(

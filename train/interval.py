@@ -35,7 +35,6 @@ import numpy as np
 
 from contactcal.infer.bench.dataset import read_index, sessions_of
 from contactcal.infer.files.atomic import atomic_open
-from contactcal.infer.image.read import load_image
 from contactcal.infer.methods.unet.postprocess import Band, Segmentation, boundary_band
 from contactcal.infer.methods.unet.spec import IntervalSpec, ModelSpec, read_spec
 
@@ -160,12 +159,13 @@ def _segment_dataset(
     model: Path, data_dirs: Sequence[Path]
 ) -> tuple[list[Segmentation], list[float], ModelSpec]:
     """Every frame of the datasets through the deployment runner (each session's lowest-pressure
-    frame is its reference), the true areas, and the model's spec without its interval (the
+    frame is its reference; large frames shrunk as deployment shrinks them: ``session_inputs``),
+    the true areas (in pixels of the shrunk frame), and the model's spec without its interval (the
     model's own ``interval`` key, if any, is not used)."""
     import onnx
 
-    from contactcal.infer.methods.unet.prepare import session_reference
     from contactcal.infer.methods.unet.runner import OnnxSegmenter
+    from contactcal.train.data import session_inputs
 
     proto = onnx.load(str(model))
     meta = {p.key: p.value for p in proto.metadata_props}
@@ -177,11 +177,12 @@ def _segment_dataset(
         onnx.save(proto, os.path.join(tmp, "model.onnx"))
         runner = OnnxSegmenter(os.path.join(tmp, "model.onnx"))
         for d in data_dirs:
-            for rows in sessions_of(read_index(d)).values():
-                ref = session_reference(load_image(rows[0].frame), runner.spec.preprocess)
-                for r in rows:
-                    segs.append(runner.segment(load_image(r.frame), ref))
-                    truths.append(r.area_px)
+            rows = read_index(d)
+            groups = sessions_of(rows)
+            for key, sess in session_inputs(rows, runner.spec.preprocess).items():
+                for r in groups[key]:
+                    segs.append(runner.segment(sess.frame(r.frame), sess.reference))
+                    truths.append(r.area_px / sess.shrink**2)
     return segs, truths, dataclasses.replace(runner.spec, interval=None)
 
 

@@ -1,6 +1,6 @@
 """INT8 variant of an exported model (onnxruntime static quantization, QDQ format).
 
-Calibration inputs come from the one preprocessing (``session_reference`` → ``prepare``) on
+Calibration inputs come from the one preprocessing (``session_inputs`` → ``prepare``) on
 frames of the given datasets, so the activation ranges are those deployment will see; the
 caller must pass data that is neither a benchmark nor a cross-check set (validation renders).
 The metadata is copied unchanged from the float model (the strict spec of
@@ -19,10 +19,10 @@ import numpy as np
 
 from contactcal.infer.bench.dataset import read_datasets, sessions_of
 from contactcal.infer.files.atomic import atomic_path
-from contactcal.infer.image.read import load_image
 from contactcal.infer.methods.unet.config import PreprocessConfig
-from contactcal.infer.methods.unet.prepare import SessionReference, prepare, session_reference
+from contactcal.infer.methods.unet.prepare import SessionReference, prepare
 from contactcal.infer.methods.unet.runner import OnnxSegmenter
+from contactcal.train.data import session_inputs
 
 __all__ = ["calibration_frames", "quantize_model"]
 
@@ -31,17 +31,15 @@ def calibration_frames(
     preprocess: PreprocessConfig, data: Sequence[str | os.PathLike[str]], frames: int
 ) -> list[tuple[np.ndarray, SessionReference]]:
     """Up to ``frames`` ``(frame (H, W) uint8, session reference)`` pairs, spread evenly."""
-    sessions = sessions_of(read_datasets([Path(d) for d in data]))
-    pairs = [(rows[0], r) for rows in sessions.values() for r in rows]
+    groups = sessions_of(read_datasets([Path(d) for d in data]))
+    pairs = [r for rows in groups.values() for r in rows]
     step = max(1, len(pairs) // frames)
-    refs: dict[str, SessionReference] = {}
-    out = []
-    for ref_row, row in pairs[::step][:frames]:
-        key = ref_row.session_key
-        if key not in refs:
-            refs[key] = session_reference(load_image(ref_row.frame), preprocess)
-        out.append((load_image(row.frame), refs[key]))
-    return out
+    picks = pairs[::step][:frames]
+    used = {r.session_key for r in picks}
+    sessions = session_inputs([r for r in pairs if r.session_key in used], preprocess)
+    return [
+        (sessions[r.session_key].frame(r.frame), sessions[r.session_key].reference) for r in picks
+    ]
 
 
 class _Reader:

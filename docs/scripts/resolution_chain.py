@@ -2,15 +2,16 @@
 ridges from a 400×300 training render as from a 2592×1944 rig frame decoded the way deployment
 decodes it?
 
-For a few nominal sessions and pressures the same frame is rendered twice (same session, same
-seed): at 2592×1944 (saved as JPEG q90 like the rig's camera, decoded by ``contactcal`` at the
-reduction deployment picks for the network input) and at 400×300 (the training frames). Both go
+For a few nominal sessions and pressures the same frame is rendered three times (same session,
+same seed): at 2592×1944 (saved as JPEG q90 like the rig's camera, decoded by ``contactcal`` at
+the reduction deployment picks for the network input), and at 1296×972 and 400×300 (the two
+sizes of training frames; PNG, shrunk by the factor deployment and training pick). Both go
 through the one preprocessing (`prepare`) to the network input; the script prints, per input
 size, the ridge contrast inside the contact (RMS of a band-pass at the ridge frequency, in network
 units), and for the ridge-energy channel (192² input, measured at 288 px) its median inside the
 eroded contact and on the membrane around it.
 
-Run from the repository root (slow: one 5 MP render takes about a minute on 2 cores):
+Run from the repository root (slow: one 5 MP render takes about a minute, a 1296×972 one ~8 s):
 ``python docs/scripts/resolution_chain.py [--sessions 2] [--spp 8] [--full-from DIR]``;
 ``--full-from`` reads the 2592×1944 frames of those sessions from a dataset rendered with
 ``contactcal synth --fingers 2 --pressures 0:20:5 --size 2592x1944 --spp 8 --seed 9000
@@ -27,15 +28,18 @@ from types import SimpleNamespace
 import cv2
 import numpy as np
 
+from contactcal.infer.image.gray import reduce_area
 from contactcal.infer.image.read import load_image
 from contactcal.infer.methods.unet.config import PreprocessConfig
 from contactcal.infer.methods.unet.prepare import crop_resize, prepare, session_reference
+from contactcal.infer.methods.unet.shrink import deployed_shrink
 from contactcal.synth.dataset import DatasetConfig, session_params
 from contactcal.synth.session import RenderConfig, render_session
 
 PRESSURES = (0.0, 10.0, 20.0)
 FULL = (2592, 1944)
 SMALL = (400, 300)
+MID = (1296, 972)
 
 
 def _ridge_contrast(x: np.ndarray, mask: np.ndarray) -> float:
@@ -56,16 +60,26 @@ def _ridge_channel(x: np.ndarray, mask: np.ndarray) -> str:
 
 
 def _network_views(frames, reduce: int, size: int, tmp: Path, tag: str, ridge: int = 0):
-    """Save frames (JPEG q90), decode at 1/reduce, prepare; yield (x, mask) in network pixels."""
+    """Save frames, decode, prepare; yield (kPa, x, mask) in network pixels.
+
+    ``reduce`` > 0: JPEG q90 decoded at 1/reduce (the rig's frames). ``reduce`` 0: PNG decoded
+    fully and shrunk by the factor deployment and training pick (``deployed_shrink``; the
+    training renders)."""
     cfg = PreprocessConfig(input_size=size, ridge_work_px=ridge)
+    suffix = ".jpg" if reduce else ".png"
     paths = []
     for f in frames:
-        p = tmp / f"{tag}_{f.pressure_kpa:04.1f}.jpg"
-        cv2.imwrite(str(p), f.frame[:, :, ::-1], [cv2.IMWRITE_JPEG_QUALITY, 90])
+        p = tmp / f"{tag}_{f.pressure_kpa:04.1f}{suffix}"
+        cv2.imwrite(str(p), f.frame[:, :, ::-1], [cv2.IMWRITE_JPEG_QUALITY, 90] if reduce else [])
         paths.append(p)
-    ref = session_reference(load_image(paths[0], reduce=reduce), cfg)
+    k = deployed_shrink(load_image(paths[0]), cfg) if not reduce else 1
+
+    def decoded(path: Path) -> np.ndarray:
+        return load_image(path, reduce=reduce) if reduce else reduce_area(load_image(path), k)
+
+    ref = session_reference(decoded(paths[0]), cfg)
     for f, p in zip(frames, paths, strict=True):
-        gray = load_image(p, reduce=reduce)
+        gray = decoded(p)
         x = prepare(gray, ref, cfg, channels=1 + (ridge > 0)).x[-1]
         m = cv2.resize(f.mask.astype(np.float32), gray.shape[::-1], interpolation=cv2.INTER_AREA)
         yield f.pressure_kpa, x, crop_resize(m, ref.box, size) > 0.5
@@ -96,7 +110,7 @@ def main() -> None:
         for finger in range(args.sessions):
             session = session_params(data, finger)
             renders = {}
-            for size, weight in ((FULL, 2048), (SMALL, 1024)):
+            for size, weight in ((FULL, 2048), (MID, 1024), (SMALL, 1024)):
                 if size == FULL and args.full_from is not None:
                     renders[size] = _from_dataset(args.full_from, finger)
                     continue
@@ -104,9 +118,11 @@ def main() -> None:
                 renders[size] = list(render_session(session, PRESSURES, rc, (9000, finger)))
             for net, reduce, ridge in ((192, 8, 0), (384, 4, 0), (192, 4, 288), (192, 8, 288)):
                 full = _network_views(renders[FULL], reduce, net, Path(tmp), "f", ridge)
-                small = _network_views(renders[SMALL], 1, net, Path(tmp), "s", ridge)
+                mid = _network_views(renders[MID], 0, net, Path(tmp), "m", ridge)
+                small = _network_views(renders[SMALL], 0, net, Path(tmp), "s", ridge)
                 label = f"{net}²" + (f" ridge channel @{ridge}, 1/{reduce} decode" if ridge else "")
-                for name, views in (("2592×1944 JPEG", full), ("400×300", small)):
+                named = (("2592×1944 JPEG", full), ("1296×972 PNG", mid), ("400×300 PNG", small))
+                for name, views in named:
                     for kpa, x, m in views:
                         if kpa > 0:
                             c = _ridge_channel(x, m) if ridge else f"{_ridge_contrast(x, m):.3f}"

@@ -22,35 +22,10 @@ from contactcal.infer.image.gray import reduce_area, to_gray_u8
 from contactcal.infer.image.jpeg import jpeg_size
 from contactcal.infer.image.read import load_image
 from contactcal.infer.methods.base import AreaResult, load_reference
-from contactcal.infer.methods.unet.config import PreprocessConfig
 from contactcal.infer.methods.unet.postprocess import mask_in_input
-from contactcal.infer.methods.unet.prepare import crop_box, session_reference
-from contactcal.infer.methods.unet.ring import locate_ring
+from contactcal.infer.methods.unet.prepare import session_reference
 from contactcal.infer.methods.unet.runner import OnnxSegmenter
-
-#: JPEG decode reductions (and shrink factors of decoded frames) tried, cheapest first.
-REDUCTIONS = (8, 4, 2)
-
-
-def fitting_reduction(side: float, shape: tuple[int, ...], config: PreprocessConfig) -> int:
-    """The largest of :data:`REDUCTIONS` that keeps the ring crop at least the network's input
-    size and divides both sides of the frame exactly (so areas scale back by exactly k²); 1
-    when none does.
-
-    The ridge channel's work side (288 px) may be larger than the reduced crop: it is then
-    interpolated up, exactly as from the 400×300 training renders (crop ~280 px). Measured
-    through the rig's chain (``docs/synth.md``, "Resolution chain"), the 1/8 decode gives a ridge
-    channel within 1.1-1.8× of the training renders', the 1/4 decode 1.5-2.5×.
-
-    Args:
-        side: ring crop side in pixels of the frame (``CropBox.side``; 0 when no ring).
-        shape: the frame's ``(H, W)``.
-        config: the model's preprocessing (``input_size``).
-    """
-    h, w = int(shape[0]), int(shape[1])
-    fits = (k for k in REDUCTIONS if side / k >= config.input_size and h % k == 0 and w % k == 0)
-    return next(fits, 1)
-
+from contactcal.infer.methods.unet.shrink import deployed_shrink, fitting_reduction
 
 #: The note of a frame measured without a reference frame, by what the model does then.
 NO_REFERENCE_NOTES = MappingProxyType(
@@ -130,24 +105,16 @@ class UnetMethod:
         self.reduction, self.shrink = reduction, None
         if reference is not None:
             gray = to_gray_u8(reference, name="reference frame")
-            self.shrink = self._fitting_shrink(gray)
+            self.shrink = deployed_shrink(gray, self.segmenter.spec.preprocess)
             reference = reduce_area(gray, self.shrink)
         self.reference = session_reference(reference, cfg)
-
-    def _fitting_shrink(self, gray: np.ndarray) -> int:
-        """:func:`fitting_reduction` for the crop of ``gray``'s ring (``(H, W) uint8``; the
-        fallback ring's crop when none is found: what ``prepare`` then uses too). Only the ring
-        search runs at full size, not the preparation of the network input."""
-        cfg = self.segmenter.spec.preprocess
-        box = crop_box(locate_ring(gray, cfg), gray.shape, cfg)
-        return fitting_reduction(box.side, gray.shape, cfg)
 
     def _shrunk(self, image: np.ndarray) -> tuple[np.ndarray, int]:
         """The frame at the session's shrink factor, and that factor (decided here when there
         is no reference; a frame whose sides it does not divide is not shrunk)."""
         gray = to_gray_u8(image, name="frame")
         if self.shrink is None:
-            self.shrink = self._fitting_shrink(gray)
+            self.shrink = deployed_shrink(gray, self.segmenter.spec.preprocess)
         k, full = self.shrink, self.reference.gray
         if k > 1 and full is not None and gray.shape != (full.shape[0] * k, full.shape[1] * k):
             raise ValueError(
