@@ -16,7 +16,8 @@ from contactcal.infer.bench.dataset import read_datasets  # noqa: E402
 from contactcal.infer.image.read import load_image  # noqa: E402
 from contactcal.infer.methods.unet.config import PreprocessConfig  # noqa: E402
 from contactcal.infer.methods.unet.shrink import deployed_shrink, fitting_reduction  # noqa: E402
-from contactcal.train.data import build_cache, session_inputs  # noqa: E402
+from contactcal.train.data import build_cache  # noqa: E402
+from contactcal.train.sessions import session_inputs  # noqa: E402
 
 CFG = PreprocessConfig(input_size=32, ridge_work_px=48)
 K = 4

@@ -22,18 +22,16 @@ import numpy as np
 import torch
 from tqdm import tqdm
 
-from contactcal.infer.bench.dataset import IndexRow, sessions_of
+from contactcal.infer.bench.dataset import IndexRow
 from contactcal.infer.image.gray import reduce_area
 from contactcal.infer.image.read import load_image
 from contactcal.infer.methods.unet.config import PreprocessConfig
 from contactcal.infer.methods.unet.prepare import (
     CropBox,
-    SessionReference,
     crop_resize,
     prepare,
-    session_reference,
 )
-from contactcal.infer.methods.unet.shrink import deployed_shrink
+from contactcal.train.sessions import session_inputs
 
 
 @dataclass
@@ -83,31 +81,6 @@ def dataset_digest(data_dirs: Sequence[str | os.PathLike[str]]) -> str:
     for d in data_dirs:
         h.update((Path(d) / "index.csv").read_bytes())
     return h.hexdigest()
-
-
-@dataclass(frozen=True)
-class SessionInput:
-    """A session's preparation, fixed by its lowest-pressure frame, as deployment fixes it."""
-
-    reference: SessionReference  # of the shrunk reference frame
-    shrink: int  # every frame is shrunk by this factor first (deployed_shrink; 1, 2, 4 or 8)
-
-    def frame(self, path: str | os.PathLike[str]) -> np.ndarray:
-        """``path`` decoded and shrunk: the ``(H / k, W / k) uint8`` frame deployment prepares."""
-        return reduce_area(load_image(path), self.shrink)
-
-
-def session_inputs(rows: Sequence[IndexRow], config: PreprocessConfig) -> dict[str, SessionInput]:
-    """Each session's :class:`SessionInput`: the shrink deployment would choose for its
-    lowest-pressure frame (:func:`~contactcal.infer.methods.unet.shrink.deployed_shrink`) and
-    that frame, shrunk, as reference. A 1296×972 render is thus prepared at 324×243, as a
-    2592×1944 rig frame decoded at 1/8 is."""
-    out = {}
-    for key, frames in sessions_of(rows).items():
-        gray = load_image(frames[0].frame)
-        k = deployed_shrink(gray, config)
-        out[key] = SessionInput(session_reference(reduce_area(gray, k), config), k)
-    return out
 
 
 def build_cache(

@@ -165,7 +165,7 @@ def _segment_dataset(
     import onnx
 
     from contactcal.infer.methods.unet.runner import OnnxSegmenter
-    from contactcal.train.data import session_inputs
+    from contactcal.train.sessions import session_inputs
 
     proto = onnx.load(str(model))
     meta = {p.key: p.value for p in proto.metadata_props}

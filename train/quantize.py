@@ -22,7 +22,7 @@ from contactcal.infer.files.atomic import atomic_path
 from contactcal.infer.methods.unet.config import PreprocessConfig
 from contactcal.infer.methods.unet.prepare import SessionReference, prepare
 from contactcal.infer.methods.unet.runner import OnnxSegmenter
-from contactcal.train.data import session_inputs
+from contactcal.train.sessions import session_inputs
 
 __all__ = ["calibration_frames", "quantize_model"]
 
