@@ -131,17 +131,23 @@ def build_config(args: argparse.Namespace) -> Any:
         "num_threads": args.torch_threads,
     }
     cfg = dataclasses.replace(base, **{k: v for k, v in given.items() if v is not None})
-    erase = {"p": args.ridgeless, "flatten": args.ridgeless_flatten}
-    erase = {k: v for k, v in erase.items() if v is not None}
-    if erase:
-        rl = dataclasses.replace(cfg.augment.ridgeless, **erase)
-        cfg = dataclasses.replace(cfg, augment=dataclasses.replace(cfg.augment, ridgeless=rl))
-    if args.contact_gain is not None:
-        look = dataclasses.replace(cfg.augment.contact, gain=tuple(args.contact_gain))
-        cfg = dataclasses.replace(cfg, augment=dataclasses.replace(cfg.augment, contact=look))
+    gain = None if args.contact_gain is None else tuple(args.contact_gain)
+    cfg = _with_augment(cfg, "ridgeless", p=args.ridgeless, flatten=args.ridgeless_flatten)
+    cfg = _with_augment(cfg, "contact", gain=gain)
     arch = {"base": args.base, "levels": args.levels}
     arch = {k: v for k, v in arch.items() if v is not None}
     return dataclasses.replace(cfg, model=dataclasses.replace(cfg.model, **arch)) if arch else cfg
+
+
+def _with_augment(cfg: Any, part: str, **fields: Any) -> Any:
+    """``cfg`` with the given (not None) fields of its ``augment.<part>`` config replaced."""
+    import dataclasses
+
+    given = {k: v for k, v in fields.items() if v is not None}
+    if not given:
+        return cfg
+    sub = dataclasses.replace(getattr(cfg.augment, part), **given)
+    return dataclasses.replace(cfg, augment=dataclasses.replace(cfg.augment, **{part: sub}))
 
 
 def _add_ridge_args(t: argparse.ArgumentParser) -> None:
