@@ -175,6 +175,8 @@ def test_bench_crosscheck(dataset: Path, tmp_path: Path) -> None:
     assert set(row) >= {"median_abs_rel_error@set", "no_contact_accuracy@other"}
     report = (tmp_path / "both" / "report.md").read_text(encoding="utf-8")
     assert "## Datasets side by side" in report and "## Cross-check `other`" in report
+    for header in ("### median abs. rel. error", "### contact recall", "### no-contact acc."):
+        assert f"{header}\n\n| method | kPa | set | other |\n" in report  # one column per set
     saved = json.loads((tmp_path / "both" / "results.json").read_text())
     assert saved["side_by_side"] == json.loads(json.dumps(both["side_by_side"]))
     with pytest.raises(ValueError, match="index.csv"):

@@ -108,8 +108,12 @@ def crosscheck_text(results: Mapping[str, Any], main_label: str) -> str:
         main_label: the main dataset's label.
     """
     names = [main_label] + [c["label"] for c in results["crosscheck"]]
-    cols = [("method", "method", False), ("bin_kpa", "kPa", False)]
-    cols += [(f"{k}@{n}", f"{h} ({n})", pct) for k, h, pct in SIDE_KEYS for n in names]
+    head = [("method", "method", False), ("bin_kpa", "kPa", False)]
+    tables = [
+        f"### {h}\n\n"
+        + md_table(results["side_by_side"], [*head, *((f"{k}@{n}", n, pct) for n in names)])
+        for k, h, pct in SIDE_KEYS
+    ]  # one table per quantity, one column per dataset: readable with many datasets
     parts = [
         "## Datasets side by side\n\n"
         f"Main dataset `{names[0]}`; cross-check datasets "
@@ -118,8 +122,7 @@ def crosscheck_text(results: Mapping[str, Any], main_label: str) -> str:
             for c in results["crosscheck"]
         )
         + ". Same methods, same scoring; a gap between columns is\nover-fitting to one "
-        "generator. `≥5` pools every frame at or above 5 kPa.\n\n"
-        + md_table(results["side_by_side"], cols)
+        "generator. `≥5` pools every frame at or above 5 kPa.\n\n" + "\n\n".join(tables)
     ]
     for c in results["crosscheck"]:
         parts.append(
