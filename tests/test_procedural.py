@@ -13,6 +13,7 @@ import numpy as np
 import pytest
 
 from contactcal.infer.bench.config import BenchConfig
+from contactcal.infer.bench.crosscheck import SIDE_KEYS
 from contactcal.infer.bench.dataset import read_index
 from contactcal.infer.bench.run import run_bench
 from contactcal.infer.cli import main
@@ -175,8 +176,13 @@ def test_bench_crosscheck(dataset: Path, tmp_path: Path) -> None:
     assert set(row) >= {"median_abs_rel_error@set", "no_contact_accuracy@other"}
     report = (tmp_path / "both" / "report.md").read_text(encoding="utf-8")
     assert "## Datasets side by side" in report and "## Cross-check `other`" in report
-    for header in ("### median abs. rel. error", "### contact recall", "### no-contact acc."):
-        assert f"{header}\n\n| method | kPa | set | other |\n" in report  # one column per set
+    for key, header, pct in SIDE_KEYS:  # one table per quantity, one column per dataset
+        table = report.split(f"### {header}\n\n", 1)[1].split("\n\n", 1)[0]
+        assert table.startswith("| method | kPa | set | other |\n")
+        values = [row[f"{key}@{name}"] for name in ("set", "other")]
+        cells = ["–" if v is None else f"{100 * v:.1f} %" for v in values]  # all shown as %
+        assert pct
+        assert f"| unet | ≥5 | {cells[0]} | {cells[1]} |" in table.splitlines()
     saved = json.loads((tmp_path / "both" / "results.json").read_text())
     assert saved["side_by_side"] == json.loads(json.dumps(both["side_by_side"]))
     with pytest.raises(ValueError, match="index.csv"):
