@@ -33,7 +33,7 @@ from typing import Any
 
 import numpy as np
 
-from contactcal.infer.bench.dataset import read_index, sessions_of
+from contactcal.infer.bench.dataset import read_index
 from contactcal.infer.files.atomic import atomic_open
 from contactcal.infer.methods.unet.postprocess import Band, Segmentation, boundary_band
 from contactcal.infer.methods.unet.spec import IntervalSpec, ModelSpec, read_spec
@@ -177,10 +177,8 @@ def _segment_dataset(
         onnx.save(proto, os.path.join(tmp, "model.onnx"))
         runner = OnnxSegmenter(os.path.join(tmp, "model.onnx"))
         for d in data_dirs:
-            rows = read_index(d)
-            groups = sessions_of(rows)
-            for key, sess in session_inputs(rows, runner.spec.preprocess).items():
-                for r in groups[key]:
+            for sess in session_inputs(read_index(d), runner.spec.preprocess).values():
+                for r in sess.rows:
                     segs.append(runner.segment(sess.frame(r.frame), sess.reference))
                     truths.append(r.area_px / sess.shrink**2)
     return segs, truths, dataclasses.replace(runner.spec, interval=None)

@@ -16,8 +16,8 @@ from contactcal.infer.bench.dataset import IndexRow, sessions_of
 from contactcal.infer.image.gray import reduce_area
 from contactcal.infer.image.read import load_image
 from contactcal.infer.methods.unet.config import PreprocessConfig
-from contactcal.infer.methods.unet.prepare import SessionReference, session_reference
-from contactcal.infer.methods.unet.shrink import deployed_shrink
+from contactcal.infer.methods.unet.prepare import SessionReference
+from contactcal.infer.methods.unet.shrink import shrunk_reference
 
 
 @dataclass(frozen=True)
@@ -26,6 +26,7 @@ class SessionInput:
 
     reference: SessionReference  # of the shrunk reference frame
     shrink: int  # every frame is shrunk by this factor first (deployed_shrink; 1, 2, 4 or 8)
+    rows: tuple[IndexRow, ...]  # the session's index rows, lowest pressure first
 
     def frame(self, path: str | os.PathLike[str]) -> np.ndarray:
         """``path`` decoded and shrunk: the ``(H / k, W / k) uint8`` frame deployment prepares."""
@@ -34,12 +35,11 @@ class SessionInput:
 
 def session_inputs(rows: Sequence[IndexRow], config: PreprocessConfig) -> dict[str, SessionInput]:
     """Each session's :class:`SessionInput`: the shrink deployment would choose for its
-    lowest-pressure frame (:func:`~contactcal.infer.methods.unet.shrink.deployed_shrink`) and
-    that frame, shrunk, as reference. A 1296×972 render is thus prepared at 324×243, as a
-    2592×1944 rig frame decoded at 1/8 is."""
+    lowest-pressure frame and that frame, shrunk, as reference, by deployment's own
+    :func:`~contactcal.infer.methods.unet.shrink.shrunk_reference`. A 1296×972 render is thus
+    prepared at 324×243, as a 2592×1944 rig frame decoded at 1/8 is."""
     out = {}
     for key, frames in sessions_of(rows).items():
-        gray = load_image(frames[0].frame)
-        k = deployed_shrink(gray, config)
-        out[key] = SessionInput(session_reference(reduce_area(gray, k), config), k)
+        reference, k = shrunk_reference(load_image(frames[0].frame), config)
+        out[key] = SessionInput(reference, k, tuple(frames))
     return out

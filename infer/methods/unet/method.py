@@ -25,7 +25,11 @@ from contactcal.infer.methods.base import AreaResult, load_reference
 from contactcal.infer.methods.unet.postprocess import mask_in_input
 from contactcal.infer.methods.unet.prepare import session_reference
 from contactcal.infer.methods.unet.runner import OnnxSegmenter
-from contactcal.infer.methods.unet.shrink import deployed_shrink, fitting_reduction
+from contactcal.infer.methods.unet.shrink import (
+    deployed_shrink,
+    fitting_reduction,
+    shrunk_reference,
+)
 
 #: The note of a frame measured without a reference frame, by what the model does then.
 NO_REFERENCE_NOTES = MappingProxyType(
@@ -103,11 +107,11 @@ class UnetMethod:
         """
         cfg = self.segmenter.spec.preprocess
         self.reduction, self.shrink = reduction, None
-        if reference is not None:
-            gray = to_gray_u8(reference, name="reference frame")
-            self.shrink = deployed_shrink(gray, self.segmenter.spec.preprocess)
-            reference = reduce_area(gray, self.shrink)
-        self.reference = session_reference(reference, cfg)
+        if reference is None:
+            self.reference = session_reference(None, cfg)
+            return
+        gray = to_gray_u8(reference, name="reference frame")
+        self.reference, self.shrink = shrunk_reference(gray, cfg)
 
     def _shrunk(self, image: np.ndarray) -> tuple[np.ndarray, int]:
         """The frame at the session's shrink factor, and that factor (decided here when there

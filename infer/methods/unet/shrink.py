@@ -12,8 +12,9 @@ from __future__ import annotations
 
 import numpy as np
 
+from contactcal.infer.image.gray import reduce_area
 from contactcal.infer.methods.unet.config import PreprocessConfig
-from contactcal.infer.methods.unet.prepare import crop_box
+from contactcal.infer.methods.unet.prepare import SessionReference, crop_box, session_reference
 from contactcal.infer.methods.unet.ring import locate_ring
 
 #: JPEG decode reductions (and shrink factors of decoded frames) tried, cheapest first.
@@ -54,3 +55,19 @@ def deployed_shrink(gray: np.ndarray, config: PreprocessConfig) -> int:
     """
     box = crop_box(locate_ring(gray, config), gray.shape, config)
     return fitting_reduction(box.side, gray.shape, config)
+
+
+def shrunk_reference(gray: np.ndarray, config: PreprocessConfig) -> tuple[SessionReference, int]:
+    """A session's reference as deployment prepares it: ``gray`` shrunk by
+    :func:`deployed_shrink`, then :func:`~contactcal.infer.methods.unet.prepare.session_reference`.
+
+    Args:
+        gray: ``(H, W) uint8`` full-size zero-pressure frame of the session.
+        config: the model's preprocessing.
+
+    Returns:
+        The reference (of the shrunk frame) and the shrink factor k, by which every frame of the
+        session is shrunk too.
+    """
+    k = deployed_shrink(gray, config)
+    return session_reference(reduce_area(gray, k), config), k
