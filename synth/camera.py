@@ -11,12 +11,18 @@ offsets sampled here are nearly so for this shallow scene), so the mask stays ex
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 import cv2
 import numpy as np
 
-from contactcal.synth.look import LookEffects, apply_optics, apply_white_balance, tone_curve
+from contactcal.synth.look import (
+    REFERENCE_WIDTH_PX,
+    LookEffects,
+    apply_optics,
+    apply_white_balance,
+    tone_curve,
+)
 
 
 @dataclass(frozen=True)
@@ -24,13 +30,15 @@ class CameraEffects:
     """One frame's camera settings (all sampled per session, with small per-frame jitter)."""
 
     exposure: float = 1.0  # × linear radiance; <1 underexposes (faint ridges), >1 clips rings
-    defocus_sigma_px: float = 0.0  # Gaussian blur sigma, px; blurs ridges (period ~4-10 px)
+    defocus_sigma_px: float = 0.0  # Gaussian blur sigma, px at a 400-px-wide frame (scaled with
+    #   the width: ``at_width``); blurs ridges (period ~4 px at 400 wide, ~28 px at 2592)
     full_well: float = 2000.0  # photo-electrons at white; lower → more shot (Poisson) noise
     read_noise: float = 0.004  # Gaussian read noise, fraction of white
     gamma: float = 2.2  # display gamma of the saved file
     jpeg_quality: int = 0  # 0 → PNG-like lossless; 60-95 → JPEG round trip artefacts
     tilt_deg: tuple[float, float] = (0.0, 0.0)  # camera rotation about x, y; shifts/keystones
-    shift_px: tuple[float, float] = (0.0, 0.0)  # image offset of the optical axis, px
+    shift_px: tuple[float, float] = (0.0, 0.0)  # image offset of the optical axis, px at a
+    #   400-px-wide frame (scaled with the width)
     look: LookEffects = field(default_factory=LookEffects)  # v2 appearance (look.py); none
 
     def __post_init__(self) -> None:
@@ -42,6 +50,21 @@ class CameraEffects:
             raise ValueError(f"jpeg_quality must be 0 (off) or 1-100, got {self.jpeg_quality}")
         if not isinstance(self.look, LookEffects):
             raise ValueError(f"synth/camera.py: look must be a LookEffects, got {self.look!r}")
+
+    def at_width(self, width_px: int) -> CameraEffects:
+        """These settings with every pixel length in pixels of a ``width_px``-wide frame.
+
+        Defocus, axis offset and motion blur are given at ``REFERENCE_WIDTH_PX`` (400) and mean
+        the same optics at every render size (as the dust radii do): a 1296-wide render gets
+        3.24 × the pixels of blur, so its ridges lose what a 400-wide render's lose.
+        """
+        k = width_px / REFERENCE_WIDTH_PX
+        return replace(
+            self,
+            defocus_sigma_px=self.defocus_sigma_px * k,
+            shift_px=(self.shift_px[0] * k, self.shift_px[1] * k),
+            look=replace(self.look, motion_blur_px=self.look.motion_blur_px * k),
+        )
 
 
 def tilt_homography(
@@ -93,6 +116,7 @@ def apply_camera(
     if not np.all(np.isfinite(linear_rgb)):
         raise ValueError("linear render contains NaN or inf")
     h, w = mask.shape
+    fx = fx.at_width(w)
     img = np.maximum(linear_rgb.astype(np.float32), 0.0) * fx.exposure
     m = mask.astype(np.uint8)
     if any(fx.tilt_deg) or any(fx.shift_px):

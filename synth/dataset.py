@@ -33,6 +33,14 @@ from contactcal.synth.layout import (
 from contactcal.synth.randomize import SessionParams, sample_session
 from contactcal.synth.session import FrameOutput, RenderConfig, render_session
 
+#: What changed the frames a given config renders (recorded in ``config.json``; a folder of an
+#: earlier revision is not resumed, since its frames and new ones would differ).
+REVISIONS = {
+    1: "v2 world",
+    2: "defocus, motion blur and axis offset scale with the frame width",
+}
+SYNTH_REVISION = max(REVISIONS)
+
 
 @dataclass(frozen=True)
 class DatasetConfig:
@@ -195,11 +203,18 @@ def build_dataset(
 def _check_config_matches(root: Path, config: DatasetConfig) -> None:
     """Write ``config.json``, or refuse to mix a different config into an existing folder."""
     path = root / "config.json"
-    data = jsonable(asdict(config))
+    data = {**jsonable(asdict(config)), "synth_revision": SYNTH_REVISION}
     if path.is_file():
         old = json.loads(path.read_text())
         new = json.loads(json.dumps(data))
         old.setdefault("smooth_fraction", 0.0)  # folders rendered before the option existed
+        old.setdefault("synth_revision", 1)
+        if old["synth_revision"] != SYNTH_REVISION:
+            raise ValueError(
+                f"{path}: this folder was rendered by synth revision {old['synth_revision']} "
+                f"(now {SYNTH_REVISION}: {REVISIONS[SYNTH_REVISION]}), so new frames would not "
+                "match its frames; render into a new --out"
+            )
         if old != new:
             raise ValueError(
                 f"{path}: this folder was rendered with a different config; use a new --out "

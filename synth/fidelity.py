@@ -80,7 +80,7 @@ def true_ring(session: SessionParams, frame: FrameOutput) -> tuple[float, float,
     h, w = frame.mask.shape
     rig = session.rig
     cx, cy, r = window_ring_circle(rig, w, h)
-    cam = session.camera
+    cam = session.camera.at_width(w)
     hmat = tilt_homography(w, h, cam.tilt_deg, cam.shift_px, focal_px(rig, h))
     c = cv2.perspectiveTransform(np.array([[[cx, cy]]], np.float64), hmat)[0, 0]
     return float(c[0]), float(c[1]), r
@@ -192,7 +192,7 @@ def measure_session(
 
 def _ring_band(session: SessionParams, w: int, h: int) -> np.ndarray:
     """``(H, W) bool`` pixels of the window ring (both reflexes), in the saved frame's pixels."""
-    rig, cam = session.rig, session.camera
+    rig, cam = session.rig, session.camera.at_width(w)
     support = WindowReflection(rig, w, h, 16, ss=2)(1.0, np.ones(16))[..., 0] > 0
     hmat = tilt_homography(w, h, cam.tilt_deg, cam.shift_px, focal_px(rig, h))
     warped = cv2.warpPerspective(support.astype(np.uint8), hmat, (w, h), flags=cv2.INTER_NEAREST)

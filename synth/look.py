@@ -31,8 +31,9 @@ class LookEffects:
     #   white balance / colour cast; ±25 % turns the white ring pink or cyan, hue is no cue
     tone_strength: float = 0.0  # 0-1 blend towards a smoothstep S-curve on the display values;
     #   more contrast in mid-tones, crushed shadows and highlights (faint ridges fade or pop)
-    motion_blur_px: float = 0.0  # length of a linear blur kernel, px; smears ridges along one
-    #   direction (period 4-10 px), so 3 px is a visible but not total loss
+    motion_blur_px: float = 0.0  # length of a linear blur kernel, px (at a 400-px-wide frame
+    #   through ``CameraEffects.at_width``); smears ridges along one direction (period ~4 px at
+    #   400 wide), so 3 px is a visible but not total loss
     motion_blur_deg: float = 0.0  # direction of the motion blur, degrees from the image x axis
     dust_count: int = 0  # small blurred specks on the window (80 % dark, 20 % bright); radius
     #   1-4 px at 400 px width; they mimic pores/scars, so the segmenter must ignore them

@@ -180,3 +180,34 @@ def test_smooth_coating_in_the_chosen_share_of_hard_sessions_only() -> None:
         else:
             assert 1.0 <= hard.particle_tilt_deg <= 4.0 and hard.roughness_alpha <= 0.15
     assert 18 <= smooth <= 42  # smooth_fraction 0.5 of 60
+
+
+def test_camera_blur_means_the_same_optics_at_every_width() -> None:
+    """Defocus, motion blur and axis offset are given at 400 px wide and scale with the width:
+    under defocus, ridges of the same physical period keep the same contrast at 400 and 1296 px."""
+    fx = CameraEffects(
+        defocus_sigma_px=1.0,
+        shift_px=(1.5, -1.0),
+        full_well=1e7,
+        read_noise=0.0,
+        gamma=1.0,
+        look=LookEffects(motion_blur_px=2.0),
+    )
+    wide = fx.at_width(1296)
+    assert wide.defocus_sigma_px == pytest.approx(3.24)
+    assert wide.shift_px == pytest.approx((4.86, -3.24))
+    assert wide.look.motion_blur_px == pytest.approx(6.48)
+    assert fx.at_width(400) == fx
+    kept = []
+    # defocus alone: a 2-px motion kernel and a sub-pixel shift's interpolation are coarser at 400
+    fx = dataclasses.replace(fx, shift_px=(0.0, 0.0), look=LookEffects())
+    for w in (400, 1296):
+        period = 5.0 * w / 400  # the same ridges, 5 px apart at 400 wide
+        x = np.arange(w, dtype=np.float32)
+        row = 0.5 + 0.2 * np.sin(2 * np.pi * x / period)
+        img = np.repeat(np.broadcast_to(row, (32, w))[:, :, None], 3, axis=2).astype(np.float32)
+        out, _ = apply_camera(img, np.zeros((32, w), bool), fx, np.random.default_rng(0), 1e3)
+        centre = out[16, w // 4 : 3 * w // 4, 1].astype(np.float32) / 255.0
+        kept.append(float(centre.std() / row[w // 4 : 3 * w // 4].std()))
+    assert 0.1 < kept[0] < 0.9  # the blur is visible ...
+    assert kept[1] == pytest.approx(kept[0], abs=0.05)  # ... and the same at both widths

@@ -137,6 +137,10 @@ def test_bad_arguments(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> No
     del old["smooth_fraction"]
     cfg.write_text(json.dumps(old))
     build_dataset(tmp_path / "a", dataclasses.replace(CONFIG, fingers=1), progress=False)
+    del old["synth_revision"]  # a folder of the first v2 revision: its frames would differ
+    cfg.write_text(json.dumps(old))
+    with pytest.raises(ValueError, match="synth revision 1"):
+        build_dataset(tmp_path / "a", dataclasses.replace(CONFIG, fingers=1), progress=False)
 
 
 def test_pressures_that_share_a_frame_name_are_refused(
