@@ -4,12 +4,13 @@ from __future__ import annotations
 
 import dataclasses
 
+import cv2
 import numpy as np
 import pytest
 
 from contactcal.infer.methods.unet.config import PreprocessConfig
 from contactcal.infer.methods.unet.prepare import prepare, session_reference
-from contactcal.infer.methods.unet.ridge import ridge_energy
+from contactcal.infer.methods.unet.ridge import ridge_band_frequency, ridge_energy
 from contactcal.infer.methods.unet.spec import ModelSpec
 
 SIZE, WORK = 32, 64
@@ -113,3 +114,66 @@ def test_train_config_and_augmenter_with_ridge() -> None:
     assert out.shape == x.shape
     torch.testing.assert_close(out[:, 2], x[:, 2])  # camera ops leave the ridge energy alone
     assert not torch.allclose(out[:, 0], x[:, 0])
+
+
+def test_band_centre_is_the_dog_peak() -> None:
+    periods = np.linspace(2.5, 12.0, 2000)
+    best = periods[np.argmax([_gain(p, CFG) for p in periods])]
+    assert 1.0 / ridge_band_frequency(CFG) == pytest.approx(best, abs=0.01)
+
+
+@pytest.mark.parametrize("sigma_in", [0.3, 0.6, 1.0])
+def test_blurred_ridge_gain_matches_a_blurred_sinusoid(sigma_in: float) -> None:
+    """Ridges at the band centre, blurred by σ input px (σ·W/S work px): the energy ratio."""
+    torch = pytest.importorskip("torch")
+    from contactcal.train.augment import blurred_ridge_gain
+
+    x = np.arange(WORK, dtype=np.float32)
+    period = 1.0 / ridge_band_frequency(CFG)
+    work = np.ascontiguousarray(
+        np.broadcast_to(100.0 + 20.0 * np.sin(2 * np.pi * x / period), (WORK, WORK)), np.float32
+    )
+    blurred = cv2.GaussianBlur(work, (0, 0), sigma_in * WORK / SIZE)
+    c = slice(SIZE // 4, -SIZE // 4)
+    sharp_e = float(np.median(ridge_energy(work, CFG, 200.0)[c, c]))
+    blur_e = float(np.median(ridge_energy(blurred, CFG, 200.0)[c, c]))
+    gain = float(blurred_ridge_gain(torch.tensor([sigma_in]), CFG)[0])
+    assert blur_e / sharp_e == pytest.approx(gain, rel=0.1, abs=0.01)
+
+
+def test_augmenter_ridge_blur_weakens_only_the_ridge_channel() -> None:
+    """Same draws with and without ridge_blur; blurred samples' ridge energy scaled down."""
+    torch = pytest.importorskip("torch")
+    pytest.importorskip("kornia")
+    from contactcal.train.augment import AugmentConfig, Augmenter
+    from contactcal.train.config import TrainConfig
+
+    cfg = TrainConfig(input_size=SIZE, ridge_work_px=WORK).resolved()
+    x = torch.rand((6, 3, SIZE, SIZE), generator=torch.Generator().manual_seed(3)) + 0.5
+    m = torch.zeros((6, 1, SIZE, SIZE))
+    base = AugmentConfig(flip_p=0.0, affine_p=0.0, blur_p=0.5, blur_sigma=(0.5, 1.2))
+    sharp, _ = Augmenter(base, cfg.preprocess, seed=2)(x, m)
+    soft, _ = Augmenter(dataclasses.replace(base, ridge_blur=True), cfg.preprocess, seed=2)(x, m)
+    torch.testing.assert_close(soft[:, :2], sharp[:, :2])
+    torch.testing.assert_close(sharp[:, 2], x[:, 2])
+    ratio = (soft[:, 2] / x[:, 2]).flatten(1)
+    assert torch.allclose(ratio.min(1).values, ratio.max(1).values)  # one gain per sample
+    gains = ratio[:, 0]
+    assert bool((gains <= 1.0).all()) and 0 < int((gains < 0.9).sum()) < 6  # blur_p = 0.5
+    with pytest.raises(ValueError, match="ridge_blur needs the ridge-energy channel"):
+        TrainConfig(input_size=SIZE, augment=AugmentConfig(ridge_blur=True))
+
+
+def test_cli_ridge_blur_option() -> None:
+    import argparse
+
+    pytest.importorskip("torch")
+    from contactcal.train.commands import add_parsers, build_config
+
+    parser = argparse.ArgumentParser(prog="contactcal")
+    add_parsers(parser.add_subparsers(dest="command", required=True))
+    base = ["train", "--data", "a", "--out", "r", "--input-size", "64", "--ridge-channel", "96"]
+    assert build_config(parser.parse_args([*base, "--ridge-blur"])).augment.ridge_blur
+    assert not build_config(parser.parse_args(base)).augment.ridge_blur
+    with pytest.raises(ValueError, match="ridge-energy channel"):
+        build_config(parser.parse_args([*base[:-2], "--ridge-blur"]))

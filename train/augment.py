@@ -24,6 +24,7 @@ import torch
 
 from contactcal.infer.methods.unet.config import PreprocessConfig
 from contactcal.infer.methods.unet.prepare import network_to_unit, unit_to_network
+from contactcal.infer.methods.unet.ridge import ridge_band_frequency
 from contactcal.train.contact_look import ContactLookConfig, contact_look
 from contactcal.train.ridgeless import RidgelessConfig, ridgeless
 
@@ -46,6 +47,9 @@ class AugmentConfig:
     blur_p: float = 0.3  # probability of a blur
     noise_std: float = 0.02  # in [0, 1] units; sensor noise
     noise_p: float = 0.5  # probability of added noise
+    ridge_blur: bool = False  # the drawn blur also weakens the ridge-energy channel, as it weakens
+    #   ridges at the band's centre (``blurred_ridge_gain``); False keeps that channel sharp under
+    #   blur (v2.1), which a defocused rig frame contradicts
     contact: ContactLookConfig = field(default_factory=ContactLookConfig)  # the contact region's
     #   brightness and ridge contrast (``contact_look``), after the warp, before the camera ops
     ridgeless: RidgelessConfig = field(default_factory=RidgelessConfig)  # contact patches with
@@ -138,12 +142,24 @@ class Augmenter(torch.nn.Module):
                     u, m = ridgeless(
                         u, m, self.config.ridgeless, self.generator, self.preprocess.crop_factor
                     )
-                u = torch.cat([self.camera(u[:, :n_img]).clamp(0.0, 1.0), u[:, n_img:]], 1)
+                u = self._camera_ops(u, n_img, ridge)
         if self.reference_dropout > 0.0 and n_img == 2:
             drop = torch.rand(u.shape[0], generator=self.generator) < self.reference_dropout
             u[drop.to(u.device), 1] = 0.0  # prepare.blank_reference: black, after the warp
         x_out = torch.cat([unit_to_network(u[:, :n_img], self.preprocess), u[:, n_img:]], 1)
         return x_out, (m > 0.5).to(mask.dtype)
+
+    def _camera_ops(self, u: torch.Tensor, n_img: int, ridge: bool) -> torch.Tensor:
+        """The camera operations on the image channels; with ``ridge_blur`` the ridge channel
+        loses what the drawn blur takes from ridges (same draws as without it)."""
+        params = self.camera.forward_parameters(u[:, :n_img].shape)
+        img = self.camera(u[:, :n_img], params=params).clamp(0.0, 1.0)
+        rest = u[:, n_img:]
+        if ridge and self.config.ridge_blur:
+            blur = next(p.data for p in params if p.name.startswith("RandomGaussianBlur"))
+            sigma = (blur["sigma"] * blur["batch_prob"]).to(u)  # 0 where no blur was drawn
+            rest = rest * blurred_ridge_gain(sigma, self.preprocess).view(-1, 1, 1, 1)
+        return torch.cat([img, rest], 1)
 
     @contextmanager
     def _seeded(self, device: torch.device) -> Iterator[None]:
@@ -158,3 +174,22 @@ class Augmenter(torch.nn.Module):
                 with torch.cuda.device(d):
                     torch.cuda.manual_seed(seed)
             yield
+
+
+def blurred_ridge_gain(sigma_px: torch.Tensor, preprocess: PreprocessConfig) -> torch.Tensor:
+    """What a Gaussian blur leaves of the ridge-energy channel: its transfer at the band's centre.
+
+    A blur of σ input pixels is σ · W / S pixels at the ridge channel's work side ``W``; a ridge
+    at the band's centre frequency ``f`` (``ridge_band_frequency``) keeps ``exp(-2π² σ_w² f²)``
+    of its amplitude, and the channel (an RMS amplitude) scales with it.
+
+    Args:
+        sigma_px: ``(N,)`` blur σ in network-input pixels (0 = no blur).
+        preprocess: input size, ridge work side and band.
+
+    Returns:
+        ``(N,)`` gains in (0, 1].
+    """
+    f = ridge_band_frequency(preprocess)
+    sigma_work = sigma_px * (preprocess.ridge_work_px / preprocess.input_size)
+    return torch.exp(-2.0 * torch.pi**2 * (sigma_work * f) ** 2)

@@ -134,6 +134,10 @@ def build_config(args: argparse.Namespace) -> Any:
     gain = None if args.contact_gain is None else tuple(args.contact_gain)
     cfg = _with_augment(cfg, "ridgeless", p=args.ridgeless, flatten=args.ridgeless_flatten)
     cfg = _with_augment(cfg, "contact", gain=gain)
+    if args.ridge_blur is not None:
+        cfg = dataclasses.replace(
+            cfg, augment=dataclasses.replace(cfg.augment, ridge_blur=args.ridge_blur)
+        )
     arch = {"base": args.base, "levels": args.levels}
     arch = {k: v for k, v in arch.items() if v is not None}
     return dataclasses.replace(cfg, model=dataclasses.replace(cfg.model, **arch)) if arch else cfg
@@ -177,7 +181,7 @@ def _add_ridge_args(t: argparse.ArgumentParser) -> None:
 
 
 def _add_look_args(t: argparse.ArgumentParser) -> None:
-    """``--contact-gain``."""
+    """``--contact-gain`` and ``--ridge-blur``."""
     t.add_argument(
         "--contact-gain",
         type=float,
@@ -186,6 +190,13 @@ def _add_look_args(t: argparse.ArgumentParser) -> None:
         help="range of the contact region's brightness factor in the contact appearance "
         "augmentation, log-uniform (default 0.6 1.5; below ~0.5 the skin is darker than the "
         "membrane)",
+    )
+    t.add_argument(
+        "--ridge-blur",
+        action=argparse.BooleanOptionalAction,
+        default=None,
+        help="the blur augmentation also weakens the ridge-energy channel, as blur weakens "
+        "ridges (needs --ridge-channel; default off)",
     )
 
 

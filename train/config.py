@@ -69,6 +69,11 @@ class TrainConfig:
                 "augment.ridgeless.p > 0 needs the ridge-energy channel (ridge_work_px > 0, "
                 "contactcal train --ridge-channel W)"
             )
+        if self.augment.ridge_blur and self.ridge_work_px <= 0:
+            raise ValueError(
+                "augment.ridge_blur needs the ridge-energy channel (ridge_work_px > 0, "
+                "contactcal train --ridge-channel W)"
+            )
         if self.ridge_work_px < 0 or 0 < self.ridge_work_px < self.input_size:
             raise ValueError(
                 f"ridge_work_px must be 0 (off) or >= input_size {self.input_size}, "

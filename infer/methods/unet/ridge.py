@@ -21,6 +21,8 @@ apart, this channel only makes the ridges visible at its input size.
 
 from __future__ import annotations
 
+import math
+
 import cv2
 import numpy as np
 
@@ -57,3 +59,21 @@ def ridge_energy(work: np.ndarray, config: PreprocessConfig, reference_level: fl
     interp = cv2.INTER_AREA if w > s else cv2.INTER_LINEAR
     small = cv2.resize(energy, (s, s), interpolation=interp)
     return (small / config.ridge_norm).astype(np.float32)
+
+
+def ridge_band_frequency(config: PreprocessConfig) -> float:
+    """Centre of the ridge band: the frequency where the difference of Gaussians peaks.
+
+    The DoG ``exp(-a f²) - exp(-b f²)`` (``a, b = 2π² σ²`` of the fine and coarse σ) peaks at
+    ``f² = ln(b / a) / (b - a)``; at the default σ 0.6 / 1.3 px that is 0.243 cycles per work px,
+    a period of 4.1 px at ``ridge_work_px`` = 288 (2.7 px at a 192² input).
+
+    Args:
+        config: the ridge band (``ridge_sigma_fine_px`` < ``ridge_sigma_coarse_px``).
+
+    Returns:
+        Frequency in cycles per work pixel (> 0).
+    """
+    a = 2.0 * math.pi**2 * config.ridge_sigma_fine_px**2
+    b = 2.0 * math.pi**2 * config.ridge_sigma_coarse_px**2
+    return math.sqrt(math.log(b / a) / (b - a))
