@@ -102,7 +102,8 @@ def apply_camera(
     Args:
         linear_rgb: ``(H, W, 3) float32`` linear radiance, 1.0 ≈ white at exposure 1.
         mask: ``(H, W) bool`` exact contact mask of the same camera.
-        fx: camera settings.
+        fx: camera settings, pixel lengths at 400 px wide (scaled here to the frame's width by
+            ``CameraEffects.at_width``: pass them unscaled).
         rng: generator for the sensor noise (the look's dust/glare use ``fx.look.seed``).
         focal_px: focal length in pixels (for the tilt homography).
 

@@ -157,7 +157,7 @@ class Augmenter(torch.nn.Module):
         rest = u[:, n_img:]
         if ridge and self.config.ridge_blur:
             blur = next(p.data for p in params if p.name.startswith("RandomGaussianBlur"))
-            sigma = (blur["sigma"] * blur["batch_prob"]).to(u)  # 0 where no blur was drawn
+            sigma = drawn_blur_sigma(blur["sigma"], blur["batch_prob"]).to(u)
             rest = rest * blurred_ridge_gain(sigma, self.preprocess).view(-1, 1, 1, 1)
         return torch.cat([img, rest], 1)
 
@@ -174,6 +174,26 @@ class Augmenter(torch.nn.Module):
                 with torch.cuda.device(d):
                     torch.cuda.manual_seed(seed)
             yield
+
+
+def drawn_blur_sigma(sigma: torch.Tensor, batch_prob: torch.Tensor) -> torch.Tensor:
+    """``(N,)`` blur σ per sample, 0 where no blur was applied, from kornia's blur parameters.
+
+    Args:
+        sigma: the drawn σ, one per sample (kornia 0.9) or one per blurred sample (kornia 0.7).
+        batch_prob: ``(N,)`` 1 where the blur was applied, else 0.
+    """
+    applied = batch_prob > 0.5
+    if sigma.numel() == applied.numel():
+        return torch.where(applied, sigma, torch.zeros_like(sigma))
+    if sigma.numel() != int(applied.sum()):
+        raise ValueError(
+            f"kornia blur parameters: {sigma.numel()} sigmas for {int(applied.sum())} blurred "
+            f"of {applied.numel()} samples"
+        )
+    out = torch.zeros(applied.numel(), dtype=sigma.dtype, device=sigma.device)
+    out[applied] = sigma
+    return out
 
 
 def blurred_ridge_gain(sigma_px: torch.Tensor, preprocess: PreprocessConfig) -> torch.Tensor:

@@ -43,7 +43,8 @@ PANELS: list[tuple[str, CameraEffects]] = [
     (
         "motion blur 3 px at 30°",
         dataclasses.replace(
-            BASE, look=dataclasses.replace(LOOK, motion_blur_px=3.0, motion_blur_deg=30.0)
+            BASE,  # 3 px at this 320-px width: pixel lengths are given at 400 px wide
+            look=dataclasses.replace(LOOK, motion_blur_px=3.75, motion_blur_deg=30.0),
         ),
     ),
     (
