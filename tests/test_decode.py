@@ -121,3 +121,15 @@ def test_corrupt_jpeg_in_a_reduced_session(tmp_path: Path) -> None:
     assert unet.start([cut], ref) == 4  # the U-Net decodes this session at 1/4
     with pytest.raises(ImageError, match="Corrupt JPEG data"):
         measure_files([frame, cut], unet, ref)
+
+
+def test_header_too_large_for_the_decoder_is_an_error(tmp_path: Path) -> None:
+    """A BMP whose header declares 10⁷ px of width: OpenCV's assertion becomes an ImageError
+    naming the file (found by tests/test_cli_fuzz.py), not a traceback."""
+    import struct
+
+    info = struct.pack("<IiiHHIIiiII", 40, 10**7, 10, 1, 24, 0, 0, 0, 0, 0, 0)
+    path = tmp_path / "huge.bmp"
+    path.write_bytes(b"BM" + struct.pack("<IHHI", 1358, 0, 0, 54) + info + bytes(1300))
+    with pytest.raises(ImageError, match=r"huge\.bmp: the decoder refused the file"):
+        load_image(path)

@@ -47,7 +47,8 @@ def decode_strict(buf: np.ndarray, flag: int, name: str) -> np.ndarray | None:
         What ``cv2.imdecode`` returns (None when it cannot decode at all).
 
     Raises:
-        ImageError: the decoder warned or complained about the data (corrupt); a warning about
+        ImageError: the decoder refused the file (e.g. a header larger than OpenCV allows), or
+            warned or complained about the data (corrupt); a warning about
             colour metadata only (:data:`METADATA_WARNING`) is printed on stderr instead.
     """
     with _STDERR_LOCK, tempfile.TemporaryFile() as sink:
@@ -60,6 +61,12 @@ def decode_strict(buf: np.ndarray, flag: int, name: str) -> np.ndarray | None:
         os.dup2(sink.fileno(), 2)
         try:
             img = cv2.imdecode(buf, flag)
+        except cv2.error as exc:  # e.g. a header declaring a frame wider than OpenCV allows
+            refused = str(exc).strip().splitlines()[-1]
+            raise ImageError(
+                f"{name}: the decoder refused the file ({refused}); expected an image of a "
+                "plausible size: copy or export it again from the camera"
+            ) from exc
         finally:
             if saved is None:
                 os.close(2)
