@@ -64,16 +64,16 @@ class TrainConfig:
                 "augment.ridgeless.flatten > 0 does nothing without ridgeless patches: give "
                 "augment.ridgeless.p > 0 (contactcal train --ridgeless P)"
             )
-        if self.augment.ridgeless.p > 0.0 and self.ridge_work_px <= 0:
-            raise ValueError(
-                "augment.ridgeless.p > 0 needs the ridge-energy channel (ridge_work_px > 0, "
-                "contactcal train --ridge-channel W)"
-            )
-        if self.augment.ridge_blur and self.ridge_work_px <= 0:
-            raise ValueError(
-                "augment.ridge_blur needs the ridge-energy channel (ridge_work_px > 0, "
-                "contactcal train --ridge-channel W)"
-            )
+        needs_ridge = {
+            "augment.ridgeless.p > 0": self.augment.ridgeless.p > 0.0,
+            "augment.ridge_blur": self.augment.ridge_blur,
+        }
+        for what, on in needs_ridge.items():
+            if on and self.ridge_work_px <= 0:
+                raise ValueError(
+                    f"{what} needs the ridge-energy channel (ridge_work_px > 0, "
+                    "contactcal train --ridge-channel W)"
+                )
         if self.ridge_work_px < 0 or 0 < self.ridge_work_px < self.input_size:
             raise ValueError(
                 f"ridge_work_px must be 0 (off) or >= input_size {self.input_size}, "
