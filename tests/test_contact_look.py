@@ -81,3 +81,23 @@ def test_cli_contact_gain() -> None:
     assert cfg.augment.contact.gain == (0.3, 1.5) and cfg.augment.contact.detail == (0.5, 3.0)
     with pytest.raises(ValueError, match="gain must be 0 < lo <= hi"):
         build_config(parser.parse_args([*base, "--contact-gain", "1.5", "0.3"]))
+
+
+def test_cli_camera_ranges() -> None:
+    import argparse
+
+    from contactcal.train.commands import add_parsers, build_config
+
+    parser = argparse.ArgumentParser()
+    add_parsers(parser.add_subparsers())
+    base = ["train", "--data", "d", "--out", "r"]
+    cfg = build_config(parser.parse_args(base))
+    assert (cfg.augment.gamma, cfg.augment.blur_sigma) == ((0.7, 1.4), (0.1, 1.2))
+    args = [*base, "--gamma", "0.6", "1.7", "--blur-sigma", "0.1", "1.8"]
+    args += ["--ridge-channel", "288", "--ridge-blur"]
+    cfg = build_config(parser.parse_args(args))
+    assert (cfg.augment.gamma, cfg.augment.blur_sigma) == ((0.6, 1.7), (0.1, 1.8))
+    assert cfg.augment.ridge_blur
+    for bad in (["--gamma", "1.7", "0.6"], ["--blur-sigma", "0", "1"]):
+        with pytest.raises(ValueError, match="expected a range 0 < lo <= hi"):
+            build_config(parser.parse_args([*base, *bad]))

@@ -56,8 +56,12 @@ class AugmentConfig:
     #   their ridges erased, labelled "no contact" (``ridgeless``; needs the ridge channel)
 
     def __post_init__(self) -> None:
-        if not (0 < self.gamma[0] <= self.gamma[1] and 0 < self.scale[0] <= self.scale[1]):
-            raise ValueError(f"AugmentConfig: gamma/scale ranges must be 0 < lo <= hi, got {self}")
+        for name in ("gamma", "scale", "blur_sigma"):
+            lo, hi = getattr(self, name)
+            if not 0 < lo <= hi:
+                raise ValueError(
+                    f"AugmentConfig.{name}: expected a range 0 < lo <= hi, got ({lo}, {hi})"
+                )
         for name in ("flip_p", "affine_p", "blur_p", "noise_p"):
             if not 0.0 <= getattr(self, name) <= 1.0:
                 raise ValueError(

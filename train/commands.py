@@ -134,10 +134,10 @@ def build_config(args: argparse.Namespace) -> Any:
     gain = None if args.contact_gain is None else tuple(args.contact_gain)
     cfg = _with_augment(cfg, "ridgeless", p=args.ridgeless, flatten=args.ridgeless_flatten)
     cfg = _with_augment(cfg, "contact", gain=gain)
-    if args.ridge_blur is not None:
-        cfg = dataclasses.replace(
-            cfg, augment=dataclasses.replace(cfg.augment, ridge_blur=args.ridge_blur)
-        )
+    camera = {"ridge_blur": args.ridge_blur, "gamma": args.gamma, "blur_sigma": args.blur_sigma}
+    camera = {k: tuple(v) if isinstance(v, list) else v for k, v in camera.items() if v is not None}
+    if camera:
+        cfg = dataclasses.replace(cfg, augment=dataclasses.replace(cfg.augment, **camera))
     arch = {"base": args.base, "levels": args.levels}
     arch = {k: v for k, v in arch.items() if v is not None}
     return dataclasses.replace(cfg, model=dataclasses.replace(cfg.model, **arch)) if arch else cfg
@@ -181,7 +181,22 @@ def _add_ridge_args(t: argparse.ArgumentParser) -> None:
 
 
 def _add_look_args(t: argparse.ArgumentParser) -> None:
-    """``--contact-gain`` and ``--ridge-blur``."""
+    """``--contact-gain``, ``--ridge-blur``, ``--gamma`` and ``--blur-sigma``."""
+    t.add_argument(
+        "--gamma",
+        type=float,
+        nargs=2,
+        metavar=("LO", "HI"),
+        help="range of the gamma (tone curve) augmentation (default 0.7 1.4)",
+    )
+    t.add_argument(
+        "--blur-sigma",
+        type=float,
+        nargs=2,
+        metavar=("LO", "HI"),
+        help="range of the blur augmentation's sigma, px at the network input (default 0.1 1.2; "
+        "σ 12 px of a 2592-px frame is ~1.3 there)",
+    )
     t.add_argument(
         "--contact-gain",
         type=float,
