@@ -10,18 +10,22 @@ from __future__ import annotations
 
 import os
 from collections.abc import Mapping, Sequence
-from dataclasses import asdict, fields
+from dataclasses import asdict, fields, replace
 from typing import Any
 
 from contactcal.infer.bench.dataset import IndexRow
 from contactcal.infer.bench.scoring import ScoredFrame
 from contactcal.infer.calibration.fit import estimate_onset
+from contactcal.infer.calibration.rings import session_revisions
 from contactcal.infer.image.read import load_image
 from contactcal.infer.methods.base import Method
 from contactcal.infer.methods.registry import METHODS, make_method
 
 #: Suffix of the rows that score the U-Net's probability mass instead of its pixel count.
 SOFT_SUFFIX = " (soft area)"
+#: Suffix of the rows that score a method's frames after the session rule of ``calibrate``
+#: (:mod:`~contactcal.infer.calibration.rings`): what a calibration reports, per frame.
+SESSION_SUFFIX = " (session rule)"
 
 
 def score_session(
@@ -59,6 +63,30 @@ def score_session(
             # stated interval is the pixel count's, not the soft area's.
             soft = float(res.soft_area_px) if res.soft_area_px is not None else 0.0
             out.append(_renamed(scored, name + SOFT_SUFFIX, soft))
+    return out + session_ruled([f for f in out if f.method == name])
+
+
+def session_ruled(frames: Sequence[ScoredFrame]) -> list[ScoredFrame]:
+    """One session's frames (one method, one frame per pressure) after ``calibrate``'s session
+    rule, renamed ``"<method> (session rule)"``; none for a method that states no interval.
+
+    A revised frame (a shrinking region, or a contact left below the contact range:
+    :func:`~contactcal.infer.calibration.rings.session_revisions`) reports no contact, area 0
+    and the interval ``(0, its upper end)``, as in a calibration record.
+    """
+    if not frames or all(f.area_interval_px is None for f in frames):
+        return []
+    nan = (float("nan"), float("nan"))
+    lo, hi = zip(*(f.area_interval_px or nan for f in frames), strict=True)
+    p, c = [f.pressure_kpa for f in frames], [f.contact for f in frames]
+    ring, below = session_revisions(p, lo, hi, c)
+    out = []
+    for f, revised in zip(frames, ring | below, strict=True):
+        iv = f.area_interval_px
+        if revised:
+            upper = iv[1] if iv is not None else 0.0
+            f = replace(f, area_px=0.0, contact=False, area_interval_px=(0.0, upper))
+        out.append(replace(f, method=f.method + SESSION_SUFFIX))
     return out
 
 

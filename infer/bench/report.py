@@ -231,7 +231,10 @@ def report_text(results: Mapping[str, Any]) -> str:
         " Areas are compared in input pixels with the exact masks; "
         "relative\nerrors over frames with true contact. Timing: median of "
         f"{cfg['repeats']} runs over\n{cfg['timing_frames']} frames upscaled to {w}×{h}, "
-        "in one process.",
+        "in one process. Rows `(soft area)`: the same prediction measured by its probability\n"
+        "mass; rows `(session rule)`: the same frames after `calibrate`'s session rule (a region "
+        "that\nshrinks at the next pressure beyond both stated intervals, and a contact left "
+        "below the\ncontact range, count as no contact), i.e. what a calibration reports.",
         "## Area error per pressure bin\n\n"
         + md_table(results["bins"], BIN_COLUMNS)
         + "\n\n![error vs pressure](error_vs_pressure.png)",

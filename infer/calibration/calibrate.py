@@ -13,6 +13,7 @@ from contactcal.infer.calibration.phases import LOADING
 from contactcal.infer.calibration.points import CalibrationPoint
 from contactcal.infer.calibration.provenance import Provenance, input_digests
 from contactcal.infer.calibration.record import write_calibration
+from contactcal.infer.calibration.rings import revise_points
 from contactcal.infer.calibration.session import SessionFit, fit_session
 from contactcal.infer.calibration.table import format_table
 from contactcal.infer.errors import RunError
@@ -56,7 +57,10 @@ def calibrate_session(
 
     The lowest-pressure frame of the loading pass is the session's reference (ROI for the
     classical method). Repeated frames of a pressure step are aggregated by their median area;
-    each phase (loading, unloading) gets its own curve and band (`fit_session`).
+    each phase (loading, unloading) gets its own curve and band (`fit_session`). Before the
+    fit, steps whose region shrinks at the next pressure beyond both stated intervals are revised
+    to "no contact" (:mod:`~contactcal.infer.calibration.rings`; ``curve_config.session_rule``),
+    each with a note saying so.
 
     Args:
         manifest: CSV with columns ``file,pressure_kpa`` and optionally ``phase`` and others
@@ -92,6 +96,8 @@ def calibrate_session(
     method = make_method(method_name, None if model is None else str(model), outline=outline)
     measured = measure_files(files, method, frames[0].file, scale, bit_depth=bit_depth)
     results = _points(manifest, frames, measured, scale)
+    if (curve_config or CurveConfig()).session_rule:
+        results = revise_points(results)
     if not any(r.contact for r in results):
         raise RunError(
             f"{manifest}: no contact detected in any of its {len(results)} frames "

@@ -5,6 +5,10 @@ from __future__ import annotations
 
 import argparse
 from pathlib import Path
+from typing import TYPE_CHECKING
+
+if TYPE_CHECKING:
+    from contactcal.infer.calibration.fit import CurveConfig
 
 from contactcal.infer.pipeline.args import (
     method_args,
@@ -29,9 +33,22 @@ def add_parsers(sub: argparse._SubParsersAction) -> None:
         default="loading",
         help="pass whose curve is inverted (default %(default)s)",
     )
+    c.add_argument(
+        "--per-frame-contact",
+        action="store_true",
+        help="keep every frame's contact flag as measured: no session rule revising regions "
+        "that shrink at the next pressure (the inner ring before contact) to no contact",
+    )
     scale_args(c)
     add_video_args(c)
     c.set_defaults(func=_cmd_calibrate)
+
+
+def curve_config(args: argparse.Namespace) -> CurveConfig:
+    """The fit settings the options give (``--per-frame-contact``)."""
+    from contactcal.infer.calibration.fit import CurveConfig
+
+    return CurveConfig(session_rule=not args.per_frame_contact)
 
 
 def _cmd_calibrate(args: argparse.Namespace) -> int:
@@ -58,6 +75,7 @@ def _cmd_calibrate(args: argparse.Namespace) -> int:
             outputs=outs,
             bit_depth=args.bit_depth,
             inverse_phase=args.inverse_phase,
+            curve_config=curve_config(args),
         )
         if args.overlay is not None:
             files = [f.file for f in rep.frames]

@@ -17,6 +17,7 @@ import numpy as np
 
 from contactcal.infer.bench.scoring import ScoredFrame
 from contactcal.infer.calibration.fit import estimate_onset
+from contactcal.infer.calibration.rings import session_revisions, step_interval
 from contactcal.infer.calibration.steps import pool
 from contactcal.infer.evaluate.labels import LabelMask
 from contactcal.infer.methods.base import AreaResult
@@ -70,6 +71,7 @@ def score_frames(
                     area_px=float(m.result.area_px),
                     contact=bool(m.result.contact),
                     iou=iou(m.result, lab.mask) if lab.area_px > 0 else None,
+                    area_interval_px=m.result.area_interval_px,
                 )
             )
     return out
@@ -117,7 +119,8 @@ def frame_records(
 
 
 def onset_summary(scored: Sequence[ScoredFrame]) -> dict[str, Any]:
-    """Onset from the labels vs from each method (both by ``estimate_onset``), kPa.
+    """Onset from the labels vs from each method (both by ``estimate_onset``), kPa; a method
+    that states intervals after ``calibrate``'s session rule, as its calibration would report.
 
     Frames at the same pressure (repeats, or a loading and an unloading pass) are pooled into
     one step: its median area, in contact when at least half of its frames are (said in
@@ -141,7 +144,9 @@ def onset_summary(scored: Sequence[ScoredFrame]) -> dict[str, Any]:
     truth = estimate_onset(p, *_steps(first, p, truth=True))
     out: dict[str, Any] = {}
     for m in methods:
-        est = estimate_onset(p, *_steps([s for s in scored if s.method == m], p, truth=False))
+        areas, contacts = _steps([s for s in scored if s.method == m], p, truth=False)
+        contacts = _session_rule([s for s in scored if s.method == m], p, contacts)
+        est = estimate_onset(p, areas, contacts)
         err = None if est is None or truth is None else est - truth
         out[m] = {"onset_kpa": est, "error_kpa": err}
     note = "" if len(p) == len(first) else "frames at one pressure pooled (median, majority)"
@@ -153,6 +158,22 @@ def onset_summary(scored: Sequence[ScoredFrame]) -> dict[str, Any]:
             "bounded by it: label a frame without contact below the onset"
         )
     return {"labels_onset_kpa": truth, "methods": out, "note": note}
+
+
+def _session_rule(
+    frames: Sequence[ScoredFrame], pressures: Sequence[float], contacts: list[bool]
+) -> list[bool]:
+    """The steps' contact flags after ``calibrate``'s session rule (``rings.py``), so that the
+    onset compared is the one a calibration reports; unchanged for a method without intervals."""
+    if all(s.area_interval_px is None for s in frames):
+        return contacts
+    ivs = []
+    for q in pressures:
+        at = [s for s in frames if s.pressure_kpa == q]
+        ivs.append(step_interval([s.contact for s in at], [s.area_interval_px for s in at]))
+    lo, hi = zip(*ivs, strict=True)
+    ring, below = session_revisions(pressures, lo, hi, contacts)
+    return [c and not r for c, r in zip(contacts, ring | below, strict=True)]
 
 
 def _steps(

@@ -1,0 +1,195 @@
+"""The session rule: a region that shrinks beyond its interval at the next pressure: no contact."""
+
+from __future__ import annotations
+
+import json
+from collections.abc import Sequence
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import pytest
+
+from contactcal.infer.bench.accuracy import SESSION_SUFFIX, session_ruled
+from contactcal.infer.bench.scoring import ScoredFrame
+from contactcal.infer.calibration import calibrate as calibrate_module
+from contactcal.infer.calibration.calibrate import calibrate_session
+from contactcal.infer.calibration.fit import CurveConfig
+from contactcal.infer.calibration.points import CalibrationPoint
+from contactcal.infer.calibration.rings import (
+    BELOW_NOTE,
+    revise_points,
+    session_revisions,
+    shrinking_steps,
+)
+from contactcal.infer.methods.base import AreaResult
+
+EXAMPLE = Path(__file__).resolve().parents[1] / "examples" / "session"
+NAN = float("nan")
+# A pre-contact ring at 1-2 kPa (its disc shrinks), contact from 3 kPa (it grows): px, ±5 %.
+P = np.arange(0.0, 8.0)
+AREA = np.array([0.0, 900.0, 600.0, 100.0, 200.0, 300.0, 400.0, 500.0])
+LOWER, UPPER = np.where(AREA > 0, 0.95 * AREA, NAN), np.where(AREA > 0, 1.05 * AREA, NAN)
+
+
+def test_shrinking_steps_reference_values() -> None:
+    hit = shrinking_steps(P, LOWER, UPPER, AREA > 0)
+    assert hit.tolist() == [False, True, True, False, False, False, False, False]
+    # the same steps in another order: the same steps are revised
+    perm = np.random.default_rng(0).permutation(P.size)
+    again = shrinking_steps(P[perm], LOWER[perm], UPPER[perm], (AREA > 0)[perm])
+    assert again.tolist() == hit[perm].tolist()
+
+
+def test_a_decrease_within_the_intervals_is_kept() -> None:
+    area = np.array([100.0, 95.0, 120.0])  # noise: 100 ± 5 % overlaps 95 ± 5 %
+    hit = shrinking_steps([3.0, 4.0, 5.0], 0.95 * area, 1.05 * area, [True] * 3)
+    assert not hit.any()
+
+
+def test_no_interval_no_revision() -> None:
+    nan = np.full(P.size, NAN)
+    assert not shrinking_steps(P, nan, nan, AREA > 0).any()
+    # the next contact step states no interval: nothing to compare with
+    upper = UPPER.copy()
+    upper[2] = NAN
+    assert shrinking_steps(P, LOWER, upper, AREA > 0).tolist()[1] is False
+
+
+def test_the_next_step_in_contact_is_the_comparison() -> None:
+    # 2 kPa is not in contact: 1 kPa is compared with 3 kPa (contact, much smaller)
+    contact = AREA > 0
+    contact[2] = False
+    assert shrinking_steps(P, LOWER, UPPER, contact).tolist()[1] is True
+
+
+@pytest.mark.parametrize(
+    ("p", "lo"),
+    [([0.0, 1.0], [1.0]), ([1.0, 1.0], [1.0, 2.0]), ([0.0, np.inf], [1.0, 2.0])],
+)
+def test_bad_input_is_rejected(p: list[float], lo: list[float]) -> None:
+    with pytest.raises(ValueError, match="shrinking_steps"):
+        shrinking_steps(p, lo, [3.0] * len(lo), [True] * len(lo))
+
+
+def test_session_revisions_drops_contacts_left_below_the_range() -> None:
+    area = AREA.copy()
+    area[0] = 50.0  # a speck at 0 kPa: nothing lies below it, it grows into the ring
+    lo, hi = 0.95 * area, 1.05 * area
+    ring, below = session_revisions(P, lo, hi, area > 0)
+    assert ring.tolist()[:3] == [False, True, True]
+    assert below.tolist() == [True] + [False] * 7  # left alone below the revised ring
+    assert not (ring & below).any()
+
+
+def _points(
+    p: Sequence[float], areas: Sequence[float], *, repeats: int = 2, phase: str = "loading"
+):
+    return [
+        CalibrationPoint(
+            f"{phase}_{i}_{r}.png",
+            float(pk),
+            a > 0,
+            float(a),
+            float(a) * 0.01,
+            phase=phase,
+            step=i,
+            area_interval_px=(0.95 * a, 1.05 * a) if a > 0 else (0.0, 0.0),
+            area_interval_mm2=(0.0095 * a, 0.0105 * a) if a > 0 else (0.0, 0.0),
+        )
+        for i, (pk, a) in enumerate(zip(p, areas, strict=True))
+        for r in range(repeats)
+    ]
+
+
+def test_revise_points_per_step_and_phase() -> None:
+    up = _points(P, AREA)
+    down = _points(P[::-1], AREA[::-1], phase="unloading")  # same pressures, listed downwards
+    pts = up + down
+    out = revise_points(pts)
+    assert len(out) == len(pts)
+    for before, after in zip(pts, out, strict=True):
+        ring = before.pressure_kpa in (1.0, 2.0)
+        assert after.contact == (before.contact and not ring)
+        if ring:
+            assert after.area_px == 0.0 and after.area_mm2 == 0.0
+            assert after.area_interval_px == (0.0, before.area_interval_px[1])
+            assert "inner ring before contact" in after.note
+            assert f"{before.area_px:.0f} px" in after.note
+        else:
+            assert after is before
+
+
+def test_revise_points_leaves_methods_without_intervals_alone() -> None:
+    pts = [
+        CalibrationPoint(f"{i}.png", float(p), a > 0, float(a), None, step=i)
+        for i, (p, a) in enumerate(zip(P, AREA, strict=True))
+    ]
+    assert revise_points(pts) == pts
+
+
+def test_revise_points_notes_a_contact_below_the_range() -> None:
+    area = AREA.copy()
+    area[0] = 50.0
+    out = revise_points(_points(P, area, repeats=1))
+    assert out[0].contact is False
+    assert out[0].note == BELOW_NOTE.format(area=50.0)
+
+
+class _Scripted:
+    """A stub method: returns the scripted results in order (frames sorted by pressure)."""
+
+    name = "unet"
+    NO_REFERENCE = "no reference"
+
+    def __init__(self, areas: Sequence[float]) -> None:
+        self.areas = list(areas)
+
+    def start(self, files: Sequence[Path], reference: Path | None, bit_depth: int | None = None):
+        return 1
+
+    def set_reference(self, reference: np.ndarray | None, reduction: int = 1) -> None:
+        return None
+
+    def measure(self, image: np.ndarray) -> AreaResult:
+        a = self.areas.pop(0)
+        iv = (0.95 * a, 1.05 * a) if a > 0 else (0.0, 0.0)
+        return AreaResult(a > 0, a, "", None, None, iv)
+
+    def describe(self) -> dict[str, Any]:
+        return {"name": self.name}
+
+
+@pytest.mark.parametrize("rule", [True, False])
+def test_calibrate_applies_the_rule(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch, rule: bool
+) -> None:
+    areas = [0.0, 9e4, 6e4, 1e4, *(2e4 + 1e4 * i for i in range(17))]  # 21 frames, 0-20 kPa
+    monkeypatch.setattr(calibrate_module, "make_method", lambda *a, **k: _Scripted(areas.copy()))
+    rep = calibrate_session(
+        EXAMPLE / "manifest.csv",
+        tmp_path / "cal",
+        "unet",
+        curve_config=CurveConfig(session_rule=rule),
+    )
+    rec = json.loads(rep.files["json"].read_text())
+    notes = [r["note"] for r in rec["points"]]
+    if rule:
+        assert 2.0 <= rep.curve.onset_kpa <= 3.0  # between the last ring and first contact
+        assert sum("inner ring" in n for n in notes) == 2
+    else:
+        assert rep.curve.onset_kpa <= 1.0
+        assert not any("session rule" in n for n in notes)
+
+
+def _frame(p: float, a: float, iv: tuple[float, float] | None) -> ScoredFrame:
+    return ScoredFrame("unet", "s", f"{p}.png", p, 0.0, a, a > 0, area_interval_px=iv)
+
+
+def test_bench_rows_after_the_session_rule() -> None:
+    frames = [_frame(p, a, (0.95 * a, 1.05 * a)) for p, a in zip(P, AREA, strict=True)]
+    out = session_ruled(frames)
+    assert [f.method for f in out] == ["unet" + SESSION_SUFFIX] * P.size
+    assert [f.contact for f in out] == [False, False, False, True, True, True, True, True]
+    assert out[1].area_px == 0.0 and out[1].area_interval_px == (0.0, 945.0)
+    assert session_ruled([_frame(p, a, None) for p, a in zip(P, AREA, strict=True)]) == []
