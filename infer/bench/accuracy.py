@@ -16,7 +16,7 @@ from typing import Any
 from contactcal.infer.bench.dataset import IndexRow
 from contactcal.infer.bench.scoring import ScoredFrame
 from contactcal.infer.calibration.fit import estimate_onset
-from contactcal.infer.calibration.rings import session_revisions
+from contactcal.infer.calibration.rings import frame_revisions
 from contactcal.infer.image.read import load_image
 from contactcal.infer.methods.base import Method
 from contactcal.infer.methods.registry import METHODS, make_method
@@ -38,7 +38,8 @@ def score_session(
 
     Returns:
         One :class:`ScoredFrame` per frame, plus one ``"<name> (soft area)"`` frame per frame for
-        methods that report a probability-mass (sub-pixel) area.
+        methods that report a probability-mass (sub-pixel) area, and one ``"<name> (session
+        rule)"`` frame per frame for methods that state an interval (:func:`session_ruled`).
     """
     k = method.start([r.frame for r in rows], rows[0].frame if use_reference else None)
     out: list[ScoredFrame] = []
@@ -67,25 +68,30 @@ def score_session(
 
 
 def session_ruled(frames: Sequence[ScoredFrame]) -> list[ScoredFrame]:
-    """One session's frames (one method, one frame per pressure) after ``calibrate``'s session
-    rule, renamed ``"<method> (session rule)"``; none for a method that states no interval.
+    """One session's frames (one method) after ``calibrate``'s session rule, renamed
+    ``"<method> (session rule)"``; none for a method that states no interval.
 
-    A revised frame (a shrinking region, or a contact left below the contact range:
-    :func:`~contactcal.infer.calibration.rings.session_revisions`) reports no contact, area 0
-    and the interval ``(0, its upper end)``, as in a calibration record.
+    Args:
+        frames: the session's scored frames of one method.
+
+    Returns:
+        The same frames, renamed; a revised one
+        (:func:`~contactcal.infer.calibration.rings.frame_revisions`) reports no contact, area
+        0 and the interval ``(0, its upper end)``, as in a calibration record.
     """
-    if not frames or all(f.area_interval_px is None for f in frames):
+    if all(f.area_interval_px is None for f in frames):
         return []
-    nan = (float("nan"), float("nan"))
-    lo, hi = zip(*(f.area_interval_px or nan for f in frames), strict=True)
-    p, c = [f.pressure_kpa for f in frames], [f.contact for f in frames]
-    ring, below = session_revisions(p, lo, hi, c)
+    ring, below = frame_revisions(
+        [f.pressure_kpa for f in frames],
+        [f.area_px for f in frames],
+        [f.contact for f in frames],
+        [f.area_interval_px for f in frames],
+    )
     out = []
     for f, revised in zip(frames, ring | below, strict=True):
-        iv = f.area_interval_px
-        if revised:
-            upper = iv[1] if iv is not None else 0.0
-            f = replace(f, area_px=0.0, contact=False, area_interval_px=(0.0, upper))
+        if revised and f.area_interval_px is not None:
+            iv = (0.0, f.area_interval_px[1])
+            f = replace(f, area_px=0.0, contact=False, area_interval_px=iv)
         out.append(replace(f, method=f.method + SESSION_SUFFIX))
     return out
 

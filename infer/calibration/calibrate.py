@@ -50,6 +50,7 @@ def calibrate_session(
     bit_depth: int | None = None,
     inverse_phase: str = LOADING,
     manifest_as: str | os.PathLike[str] | None = None,
+    session_rule: bool = True,
 ) -> CalibrationReport:
     """Calibrate the session listed in ``manifest`` and write its outputs into ``out_dir``.
 
@@ -58,8 +59,9 @@ def calibrate_session(
     The lowest-pressure frame of the loading pass is the session's reference (ROI for the
     classical method). Repeated frames of a pressure step are aggregated by their median area;
     each phase (loading, unloading) gets its own curve and band (`fit_session`). Before the
-    fit, steps whose region shrinks at the next pressure beyond both stated intervals are revised
-    to "no contact" (:mod:`~contactcal.infer.calibration.rings`; ``curve_config.session_rule``),
+    fit, the session rule (:mod:`~contactcal.infer.calibration.rings`) revises to "no contact"
+    the steps whose region shrinks at the next pressure beyond both stated intervals (with the
+    non-increasing run of steps before them) and the contacts left below the contact range,
     each with a note saying so.
 
     Args:
@@ -79,6 +81,8 @@ def calibrate_session(
         inverse_phase: the phase whose curve is inverted (``--inverse-phase``).
         manifest_as: the path recorded for the manifest: its final place when the manifest
             itself is an output staged in this run (video input); None → ``manifest``.
+        session_rule: apply the session rule (``--per-frame-contact`` turns it off); recorded
+            in the record's ``extra``.
 
     Returns:
         The :class:`CalibrationReport` (table, measurements, curve, written files).
@@ -95,18 +99,13 @@ def calibrate_session(
     frames, files = session.frames, [f.file for f in session.frames]
     method = make_method(method_name, None if model is None else str(model), outline=outline)
     measured = measure_files(files, method, frames[0].file, scale, bit_depth=bit_depth)
-    results = _points(manifest, frames, measured, scale)
-    if (curve_config or CurveConfig()).session_rule:
-        results = revise_points(results)
-    if not any(r.contact for r in results):
-        raise RunError(
-            f"{manifest}: no contact detected in any of its {len(results)} frames "
-            f"(method {method.name}); check the frames, the pressure range or the method"
-        )
+    measured_points = _points(manifest, frames, measured, scale)
+    results = revise_points(measured_points) if session_rule else measured_points
+    _check_contact(manifest, measured_points, results, method.name)
     unit = PX if scale is None else MM2
     fit = fit_session(results, unit, curve_config, inverse_phase, session.phase_source)
     recorded = Path(manifest_as if manifest_as is not None else manifest).resolve()
-    extra = _extra(recorded, scale)
+    extra = {**_extra(recorded, scale), "session_rule": session_rule}
     provenance = replace(
         provenance, method_config=method.describe(), inputs=input_digests(manifest, files, recorded)
     )
@@ -114,6 +113,27 @@ def calibrate_session(
         paths = write_calibration(out_dir, results, fit, method.name, extra, provenance, outs)
     table = format_table(results, fit)
     return CalibrationReport(table, frames, measured, fit.curve, paths, fit)
+
+
+def _check_contact(
+    manifest: Path, measured: list[CalibrationPoint], results: list[CalibrationPoint], name: str
+) -> None:
+    """Raise ``RunError`` when no frame is left in contact, saying whether the session rule
+    removed the contacts the method found."""
+    found = sum(r.contact for r in measured)
+    if any(r.contact for r in results):
+        return
+    if found:
+        raise RunError(
+            f"{manifest}: the method ({name}) found contact in {found} of its {len(results)} "
+            "frames, but the session rule set every one of them to no contact (each region "
+            "shrinks at a higher pressure or lies below any contact range); check the pressure "
+            "range, or keep the frames' own flags with --per-frame-contact"
+        )
+    raise RunError(
+        f"{manifest}: no contact detected in any of its {len(results)} frames "
+        f"(method {name}); check the frames, the pressure range or the method"
+    )
 
 
 def _interval(

@@ -5,10 +5,6 @@ from __future__ import annotations
 
 import argparse
 from pathlib import Path
-from typing import TYPE_CHECKING
-
-if TYPE_CHECKING:
-    from contactcal.infer.calibration.fit import CurveConfig
 
 from contactcal.infer.pipeline.args import (
     method_args,
@@ -44,13 +40,6 @@ def add_parsers(sub: argparse._SubParsersAction) -> None:
     c.set_defaults(func=_cmd_calibrate)
 
 
-def curve_config(args: argparse.Namespace) -> CurveConfig:
-    """The fit settings the options give (``--per-frame-contact``)."""
-    from contactcal.infer.calibration.fit import CurveConfig
-
-    return CurveConfig(session_rule=not args.per_frame_contact)
-
-
 def _cmd_calibrate(args: argparse.Namespace) -> int:
     from contactcal.infer.calibration.calibrate import calibrate_session
     from contactcal.infer.calibration.provenance import check_device_id
@@ -75,7 +64,7 @@ def _cmd_calibrate(args: argparse.Namespace) -> int:
             outputs=outs,
             bit_depth=args.bit_depth,
             inverse_phase=args.inverse_phase,
-            curve_config=curve_config(args),
+            session_rule=not args.per_frame_contact,
         )
         if args.overlay is not None:
             files = [f.file for f in rep.frames]

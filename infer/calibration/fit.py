@@ -45,10 +45,6 @@ class CurveConfig:
     n_bootstrap: int = 200
     # seed of the bootstrap's numpy Generator: the same seed gives the same band.
     seed: int = 0
-    # revise steps whose region shrinks at the next pressure beyond both stated intervals to
-    # "no contact" (rings.py: the inner ring before contact). Off: every frame's contact flag as
-    # measured, so a pre-contact ring the method takes for contact moves the onset down.
-    session_rule: bool = True
 
     def __post_init__(self) -> None:
         if self.curve_model not in CURVE_MODELS:

@@ -10,13 +10,21 @@ contact area never decreases as the pressure rises (the skin is pressed further)
 pre-contact ring's disc does.
 
 Rule (a step is one pressure of one phase; frames of a step are pooled as in
-:mod:`~contactcal.infer.calibration.steps`): a step in contact whose stated area interval lies
-wholly above the stated interval of the next step in contact (the next higher pressure) is
-revised to "no contact". Both intervals are the method's own calibrated ~90 % intervals, so a
-revision needs a decrease the method's uncertainty cannot explain; no threshold is tuned here.
-Methods that state no interval (the classical routine) are never revised. The calibration's
-onset rule (:func:`~contactcal.infer.calibration.onset.onset_index`) then drops any lone contact
-left below the revised steps, as it drops any isolated false contact.
+:mod:`~contactcal.infer.calibration.steps`: median area, majority contact, median interval ends):
+
+1. a step in contact whose stated area interval lies wholly above the stated interval of the
+   next step in contact (the next higher pressure) is revised to "no contact". Both intervals
+   are the method's own calibrated ~90 % intervals, so a revision needs a decrease the method's
+   uncertainty cannot explain; no threshold is tuned here;
+2. the run of contact steps just below a revised step whose median areas do not increase
+   towards it is revised too: a slowly shrinking ring (less than the intervals' width per step)
+   ends in a drop at its last step only. A lone under-segmented step inside the contact range
+   revises the one step below it, not the growing curve below that;
+3. contacts left below the contact range that the calibration's onset rule
+   (:func:`~contactcal.infer.calibration.onset.onset_index`) finds after that are revised (the
+   fit counts them as 0 anyway; the record then says so).
+
+Methods that state no interval (the classical routine) are never revised.
 """
 
 from __future__ import annotations
@@ -32,71 +40,92 @@ from contactcal.infer.calibration.onset import onset_index
 from contactcal.infer.calibration.points import CalibrationPoint
 from contactcal.infer.calibration.steps import pool
 
-#: The note of a frame revised as a ring (``{area}``, ``{upper}``, ``{next_kpa}`` filled in, px).
+#: The note of a frame revised by steps 1-2 (``{area}`` filled in, px).
 RING_NOTE = (
-    "no contact (session rule): its region ({area:.0f} px) is larger than the next step's "
-    "(at most {upper:.0f} px at {next_kpa:g} kPa) beyond both stated intervals; contact area "
-    "only grows with pressure, so this is the inner ring before contact"
+    "no contact (session rule): its region ({area:.0f} px) belongs to a run of steps that ends "
+    "larger than the next step in contact beyond both stated intervals; contact area only grows "
+    "with pressure, so this is not the contact (before contact: the membrane's inner ring)"
 )
-#: The note of a contact left below the session's contact range (``{area}`` filled in, px).
+#: The note of a contact revised by step 3 (``{area}`` filled in, px).
 BELOW_NOTE = (
     "no contact (session rule): its region ({area:.0f} px) lies below the session's contact "
-    "range (most frames between it and the range are not in contact), so the fit counts it as 0"
+    "range (at least as many frames between them are not in contact), so the fit counts it as 0"
 )
+#: The note of a contact revised by step 3 in a session without any contact range.
+NO_RANGE_NOTE = (
+    "no contact (session rule): the session has no contact range (at least as many frames above "
+    "it are not in contact), so the fit counts it as 0"
+)
+
+
+def _check(p: np.ndarray, *arrays: np.ndarray) -> None:
+    """Raise ``ValueError`` unless every array is 1-D of ``p``'s length and ``p`` is finite and
+    distinct."""
+    if not (p.ndim == 1 and all(a.shape == p.shape for a in arrays)):
+        raise ValueError(
+            "shrinking_steps: expected 1-D arrays of one length, got shapes "
+            + ", ".join(str(a.shape) for a in (p, *arrays))
+        )
+    if not np.all(np.isfinite(p)) or np.unique(p).size != p.size:
+        raise ValueError("shrinking_steps: pressures must be finite and distinct")
 
 
 def shrinking_steps(
-    pressures_kpa: ArrayLike, lower: ArrayLike, upper: ArrayLike, contact: ArrayLike
+    pressures_kpa: ArrayLike,
+    areas: ArrayLike,
+    lower: ArrayLike,
+    upper: ArrayLike,
+    contact: ArrayLike,
 ) -> np.ndarray:
-    """Which steps the rule revises to "no contact".
+    """Steps 1-2 of the rule: which steps are revised to "no contact".
 
     Args:
         pressures_kpa: ``(N,)`` step pressures, kPa, distinct, any order.
-        lower: ``(N,)`` lower ends of the steps' stated area intervals (any area unit; NaN
-            where the step states none).
+        areas: ``(N,)`` step areas (median of the frames), any area unit.
+        lower: ``(N,)`` lower ends of the steps' stated area intervals, same unit (NaN where
+            the step states none).
         upper: ``(N,)`` upper ends, same unit (NaN where none).
         contact: ``(N,)`` bool, the step is in contact.
 
     Returns:
-        ``(N,) bool``, in the input order: in contact, with an interval, and its ``lower`` is
-        above the ``upper`` of the next step in contact at a higher pressure (which must state
-        an interval too).
+        ``(N,) bool`` in the input order.
 
     Raises:
         ValueError: arrays of different lengths, or repeated or non-finite pressures.
     """
     p = np.asarray(pressures_kpa, dtype=np.float64)
+    a = np.asarray(areas, dtype=np.float64)
     lo, hi = np.asarray(lower, dtype=np.float64), np.asarray(upper, dtype=np.float64)
     c = np.asarray(contact, dtype=bool)
-    if not (p.ndim == 1 and p.shape == lo.shape == hi.shape == c.shape):
-        raise ValueError(
-            "shrinking_steps: expected 1-D arrays of one length, got shapes "
-            f"{p.shape}, {lo.shape}, {hi.shape}, {c.shape}"
-        )
-    if not np.all(np.isfinite(p)) or np.unique(p).size != p.size:
-        raise ValueError("shrinking_steps: pressures must be finite and distinct")
-    order = np.argsort(p)
+    _check(p, a, lo, hi, c)
     out = np.zeros(p.size, dtype=bool)
-    in_contact = [int(i) for i in order if c[i]]
-    for i, j in pairwise(in_contact):
-        out[i] = bool(lo[i] > hi[j])  # False when either is NaN
+    steps = [int(i) for i in np.argsort(p) if c[i]]  # the contact steps, ascending pressure
+    for i, j in pairwise(steps):
+        out[i] = bool(lo[i] > hi[j])  # step 1; False when either is NaN
+    for k in range(len(steps) - 1, 0, -1):  # step 2, downwards so that a run extends
+        i, below = steps[k], steps[k - 1]
+        out[below] |= bool(out[i] and a[below] >= a[i])
     return out
 
 
 def session_revisions(
-    pressures_kpa: ArrayLike, lower: ArrayLike, upper: ArrayLike, contact: ArrayLike
+    pressures_kpa: ArrayLike,
+    areas: ArrayLike,
+    lower: ArrayLike,
+    upper: ArrayLike,
+    contact: ArrayLike,
 ) -> tuple[np.ndarray, np.ndarray]:
-    """The whole session rule: shrinking steps, then contacts left below the contact range.
+    """The whole rule on one pass's steps.
 
     Arguments as :func:`shrinking_steps`.
 
     Returns:
         ``(ring, below)``, ``(N,) bool`` each, input order: the steps :func:`shrinking_steps`
-        revises, and the steps still in contact below the contact range that the calibration's
-        onset rule (:func:`~contactcal.infer.calibration.onset.onset_index`) finds after that
-        (the fit sets their area to 0). A step in neither keeps its flag.
+        revises, and the steps still in contact below the contact range that
+        :func:`~contactcal.infer.calibration.onset.onset_index` finds after that (all of them
+        when it finds none). A step in neither keeps its flag.
     """
-    ring = shrinking_steps(pressures_kpa, lower, upper, contact)
+    ring = shrinking_steps(pressures_kpa, areas, lower, upper, contact)
     c = np.asarray(contact, dtype=bool) & ~ring
     order = np.argsort(np.asarray(pressures_kpa, dtype=np.float64))
     s = onset_index(c[order])
@@ -105,11 +134,55 @@ def session_revisions(
     return ring, below & c
 
 
+def frame_revisions(
+    pressures_kpa: Sequence[float],
+    areas: Sequence[float],
+    contacts: Sequence[bool],
+    intervals: Sequence[tuple[float, float] | None],
+) -> tuple[np.ndarray, np.ndarray]:
+    """The rule on one pass's frames: frames at one pressure are pooled into a step.
+
+    Args:
+        pressures_kpa: ``(N,)`` frame pressures, kPa (repeats form a step).
+        areas: ``(N,)`` frame areas (any unit; 0 without contact).
+        contacts: ``(N,)`` per frame, in contact.
+        intervals: per frame, its stated area interval (same unit) or None.
+
+    Returns:
+        ``(ring, below)``, ``(N,) bool`` each: the frames in contact that
+        :func:`session_revisions` revises, by its two parts; all False when no frame states an
+        interval.
+    """
+    n = len(pressures_kpa)
+    if all(v is None for v in intervals):
+        return np.zeros(n, dtype=bool), np.zeros(n, dtype=bool)
+    p = np.asarray(pressures_kpa, dtype=np.float64)
+    levels, step_of = np.unique(p, return_inverse=True)
+    rows = []
+    for k in range(levels.size):
+        at = np.flatnonzero(step_of == k)
+        area, contact = pool([areas[i] for i in at], [contacts[i] for i in at])
+        lo, hi = step_interval([contacts[i] for i in at], [intervals[i] for i in at])
+        rows.append((area, lo, hi, contact))
+    a, lo, hi, c = (np.asarray(col) for col in zip(*rows, strict=True))
+    ring, below = session_revisions(levels, a, lo, hi, c.astype(bool))
+    mine = np.asarray(contacts, dtype=bool)
+    return ring[step_of] & mine, below[step_of] & mine
+
+
 def step_interval(
     contacts: Sequence[bool], intervals: Sequence[tuple[float, float] | None]
 ) -> tuple[float, float]:
-    """A step's stated interval from its frames: the medians of the lower and of the upper ends
-    over its frames in contact that state one; ``(nan, nan)`` when none does."""
+    """A step's stated interval from its frames.
+
+    Args:
+        contacts: per frame of the step, in contact.
+        intervals: per frame, its stated ``(lower, upper)`` area interval or None.
+
+    Returns:
+        The medians of the lower and of the upper ends over the frames in contact that state
+        one; ``(nan, nan)`` when none does.
+    """
     ivs = [v for c, v in zip(contacts, intervals, strict=True) if c and v is not None]
     if not ivs:
         return float("nan"), float("nan")
@@ -122,8 +195,8 @@ def revise_points(points: Sequence[CalibrationPoint]) -> list[CalibrationPoint]:
     Only a session whose method states intervals is revised (the classical routine's points
     come back unchanged; its fit still drops contacts below the range, silently as before). A
     revised frame gets ``contact`` False, area 0 (px and mm²), the interval ``(0, its upper
-    end)`` and the note :data:`RING_NOTE` or :data:`BELOW_NOTE`; the others are unchanged.
-    The rule works in px (every point has ``area_px``, and a px interval where it has one).
+    end)`` and the note :data:`RING_NOTE`, :data:`BELOW_NOTE` or :data:`NO_RANGE_NOTE`; the
+    others are unchanged. The rule works in px.
 
     Args:
         points: one session's per-frame measurements, any order.
@@ -132,35 +205,22 @@ def revise_points(points: Sequence[CalibrationPoint]) -> list[CalibrationPoint]:
         The points, revised where the rule says so.
     """
     out = list(points)
-    if all(r.area_interval_px is None for r in points):
-        return out
     for phase in dict.fromkeys(r.phase for r in points):
-        levels = sorted({r.pressure_kpa for r in points if r.phase == phase})
-        steps = [
-            [k for k, r in enumerate(points) if r.phase == phase and r.pressure_kpa == p]
-            for p in levels
-        ]
-        ivs = [
-            step_interval([points[k].contact for k in s], [points[k].area_interval_px for k in s])
-            for s in steps
-        ]
-        ivs = np.asarray(ivs).reshape(-1, 2)
-        contact = [
-            pool([points[k].area_px for k in s], [points[k].contact for k in s])[1] for s in steps
-        ]
-        ring, below = session_revisions(levels, ivs[:, 0], ivs[:, 1], contact)
-        in_contact = [i for i, c in enumerate(contact) if c]
-        for i in np.flatnonzero(ring | below):
-            j = in_contact[in_contact.index(int(i)) + 1] if ring[i] else i  # next in contact
-            for k in steps[i]:
-                a = points[k].area_px
-                note = (
-                    RING_NOTE.format(area=a, upper=ivs[j, 1], next_kpa=levels[j])
-                    if ring[i]
-                    else BELOW_NOTE.format(area=a)
-                )
-                if points[k].contact:
-                    out[k] = _revised(points[k], note)
+        idx = [k for k, r in enumerate(points) if r.phase == phase]
+        mine = [points[k] for k in idx]
+        ring, below = frame_revisions(
+            [r.pressure_kpa for r in mine],
+            [r.area_px for r in mine],
+            [r.contact for r in mine],
+            [r.area_interval_px for r in mine],
+        )
+        has_range = bool(np.any(np.asarray([r.contact for r in mine]) & ~(ring | below)))
+        for k, r, is_ring, is_below in zip(idx, mine, ring, below, strict=True):
+            if is_ring:
+                out[k] = _revised(r, RING_NOTE.format(area=r.area_px))
+            elif is_below:
+                note = BELOW_NOTE if has_range else NO_RANGE_NOTE
+                out[k] = _revised(r, note.format(area=r.area_px))
     return out
 
 

@@ -17,7 +17,7 @@ import numpy as np
 
 from contactcal.infer.bench.scoring import ScoredFrame
 from contactcal.infer.calibration.fit import estimate_onset
-from contactcal.infer.calibration.rings import session_revisions, step_interval
+from contactcal.infer.calibration.rings import frame_revisions
 from contactcal.infer.calibration.steps import pool
 from contactcal.infer.evaluate.labels import LabelMask
 from contactcal.infer.methods.base import AreaResult
@@ -163,17 +163,25 @@ def onset_summary(scored: Sequence[ScoredFrame]) -> dict[str, Any]:
 def _session_rule(
     frames: Sequence[ScoredFrame], pressures: Sequence[float], contacts: list[bool]
 ) -> list[bool]:
-    """The steps' contact flags after ``calibrate``'s session rule (``rings.py``), so that the
-    onset compared is the one a calibration reports; unchanged for a method without intervals."""
-    if all(s.area_interval_px is None for s in frames):
-        return contacts
-    ivs = []
-    for q in pressures:
-        at = [s for s in frames if s.pressure_kpa == q]
-        ivs.append(step_interval([s.contact for s in at], [s.area_interval_px for s in at]))
-    lo, hi = zip(*ivs, strict=True)
-    ring, below = session_revisions(pressures, lo, hi, contacts)
-    return [c and not r for c, r in zip(contacts, ring | below, strict=True)]
+    """The steps' contact flags after ``calibrate``'s session rule (``rings.py``).
+
+    Args:
+        frames: one method's labelled frames (all passes pooled per pressure, as the onset
+            here pools them).
+        pressures: the distinct pressures, kPa, ascending (the steps).
+        contacts: per step, in contact (majority of its frames).
+
+    Returns:
+        Per step, in contact and not revised (unchanged for a method without intervals).
+    """
+    ring, below = frame_revisions(
+        [s.pressure_kpa for s in frames],
+        [s.area_px for s in frames],
+        [s.contact for s in frames],
+        [s.area_interval_px for s in frames],
+    )
+    revised = {s.pressure_kpa for s, r in zip(frames, ring | below, strict=True) if r}
+    return [c and q not in revised for c, q in zip(contacts, pressures, strict=True)]
 
 
 def _steps(

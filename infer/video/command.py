@@ -116,7 +116,6 @@ def calibrate_video(args: argparse.Namespace, scale: PixelScale | None) -> int:
     import cv2
 
     from contactcal.infer.calibration.calibrate import calibrate_session
-    from contactcal.infer.calibration.command import curve_config
     from contactcal.infer.files.atomic import run_outputs, write_synced
     from contactcal.infer.video import extract, live
     from contactcal.infer.video.log import read_pressure_log
@@ -165,7 +164,7 @@ def calibrate_video(args: argparse.Namespace, scale: PixelScale | None) -> int:
             bit_depth=args.bit_depth,
             inverse_phase=args.inverse_phase,
             manifest_as=final_manifest,
-            curve_config=curve_config(args),
+            session_rule=not args.per_frame_contact,
         )
     print(rep.table)
     print(ex.summary())
