@@ -81,6 +81,13 @@ def test_a_dip_inside_the_contact_range_revises_one_step_only() -> None:
     assert np.flatnonzero(hit).tolist() == [6]
 
 
+def test_a_contact_lost_at_high_pressure_is_not_taken_for_a_ring() -> None:
+    # the areas fall to the end (the method loses the contact): no regrowth, nothing revised
+    area = np.array([0.0, 0.0, 0.0, 300.0, 500.0, 600.0, 400.0, 200.0, 100.0, 50.0])
+    p = np.arange(area.size, dtype=float)
+    assert not shrinking_steps(p, area, 0.95 * area, 1.05 * area, area > 0).any()
+
+
 @pytest.mark.parametrize(
     ("p", "lo"),
     [([0.0, 1.0], [1.0]), ([1.0, 1.0], [1.0, 2.0]), ([0.0, np.inf], [1.0, 2.0])],

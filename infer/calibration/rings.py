@@ -9,13 +9,17 @@ inside that ring for contact (the U-Net does on the procedural cross-check gener
 contact area never decreases as the pressure rises (the skin is pressed further), while the
 pre-contact ring's disc does.
 
-Rule (a step is one pressure of one phase; frames of a step are pooled as in
-:mod:`~contactcal.infer.calibration.steps`: median area, majority contact, median interval ends):
+Rule (a step is one pressure of one phase; its frames pooled: in contact by majority, as in
+:mod:`~contactcal.infer.calibration.steps`; its area and interval ends the medians over its frames
+in contact):
 
 1. a step in contact whose stated area interval lies wholly above the stated interval of the
-   next step in contact (the next higher pressure) is revised to "no contact". Both intervals
+   next step in contact (the next higher pressure), after which the area grows again (a later
+   step in contact is larger than that interval), is revised to "no contact". Both intervals
    are the method's own calibrated ~90 % intervals, so a revision needs a decrease the method's
-   uncertainty cannot explain; no threshold is tuned here;
+   uncertainty cannot explain; no threshold is tuned here. The regrowth condition keeps a
+   method that loses the contact at high pressure (areas falling to the end) from wiping the
+   curve below;
 2. the run of contact steps just below a revised step whose median areas do not increase
    towards it is revised too: a slowly shrinking ring (less than the intervals' width per step)
    ends in a drop at its last step only. A lone under-segmented step inside the contact range
@@ -31,7 +35,6 @@ from __future__ import annotations
 
 from collections.abc import Sequence
 from dataclasses import replace
-from itertools import pairwise
 
 import numpy as np
 from numpy.typing import ArrayLike
@@ -81,14 +84,15 @@ def shrinking_steps(
 
     Args:
         pressures_kpa: ``(N,)`` step pressures, kPa, distinct, any order.
-        areas: ``(N,)`` step areas (median of the frames), any area unit.
+        areas: ``(N,)`` step areas (median of its frames in contact; NaN without), any unit.
         lower: ``(N,)`` lower ends of the steps' stated area intervals, same unit (NaN where
             the step states none).
         upper: ``(N,)`` upper ends, same unit (NaN where none).
         contact: ``(N,)`` bool, the step is in contact.
 
     Returns:
-        ``(N,) bool`` in the input order.
+        ``(N,) bool`` in the input order (the last two contact steps are never revised by
+        step 1: it needs a regrowth after the drop).
 
     Raises:
         ValueError: arrays of different lengths, or repeated or non-finite pressures.
@@ -100,8 +104,10 @@ def shrinking_steps(
     _check(p, a, lo, hi, c)
     out = np.zeros(p.size, dtype=bool)
     steps = [int(i) for i in np.argsort(p) if c[i]]  # the contact steps, ascending pressure
-    for i, j in pairwise(steps):
-        out[i] = bool(lo[i] > hi[j])  # step 1; False when either is NaN
+    for n in range(len(steps) - 2):  # step 1
+        i, j, later = steps[n], steps[n + 1], steps[n + 2 :]
+        regrows = bool(np.max(a[later]) > hi[j])
+        out[i] = bool(lo[i] > hi[j]) and regrows  # False when either bound is NaN
     for k in range(len(steps) - 1, 0, -1):  # step 2, downwards so that a run extends
         i, below = steps[k], steps[k - 1]
         out[below] |= bool(out[i] and a[below] >= a[i])
@@ -140,7 +146,9 @@ def frame_revisions(
     contacts: Sequence[bool],
     intervals: Sequence[tuple[float, float] | None],
 ) -> tuple[np.ndarray, np.ndarray]:
-    """The rule on one pass's frames: frames at one pressure are pooled into a step.
+    """The rule on one pass's frames: frames at one pressure are pooled into a step (in
+    contact by majority; its area the median over its frames in contact, its interval by
+    :func:`step_interval`).
 
     Args:
         pressures_kpa: ``(N,)`` frame pressures, kPa (repeats form a step).
@@ -161,7 +169,9 @@ def frame_revisions(
     rows = []
     for k in range(levels.size):
         at = np.flatnonzero(step_of == k)
-        area, contact = pool([areas[i] for i in at], [contacts[i] for i in at])
+        contact = pool([areas[i] for i in at], [contacts[i] for i in at])[1]
+        touching = [areas[i] for i in at if contacts[i]]  # the areas the intervals describe
+        area = float(np.median(touching)) if touching else float("nan")
         lo, hi = step_interval([contacts[i] for i in at], [intervals[i] for i in at])
         rows.append((area, lo, hi, contact))
     a, lo, hi, c = (np.asarray(col) for col in zip(*rows, strict=True))
