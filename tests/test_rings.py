@@ -10,8 +10,8 @@ from typing import Any
 import numpy as np
 import pytest
 
-from contactcal.infer.bench.accuracy import SESSION_SUFFIX, session_ruled
-from contactcal.infer.bench.scoring import ScoredFrame
+from contactcal.infer.bench.accuracy import session_ruled
+from contactcal.infer.bench.scoring import SESSION_SUFFIX, ScoredFrame
 from contactcal.infer.calibration import calibrate as calibrate_module
 from contactcal.infer.calibration.calibrate import calibrate_session
 from contactcal.infer.calibration.points import CalibrationPoint

@@ -14,18 +14,12 @@ from dataclasses import asdict, fields, replace
 from typing import Any
 
 from contactcal.infer.bench.dataset import IndexRow
-from contactcal.infer.bench.scoring import ScoredFrame
+from contactcal.infer.bench.scoring import SESSION_SUFFIX, SOFT_SUFFIX, ScoredFrame
 from contactcal.infer.calibration.fit import estimate_onset
 from contactcal.infer.calibration.rings import frame_revisions
 from contactcal.infer.image.read import load_image
 from contactcal.infer.methods.base import Method
 from contactcal.infer.methods.registry import METHODS, make_method
-
-#: Suffix of the rows that score the U-Net's probability mass instead of its pixel count.
-SOFT_SUFFIX = " (soft area)"
-#: Suffix of the rows that score a method's frames after the session rule of ``calibrate``
-#: (:mod:`~contactcal.infer.calibration.rings`): what a calibration reports, per frame.
-SESSION_SUFFIX = " (session rule)"
 
 
 def score_session(

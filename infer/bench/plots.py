@@ -13,7 +13,7 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from contactcal.infer.bench.scoring import ScoredFrame
+from contactcal.infer.bench.scoring import SESSION_SUFFIX, SOFT_SUFFIX, ScoredFrame
 from contactcal.infer.files.atomic import atomic_path
 
 if TYPE_CHECKING:
@@ -71,14 +71,19 @@ def _plain_log_ticks(ax: Any) -> None:
 
 def plot_error_vs_pressure(path: str | os.PathLike[str], frames: Sequence[ScoredFrame]) -> None:
     """|Relative| and |absolute| area error vs pressure per method: median and interquartile
-    band over the sessions, on log axes so that methods orders of magnitude apart both read."""
+    band over the sessions, on log axes so that methods orders of magnitude apart both read.
+
+    The derived rows (``(soft area)``, ``(session rule)``: the same predictions, re-measured or
+    re-decided) are left to the tables: drawn, they would hide the methods behind them."""
     fig = _figure(11, 4.2)
     axes = fig.subplots(1, 2)
     panels = (
         (False, FLOOR_PCT, "|relative area error| (%)"),
         (True, FLOOR_MM2, "|area error| (mm²)"),
     )
-    for i, method in enumerate(sorted({f.method for f in frames})):
+    derived = (SOFT_SUFFIX, SESSION_SUFFIX)
+    methods = sorted({f.method for f in frames if not f.method.endswith(derived)})
+    for i, method in enumerate(methods):
         colour = f"C{i}"
         for ax, (mm2, floor, _) in zip(axes, panels, strict=True):
             ps, q = error_quartiles(frames, method, mm2)

@@ -21,6 +21,13 @@ PRESSURE_BINS: tuple[tuple[float, float], ...] = (
 )
 
 
+#: Suffix of the rows that score the U-Net's probability mass instead of its pixel count.
+SOFT_SUFFIX = " (soft area)"
+#: Suffix of the rows that score a method's frames after the session rule of ``calibrate``
+#: (:mod:`~contactcal.infer.calibration.rings`): what a calibration reports, per frame.
+SESSION_SUFFIX = " (session rule)"
+
+
 @dataclass(frozen=True)
 class ScoredFrame:
     """A method's outcome on one frame whose truth is known. Areas in input pixels."""
