@@ -168,7 +168,7 @@ def test_bench_crosscheck(dataset: Path, tmp_path: Path) -> None:
         assert both[key] == single[key]  # the main dataset's keys are unchanged
     (cross,) = both["crosscheck"]
     assert cross["label"] == "other" and cross["sessions"] == 2 and cross["frames"] == 10
-    assert len(cross["records"]) == 3 * 10
+    assert len(cross["records"]) == 4 * 10  # classical, unet, its soft area and session rule
     row = next(r for r in both["side_by_side"] if r["method"] == "unet" and r["bin_kpa"] == "≥5")
     own = [r for r in cross["records"] if r["method"] == "unet" and r["pressure_kpa"] >= 5]
     errs = sorted(abs(r["area_px"] - r["true_area_px"]) / r["true_area_px"] for r in own)
