@@ -5,9 +5,9 @@ inflating membrane as an inner luminous ring *before* any contact: it "decreased
 to 2 kPa because the membrane was inflated, while remaining detached from the finger", and grows
 again once contact starts, hugging the ridge region. A per-frame segmenter can take the disc
 inside that ring for contact (the U-Net does on the procedural cross-check generator,
-``docs/evaluate.md``); one frame alone cannot always tell the two apart, a session can: the true
-contact area never decreases as the pressure rises (the skin is pressed further), while the
-pre-contact ring's disc does.
+``docs/crosscheck.md``, ``models/MODEL_CARD.md``); one frame alone cannot always tell the two
+apart, a session can: the true contact area never decreases as the pressure rises (the skin is
+pressed further), while the pre-contact ring's disc does.
 
 Rule (a step is one pressure of one phase; its frames pooled: in contact by majority, as in
 :mod:`~contactcal.infer.calibration.steps`; its area and interval ends the medians over its frames
