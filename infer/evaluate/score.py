@@ -144,8 +144,9 @@ def onset_summary(scored: Sequence[ScoredFrame]) -> dict[str, Any]:
     truth = estimate_onset(p, *_steps(first, p, truth=True))
     out: dict[str, Any] = {}
     for m in methods:
-        areas, contacts = _steps([s for s in scored if s.method == m], p, truth=False)
-        contacts = _session_rule([s for s in scored if s.method == m], p, contacts)
+        mine = [s for s in scored if s.method == m]
+        areas, contacts = _steps(mine, p, truth=False)
+        contacts = _session_rule(mine, p, contacts)
         est = estimate_onset(p, areas, contacts)
         err = None if est is None or truth is None else est - truth
         out[m] = {"onset_kpa": est, "error_kpa": err}
