@@ -182,30 +182,22 @@ def _add_ridge_args(t: argparse.ArgumentParser) -> None:
 
 def _add_look_args(t: argparse.ArgumentParser) -> None:
     """``--contact-gain``, ``--ridge-blur``, ``--gamma`` and ``--blur-sigma``."""
-    t.add_argument(
-        "--gamma",
-        type=float,
-        nargs=2,
-        metavar=("LO", "HI"),
-        help="range of the gamma (tone curve) augmentation (default 0.7 1.4)",
+    ranges = (
+        ("--gamma", "range of the gamma (tone curve) augmentation (default 0.7 1.4)"),
+        (
+            "--blur-sigma",
+            "range of the blur augmentation's sigma, px at the network input (default 0.1 1.2; "
+            "σ 12 px of a 2592-px frame is ~1.3 there)",
+        ),
+        (
+            "--contact-gain",
+            "range of the contact region's brightness factor in the contact appearance "
+            "augmentation, log-uniform (default 0.6 1.5; below ~0.5 the skin is darker than the "
+            "membrane)",
+        ),
     )
-    t.add_argument(
-        "--blur-sigma",
-        type=float,
-        nargs=2,
-        metavar=("LO", "HI"),
-        help="range of the blur augmentation's sigma, px at the network input (default 0.1 1.2; "
-        "σ 12 px of a 2592-px frame is ~1.3 there)",
-    )
-    t.add_argument(
-        "--contact-gain",
-        type=float,
-        nargs=2,
-        metavar=("LO", "HI"),
-        help="range of the contact region's brightness factor in the contact appearance "
-        "augmentation, log-uniform (default 0.6 1.5; below ~0.5 the skin is darker than the "
-        "membrane)",
-    )
+    for flag, text in ranges:
+        t.add_argument(flag, type=float, nargs=2, metavar=("LO", "HI"), help=text)
     t.add_argument(
         "--ridge-blur",
         action=argparse.BooleanOptionalAction,
