@@ -30,6 +30,9 @@ class TrainConfig:
     #   reference, less use of the reference's onset cue
     ridge_work_px: int = 0  # px; > 0 adds the ridge-energy channel measured at this crop side
     #   (``infer.methods.unet.ridge``); finer ridges, a finer JPEG decode at deployment
+    ema_decay: float = 0.0  # per-step weight of the past in the exponential average of the
+    #   weights that is validated and saved (``train/ema.py``); 0 = off (the trained weights);
+    #   0.995 spans ~200 steps: a smoother epoch choice, but it lags the one-cycle schedule
     bce_weight: float = 1.0  # weight of per-pixel BCE (calibration, stable gradients)
     dice_weight: float = 1.0  # weight of per-frame soft Dice (small contacts count fully)
     device: str = "auto"  # "cpu", "cuda" or "auto" (cuda when available)
@@ -79,6 +82,8 @@ class TrainConfig:
                 f"ridge_work_px must be 0 (off) or >= input_size {self.input_size}, "
                 f"got {self.ridge_work_px}"
             )
+        if not 0.0 <= self.ema_decay < 1.0:
+            raise ValueError(f"ema_decay must be in [0, 1) (0 = off), got {self.ema_decay}")
         if not 0.0 < self.prob_threshold < 1.0:
             raise ValueError(f"prob_threshold must be in (0, 1), got {self.prob_threshold}")
 

@@ -2,7 +2,9 @@
 
 :func:`train` reads as its three steps: :func:`_prepare` (data, split, model, optimiser and
 generators, restored from ``last.pt`` on resume), :func:`_run_epochs` (train, validate with the
-deployed decision, checkpoint) and :func:`_finish` (``best.pt`` on the validation fingers).
+deployed decision, checkpoint) and :func:`_finish` (``best.pt`` on the validation fingers). With
+``ema_decay`` > 0 the model validated and saved as ``best.pt`` is the weights' running average
+(``train/ema.py``); ``last.pt`` keeps both.
 
 Randomness is explicit: the finger split (numpy Generator from ``seed``), weight init (torch's
 global generator seeded with ``seed``), the batch order (``Run.shuffle``, seeded ``seed``) and the
@@ -39,6 +41,7 @@ from contactcal.train.checkpoint import (
 )
 from contactcal.train.config import TrainConfig, resolve_device
 from contactcal.train.data import CachedSet, build_cache, dataset_digest, split_by_finger
+from contactcal.train.ema import WeightAverage
 from contactcal.train.metrics import evaluate, segmentation_loss, summarise
 from contactcal.train.model import UNet, count_parameters
 from contactcal.train.report import METRIC_COLUMNS, plot_curves, write_csv
@@ -63,6 +66,12 @@ class Run:
     history: list[dict[str, Any]] = field(default_factory=list)  # metrics.csv rows
     best: float = -math.inf  # best selection score so far
     best_epoch: int = -1  # 1-based epoch of best.pt
+    average: WeightAverage | None = None  # the weights' running average (ema_decay > 0)
+
+    @property
+    def scored(self) -> torch.nn.Module:
+        """The model that is validated and saved: the running average when there is one."""
+        return self.model if self.average is None else self.average.model
 
 
 def _run_info(
@@ -138,8 +147,12 @@ def _prepare(dirs: list[Path], out: Path, cfg: TrainConfig, resume: bool, progre
         cfg.augment, cfg.preprocess, seed=cfg.seed + 1, reference_dropout=cfg.reference_dropout
     ).to(device)
     run = Run(cfg, out, digest, device, train_set, val_set, model, opt, sched, shuffle, augment)
+    if cfg.ema_decay > 0.0:
+        run.average = WeightAverage(model, cfg.ema_decay)
     if ckpt is not None:
-        model.load_state_dict(ckpt["model"])
+        model.load_state_dict(ckpt.get("trained_model", ckpt["model"]))
+        if run.average is not None:
+            run.average.model.load_state_dict(ckpt["model"])
         opt.load_state_dict(ckpt["optimizer"])
         sched.load_state_dict(ckpt["scheduler"])
         shuffle.set_state(ckpt["shuffle_rng"])
@@ -173,6 +186,8 @@ def _train_epoch(run: Run, epoch: int, progress: bool) -> float:
         loss.backward()
         run.opt.step()
         run.sched.step()
+        if run.average is not None:
+            run.average.update(run.model)
         running += loss.item() * len(idx)
         seen += len(idx)
         bar.set_postfix(loss=f"{running / seen:.4f}")
@@ -183,18 +198,19 @@ def _validate(run: Run) -> tuple[float | None, list[ScoredFrame]]:
     """Validation loss and the deployed decision on every validation frame."""
     cfg = run.cfg
     weights = (cfg.bce_weight, cfg.dice_weight)
-    return evaluate(run.model, run.val_set, cfg.spec(), weights, cfg.batch_size, run.device)
+    return evaluate(run.scored, run.val_set, cfg.spec(), weights, cfg.batch_size, run.device)
 
 
 def _save_epoch(run: Run, epoch: int, row: dict[str, Any]) -> None:
     """Step 2b: ``best.pt`` (when the score improved), ``last.pt``, metrics.csv, curves.png."""
     score = row["val_iou"] if row["val_iou"] is not None else -row["train_loss"]
     meta = {"config": config_to_dict(run.cfg), "data_digest": run.digest, "epoch": epoch}
-    weights = run.model.state_dict()
+    weights = run.scored.state_dict()
     if score > run.best:
         run.best, run.best_epoch = score, epoch + 1
         save_checkpoint(run.out / "best.pt", {**meta, "model": weights, "metrics": row})
     state = {
+        "trained_model": run.model.state_dict(),  # differs from "model" with an average
         "optimizer": run.opt.state_dict(),
         "scheduler": run.sched.state_dict(),
         "shuffle_rng": run.shuffle.get_state(),
@@ -231,7 +247,7 @@ def _run_epochs(run: Run, progress: bool) -> None:
 
 def _finish(run: Run) -> dict[str, Any]:
     """Step 3: ``best.pt`` on the validation fingers → val_bins.csv and the summary."""
-    run.model.load_state_dict(load_checkpoint(run.out / "best.pt")["model"])
+    run.scored.load_state_dict(load_checkpoint(run.out / "best.pt")["model"])
     _, frames = _validate(run)
     bins = bin_table(frames)
     write_csv(run.out / "val_bins.csv", bins, list(bins[0]) if bins else ["method", "bin_kpa"])
@@ -240,7 +256,7 @@ def _finish(run: Run) -> dict[str, Any]:
         "best_epoch": run.best_epoch,
         "best_score": run.best,
         "epochs_run": run.cfg.epochs - run.start,
-        "parameters": count_parameters(run.model),
+        "parameters": count_parameters(run.scored),
         "train_frames": len(run.train_set),
         "val_frames": len(run.val_set),
         "val": summarise(frames),
