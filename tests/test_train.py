@@ -20,7 +20,7 @@ from contactcal.infer.cli import main  # noqa: E402
 from contactcal.infer.methods.unet.config import PreprocessConfig  # noqa: E402
 from contactcal.infer.methods.unet.prepare import CropBox, network_to_unit, unit_to_network  # noqa: E402
 from contactcal.infer.methods.unet.spec import ModelSpec  # noqa: E402
-from contactcal.train.augment import AugmentConfig, Augmenter  # noqa: E402
+from contactcal.train.augment import AugmentConfig, Augmenter, blur_kernel_size  # noqa: E402
 from contactcal.train.checkpoint import config_diff, config_from_dict, config_to_dict  # noqa: E402
 from contactcal.train.commands import add_parsers, build_config  # noqa: E402
 from contactcal.train.config import TrainConfig  # noqa: E402
@@ -107,6 +107,30 @@ def test_augment_deterministic_per_seed() -> None:
     assert torch.equal(aug(x, m)[0], second)
 
 
+def _blurred_variance(sigma: float, taps: int) -> float:
+    """Variance (px²) along x of kornia's blur of a unit impulse, as the augmentation applies it."""
+    import kornia.filters as KF
+
+    impulse = torch.zeros(1, 1, 31, 31)
+    impulse[0, 0, 15, 15] = 1.0
+    row = KF.gaussian_blur2d(impulse, (taps, taps), (sigma, sigma))[0, 0].sum(0)
+    x = torch.arange(31.0) - 15.0
+    return float((row * x**2).sum() / row.sum())
+
+
+def test_blur_kernel_holds_the_gaussian() -> None:
+    cfg = AugmentConfig()
+    assert blur_kernel_size(cfg) == 9  # 2·⌈3·1.2⌉ + 1
+    assert blur_kernel_size(AugmentConfig(blur_sigma=(0.1, 1.8))) == 13
+    assert blur_kernel_size(AugmentConfig(blur_kernel_px=5)) == 5
+    hi = cfg.blur_sigma[1]
+    assert _blurred_variance(hi, blur_kernel_size(cfg)) == pytest.approx(hi**2, rel=0.03)
+    # the 5 taps of models up to v2.2 blur σ 1.2 like σ ~1.08 (variance 0.81 σ²)
+    assert _blurred_variance(hi, 5) < 0.85 * hi**2
+    with pytest.raises(ValueError, match="odd >= 3"):
+        AugmentConfig(blur_kernel_px=4)
+
+
 def test_split_is_by_finger(tmp_path: Path) -> None:
     records = read_datasets([write_dataset(tmp_path / "d", fingers=5)])
     tr, va = split_by_finger(records, 0.4, seed=1)
@@ -184,9 +208,10 @@ def test_train_outputs(tmp_path: Path) -> None:
 
 
 @pytest.mark.slow
-def test_resume_is_exact(tmp_path: Path) -> None:
+@pytest.mark.parametrize("ema_decay", [0.0, 0.9])
+def test_resume_is_exact(tmp_path: Path, ema_decay: float) -> None:
     d = write_dataset(tmp_path / "d", fingers=3)
-    cfg = tiny_config(augment=AugmentConfig(), epochs=2)
+    cfg = tiny_config(augment=AugmentConfig(), epochs=2, ema_decay=ema_decay)
     train([d], tmp_path / "full", cfg, progress=False)
     # interrupt the second run right after its first epoch's checkpoint, then resume it
     import contactcal.train.loop as loop
@@ -209,7 +234,10 @@ def test_resume_is_exact(tmp_path: Path) -> None:
     train([d], tmp_path / "cut", cfg, resume=True, progress=False)
     a = torch.load(tmp_path / "full" / "last.pt", weights_only=True)
     b = torch.load(tmp_path / "cut" / "last.pt", weights_only=True)
-    assert all(torch.equal(a["model"][k], b["model"][k]) for k in a["model"])
+    for key in ("model", "trained_model"):  # the average and the trained weights
+        assert all(torch.equal(a[key][k], b[key][k]) for k in a[key])
+    averaged = any(not torch.equal(a["model"][k], a["trained_model"][k]) for k in a["model"])
+    assert averaged == (ema_decay > 0)
     assert len(b["history"]) == 2
 
 
@@ -231,14 +259,17 @@ def test_cli_parsers(tmp_path: Path) -> None:
             "64",
             "--threads",
             "2",
+            "--ema",
+            "0.99",
         ]
     )
     cfg = build_config(args)
     assert args.data == [Path("a"), Path("b")] and cfg.epochs == 3 and not cfg.use_reference
     assert cfg.input_size == 64 and cfg.batch_size == TrainConfig().batch_size
-    assert cfg.num_threads == 2
+    assert cfg.num_threads == 2 and cfg.ema_decay == 0.99
     args = parser.parse_args(["train", "--data", "a", "--out", "r"])
     assert build_config(args).num_threads == TrainConfig().num_threads
+    assert build_config(args).ema_decay == 0.0  # off unless asked
     args = parser.parse_args(["train", "--data", str(tmp_path / "missing"), "--out", "r"])
     with pytest.raises(ValueError, match="missing"):
         args.func(args)

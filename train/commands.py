@@ -41,6 +41,14 @@ def add_parsers(sub: Any) -> None:
     _add_look_args(t)
     t.add_argument("--seed", type=int, help="split/init/shuffle/augmentation seed (default 0)")
     t.add_argument("--batch-size", type=int, metavar="B", help="frames per step (default 16)")
+    t.add_argument(
+        "--ema",
+        dest="ema_decay",
+        type=float,
+        metavar="DECAY",
+        help="validate and save an exponential average of the weights, DECAY per step in (0, 1) "
+        "(0.995 spans ~200 steps; default 0 = off)",
+    )
     # dest differs from the deployment commands' --threads (onnxruntime threads, an int >= 1
     # checked by contactcal.infer.cli.main); here 0 or absent means torch's default.
     t.add_argument(
@@ -128,6 +136,7 @@ def build_config(args: argparse.Namespace) -> Any:
         "ridge_work_px": args.ridge_work_px,
         "seed": args.seed,
         "batch_size": args.batch_size,
+        "ema_decay": args.ema_decay,
         "num_threads": args.torch_threads,
     }
     cfg = dataclasses.replace(base, **{k: v for k, v in given.items() if v is not None})
@@ -135,6 +144,7 @@ def build_config(args: argparse.Namespace) -> Any:
     cfg = _with_augment(cfg, "ridgeless", p=args.ridgeless, flatten=args.ridgeless_flatten)
     cfg = _with_augment(cfg, "contact", gain=gain)
     camera = {"ridge_blur": args.ridge_blur, "gamma": args.gamma, "blur_sigma": args.blur_sigma}
+    camera["blur_kernel_px"] = args.blur_kernel
     camera = {k: tuple(v) if isinstance(v, list) else v for k, v in camera.items() if v is not None}
     if camera:
         cfg = dataclasses.replace(cfg, augment=dataclasses.replace(cfg.augment, **camera))
@@ -181,7 +191,7 @@ def _add_ridge_args(t: argparse.ArgumentParser) -> None:
 
 
 def _add_look_args(t: argparse.ArgumentParser) -> None:
-    """``--contact-gain``, ``--ridge-blur``, ``--gamma`` and ``--blur-sigma``."""
+    """``--contact-gain``, ``--ridge-blur``, ``--gamma``, ``--blur-sigma`` and ``--blur-kernel``."""
     ranges = (
         ("--gamma", "range of the gamma (tone curve) augmentation (default 0.7 1.4)"),
         (
@@ -204,6 +214,13 @@ def _add_look_args(t: argparse.ArgumentParser) -> None:
         default=None,
         help="the blur augmentation also weakens the ridge-energy channel, as blur weakens "
         "ridges (needs --ridge-channel; default off)",
+    )
+    t.add_argument(
+        "--blur-kernel",
+        type=int,
+        metavar="K",
+        help="taps of the blur augmentation's kernel, odd >= 3 (default: the whole Gaussian of "
+        "the largest sigma; 5 reproduces models up to v2.2)",
     )
 
 
