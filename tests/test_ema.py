@@ -6,7 +6,12 @@ import pytest
 
 torch = pytest.importorskip("torch")
 
-from contactcal.train.config import TrainConfig  # noqa: E402
+from contactcal.train.checkpoint import config_to_dict  # noqa: E402
+from contactcal.train.config import (  # noqa: E402
+    LEGACY_BLUR_KERNEL_PX,
+    TrainConfig,
+    saved_train_config,
+)
 from contactcal.train.ema import WeightAverage, ema_update  # noqa: E402
 
 
@@ -30,6 +35,8 @@ def test_ema_update_bad_decay(decay: float) -> None:
 def test_ema_update_mismatched_models() -> None:
     with pytest.raises(ValueError, match="different parameters"):
         ema_update({"a": torch.zeros(1)}, {"b": torch.zeros(1)}, 0.5)
+    with pytest.raises(ValueError, match=r"a is \(3,\), its average \(1,\)"):
+        ema_update({"a": torch.zeros(1)}, {"a": torch.zeros(3)}, 0.5)
 
 
 def test_weight_average_follows_the_trained_model() -> None:
@@ -58,3 +65,15 @@ def test_weight_average_needs_a_decay_in_the_open_interval(decay: float) -> None
 def test_config_rejects_bad_ema_decay(decay: float) -> None:
     with pytest.raises(ValueError, match="ema_decay"):
         TrainConfig(ema_decay=decay)
+
+
+def test_saved_config_keeps_its_blur_kernel() -> None:
+    """A config saved before ``blur_kernel_px`` existed blurred with 5 taps, and resumes so."""
+    saved = config_to_dict(TrainConfig().resolved())
+    assert saved["augment"]["blur_kernel_px"] == 9  # resolved: the taps actually used
+    del saved["augment"]["blur_kernel_px"]
+    assert saved_train_config(saved, "old").augment.blur_kernel_px == LEGACY_BLUR_KERNEL_PX == 5
+    old = {k: v for k, v in saved.items() if k != "augment"}  # older still: no augment at all
+    assert saved_train_config(old, "older").augment.blur_kernel_px == 5
+    saved["augment"]["blur_kernel_px"] = 0  # written by this version before resolving: auto
+    assert saved_train_config(saved, "new").resolved().augment.blur_kernel_px == 9

@@ -47,7 +47,7 @@ def add_parsers(sub: Any) -> None:
         type=float,
         metavar="DECAY",
         help="validate and save an exponential average of the weights, DECAY per step in (0, 1) "
-        "(0.995 spans ~200 steps; default 0 = off)",
+        "(0.995 spans ~200 steps; default, or 0: off)",
     )
     # dest differs from the deployment commands' --threads (onnxruntime threads, an int >= 1
     # checked by contactcal.infer.cli.main); here 0 or absent means torch's default.
@@ -116,8 +116,7 @@ def build_config(args: argparse.Namespace) -> Any:
     """
     import dataclasses
 
-    from contactcal.train.checkpoint import config_from_dict
-    from contactcal.train.config import TrainConfig
+    from contactcal.train.config import TrainConfig, saved_train_config
 
     base = TrainConfig()
     saved = args.out / "config.json"
@@ -126,7 +125,7 @@ def build_config(args: argparse.Namespace) -> Any:
             info = json.loads(saved.read_text(encoding="utf-8"))
         except (OSError, json.JSONDecodeError) as exc:
             raise ValueError(f"{saved}: unreadable run config ({exc})") from exc
-        base = config_from_dict(TrainConfig, info.get("train"), str(saved))
+        base = saved_train_config(info.get("train"), str(saved))
     given = {
         "epochs": args.epochs,
         "device": args.device,
@@ -219,8 +218,8 @@ def _add_look_args(t: argparse.ArgumentParser) -> None:
         "--blur-kernel",
         type=int,
         metavar="K",
-        help="taps of the blur augmentation's kernel, odd >= 3 (default: the whole Gaussian of "
-        "the largest sigma; 5 reproduces models up to v2.2)",
+        help="taps of the blur augmentation's kernel, odd >= 3 (default, or 0: the whole "
+        "Gaussian of the largest sigma; 5 reproduces models up to v2.2)",
     )
 
 

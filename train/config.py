@@ -4,13 +4,19 @@ from __future__ import annotations
 
 import dataclasses
 from dataclasses import dataclass, field
+from typing import Any
 
 import torch
 
 from contactcal.infer.methods.unet.config import PreprocessConfig
 from contactcal.infer.methods.unet.spec import ModelSpec
-from contactcal.train.augment import AugmentConfig
+from contactcal.train.augment import AugmentConfig, blur_kernel_size
+from contactcal.train.checkpoint import config_from_dict
 from contactcal.train.model import UNetConfig
+
+#: ``augment.blur_kernel_px`` of a config saved before the field existed: the fixed kernel it
+#: trained with, taps.
+LEGACY_BLUR_KERNEL_PX = 5
 
 
 @dataclass(frozen=True)
@@ -101,6 +107,9 @@ class TrainConfig:
                 ridge_work_px=self.ridge_work_px,
                 no_reference="blank" if self.reference_dropout > 0.0 else "self",
             ),
+            augment=dataclasses.replace(
+                self.augment, blur_kernel_px=blur_kernel_size(self.augment)
+            ),
         )
 
     def spec(self) -> ModelSpec:
@@ -109,6 +118,21 @@ class TrainConfig:
         return ModelSpec(
             cfg.model.in_channels, cfg.preprocess, cfg.prob_threshold, cfg.min_contact_area_px
         )
+
+
+def saved_train_config(data: Any, where: str) -> TrainConfig:
+    """A saved ``TrainConfig`` (``config.json``'s ``train``, a checkpoint's ``config``) as the
+    run that saved it trained: one saved before ``augment.blur_kernel_px`` existed blurred with
+    :data:`LEGACY_BLUR_KERNEL_PX` taps, not with today's default.
+
+    Raises:
+        ValueError: unknown field or invalid value (:func:`config_from_dict`).
+    """
+    if isinstance(data, dict):
+        augment = data.get("augment", {})
+        if isinstance(augment, dict) and "blur_kernel_px" not in augment:
+            data = {**data, "augment": {**augment, "blur_kernel_px": LEGACY_BLUR_KERNEL_PX}}
+    return config_from_dict(TrainConfig, data, where)
 
 
 def resolve_device(name: str) -> torch.device:

@@ -41,8 +41,8 @@ import torch
 from contactcal.infer import __version__
 from contactcal.infer.files.atomic import atomic_open
 from contactcal.infer.methods.unet.spec import ModelSpec, read_spec
-from contactcal.train.checkpoint import config_from_dict, load_checkpoint
-from contactcal.train.config import TrainConfig
+from contactcal.train.checkpoint import load_checkpoint
+from contactcal.train.config import TrainConfig, saved_train_config
 from contactcal.train.export_check import check_decisions
 from contactcal.train.interval import calibrate_run
 from contactcal.train.model import UNet
@@ -71,7 +71,7 @@ def load_run(run_dir: str | os.PathLike[str]) -> tuple[TrainConfig, dict, dict]:
         info = json.loads(path.read_text(encoding="utf-8"))
     except (OSError, json.JSONDecodeError) as exc:
         raise ValueError(f"{path}: unreadable run config ({exc})") from exc
-    cfg = config_from_dict(TrainConfig, info.get("train"), str(path))
+    cfg = saved_train_config(info.get("train"), str(path))
     return cfg, info, load_checkpoint(run / "best.pt")
 
 

@@ -3,8 +3,7 @@
 :func:`train` reads as its three steps: :func:`_prepare` (data, split, model, optimiser and
 generators, restored from ``last.pt`` on resume), :func:`_run_epochs` (train, validate with the
 deployed decision, checkpoint) and :func:`_finish` (``best.pt`` on the validation fingers). With
-``ema_decay`` > 0 the model validated and saved as ``best.pt`` is the weights' running average
-(``train/ema.py``); ``last.pt`` keeps both.
+``ema_decay`` > 0 the weights' running average is validated and saved; ``last.pt`` keeps both.
 
 Randomness is explicit: the finger split (numpy Generator from ``seed``), weight init (torch's
 global generator seeded with ``seed``), the batch order (``Run.shuffle``, seeded ``seed``) and the
@@ -32,14 +31,13 @@ from contactcal.infer.files.atomic import write_json
 from contactcal.train.augment import Augmenter
 from contactcal.train.checkpoint import (
     config_diff,
-    config_from_dict,
     config_to_dict,
     load_checkpoint,
     rng_state,
     save_checkpoint,
     set_rng_state,
 )
-from contactcal.train.config import TrainConfig, resolve_device
+from contactcal.train.config import TrainConfig, resolve_device, saved_train_config
 from contactcal.train.data import CachedSet, build_cache, dataset_digest, split_by_finger
 from contactcal.train.ema import WeightAverage
 from contactcal.train.metrics import evaluate, segmentation_loss, summarise
@@ -109,7 +107,7 @@ def _resume_checkpoint(out: Path, cfg: TrainConfig, digest: str, resume: bool) -
             )
         return None
     ckpt = load_checkpoint(out / "last.pt")
-    saved = config_from_dict(TrainConfig, ckpt["config"], str(out / "last.pt"))
+    saved = saved_train_config(ckpt["config"], str(out / "last.pt"))
     diff = [k for k in config_diff(saved, cfg) if k not in ("device", "num_threads")]
     if diff:
         raise ValueError(f"{out}: --resume with a different config ({', '.join(diff)})")
@@ -256,7 +254,7 @@ def _finish(run: Run) -> dict[str, Any]:
         "best_epoch": run.best_epoch,
         "best_score": run.best,
         "epochs_run": run.cfg.epochs - run.start,
-        "parameters": count_parameters(run.scored),
+        "parameters": count_parameters(run.model),  # the average's are frozen, not counted
         "train_frames": len(run.train_set),
         "val_frames": len(run.val_set),
         "val": summarise(frames),
