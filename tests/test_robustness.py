@@ -16,8 +16,15 @@ from contactcal.infer.bench import run as bench_run
 from contactcal.infer.bench.config import BenchConfig
 from contactcal.infer.bench.dataset import read_index, sessions_of
 from contactcal.infer.bench.perturb import offset, resolution
-from contactcal.infer.bench.robustness import Sample, load_sample, perturbed, sample_rows
+from contactcal.infer.bench.robustness import (
+    Sample,
+    load_sample,
+    perturbed,
+    ratio_interval,
+    sample_rows,
+)
 from contactcal.infer.bench.run import run_bench
+from contactcal.infer.bench.scoring import ScoredFrame
 from contactcal.infer.bench.suite import PERTURBATIONS, Perturbation
 from contactcal.infer.cli import main
 from contactcal.infer.methods.unet.ring import RingFit, locate_ring
@@ -148,6 +155,9 @@ def test_report_figure_and_results(bench: tuple[Path, dict[str, Any]]) -> None:
             assert ratio == 1.0
         if ratio is not None:
             assert ratio == pytest.approx(err / base["median_abs_rel_error_ge5"])
+        interval = r["error_ratio_interval"]
+        if r["baseline"] and interval is not None:
+            assert interval == [1.0, 1.0]  # the same frames at both "levels"
         assert f"| {r['perturbation']} | {r['label']} |" in report
 
 
@@ -192,3 +202,33 @@ def test_randomised_ranges_mark_the_levels_where_the_target_applies() -> None:
     assert by_name["JPEG"].in_range(50.0) and not by_name["JPEG"].in_range(25.0)
     assert not by_name["offset"].in_range(0.02)
     assert not by_name["no reference"].in_range(1.0)
+
+
+def _scored(errors: list[float], pressure: float = 10.0) -> list[ScoredFrame]:
+    """Frames of 1000 px true area with the given relative errors, named f0, f1, ..."""
+    return [
+        ScoredFrame("unet", "s", f"f{i}", pressure, 1000.0, 1000.0 * (1 + e), True)
+        for i, e in enumerate(errors)
+    ]
+
+
+def test_ratio_interval_reference_values() -> None:
+    base = [0.01, -0.02, 0.03, 0.015, -0.025, 0.02]
+    rng = np.random.default_rng(0)
+    assert ratio_interval(_scored(base), _scored(base), rng) == (1.0, 1.0)
+    doubled = ratio_interval(_scored([2 * e for e in base]), _scored(base), rng)
+    assert doubled == pytest.approx((2.0, 2.0))  # every frame's error doubles: no spread
+    mixed = [0.01, -0.06, 0.03, 0.015, -0.075, 0.02]  # two frames get much worse
+    low, high = ratio_interval(_scored(mixed), _scored(base), np.random.default_rng(0))
+    assert 0.5 < low < high and high > 2.0
+    again = ratio_interval(_scored(mixed), _scored(base), np.random.default_rng(0))
+    assert again == (low, high)  # seeded: reproducible
+
+
+def test_ratio_interval_undefined_and_bad_input() -> None:
+    rng = np.random.default_rng(0)
+    below = _scored([0.1, 0.2, 0.3], pressure=3.0)  # no frame at >= 5 kPa
+    assert ratio_interval(below, below, rng) is None
+    assert ratio_interval(_scored([0.1, 0.2]), _scored([0.0, 0.0]), rng) is None  # zero baseline
+    with pytest.raises(ValueError, match="frames differ"):
+        ratio_interval(_scored([0.1, 0.2]), _scored([0.1, 0.2, 0.3]), rng)

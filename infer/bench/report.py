@@ -78,10 +78,19 @@ def _worst_in_range(rows: Sequence[Mapping[str, Any]], methods: Sequence[str]) -
             continue
         w = max(cands, key=lambda r: r["error_ratio"])
         lines.append(
-            f"- {m}: worst ratio inside the randomised ranges {w['error_ratio']:.2f}× "
+            f"- {m}: worst ratio inside the randomised ranges {_ratio(w)} "
             f"({w['perturbation']} {w['label']})"
         )
     return "\n".join(lines)
+
+
+def _ratio(row: Mapping[str, Any]) -> str | None:
+    """A robustness row's error ratio with its 90 % interval: ``"2.19× (1.41-3.02)"``."""
+    ratio, interval = row["error_ratio"], row.get("error_ratio_interval")
+    if ratio is None:
+        return None
+    text = f"{ratio:.2f}×"
+    return text if interval is None else f"{text} ({interval[0]:.2f}-{interval[1]:.2f})"
 
 
 def robustness_text(rob: Mapping[str, Any]) -> str:
@@ -92,7 +101,7 @@ def robustness_text(rob: Mapping[str, Any]) -> str:
     cols.append(("label", "level", False))
     cols.append(("range", "randomised", False))
     for m in methods:
-        cols += [(f"{m} err", f"{m} ≥5 kPa", True), (f"{m} ratio", "× base", False)]
+        cols += [(f"{m} err", f"{m} ≥5 kPa", True), (f"{m} ratio", "× base (90 % interval)", False)]
         cols.append((f"{m} nc", f"{m} no-contact acc.", True))
     table: dict[tuple[str, float], dict[str, Any]] = {}
     for r in rob["rows"]:
@@ -100,7 +109,7 @@ def robustness_text(rob: Mapping[str, Any]) -> str:
             (r["perturbation"], r["level"]), {**r, "range": "yes" if r["in_range"] else "no"}
         )
         m = r["method"]
-        row[f"{m} err"], row[f"{m} ratio"] = r["median_abs_rel_error_ge5"], r["error_ratio"]
+        row[f"{m} err"], row[f"{m} ratio"] = r["median_abs_rel_error_ge5"], _ratio(r)
         row[f"{m} nc"] = r["no_contact_accuracy"]
     first = rob["rows"][0]
     refs = "\n".join(
@@ -113,8 +122,10 @@ def robustness_text(rob: Mapping[str, Any]) -> str:
         "(`contactcal.infer.bench.perturb` documents the levels and the truth).\n"
         f"≥5 kPa: median |relative area error| over the {first['contact_frames_ge5']} frames "
         "with true contact at ≥ 5 kPa; × base: its\nratio to the perturbation's unperturbed "
-        f"level; no-contact acc.: share of the {first['no_contact_frames']} frames without "
-        f"true contact\nreported as no contact. The reference frame per perturbation:\n\n{refs}\n\n"
+        "level, with a 90 % bootstrap interval over\nthose frames (each resample keeps a frame's "
+        "errors at both levels); no-contact acc.: share of the "
+        f"{first['no_contact_frames']} frames without true contact\nreported as no contact. "
+        f"The reference frame per perturbation:\n\n{refs}\n\n"
         "randomised: the level lies inside what the training renders or augmentation randomise "
         "(`suite.PERTURBATIONS`),\nwhere the error target (≤ 2× the unperturbed error) "
         "applies.\n\n"
