@@ -14,9 +14,13 @@ from dataclasses import asdict, fields, replace
 from typing import Any
 
 from contactcal.infer.bench.dataset import IndexRow
-from contactcal.infer.bench.scoring import SESSION_SUFFIX, SOFT_SUFFIX, ScoredFrame
+from contactcal.infer.bench.scoring import (
+    SESSION_SUFFIX,
+    SOFT_SUFFIX,
+    ScoredFrame,
+    session_revised,
+)
 from contactcal.infer.calibration.fit import estimate_onset
-from contactcal.infer.calibration.rings import frame_revisions
 from contactcal.infer.image.read import load_image
 from contactcal.infer.methods.base import Method
 from contactcal.infer.methods.registry import METHODS, make_method
@@ -69,20 +73,13 @@ def session_ruled(frames: Sequence[ScoredFrame]) -> list[ScoredFrame]:
         frames: the session's scored frames of one method.
 
     Returns:
-        The same frames, renamed; a revised one
-        (:func:`~contactcal.infer.calibration.rings.frame_revisions`) reports no contact, area
-        0 and the interval ``(0, its upper end)``, as in a calibration record.
+        The same frames, renamed; a revised one (:func:`session_revised`) reports no contact,
+        area 0 and the interval ``(0, its upper end)``, as in a calibration record.
     """
     if all(f.area_interval_px is None for f in frames):
         return []
-    ring, below = frame_revisions(
-        [f.pressure_kpa for f in frames],
-        [f.area_px for f in frames],
-        [f.contact for f in frames],
-        [f.area_interval_px for f in frames],
-    )
     out = []
-    for f, revised in zip(frames, ring | below, strict=True):
+    for f, revised in zip(frames, session_revised(frames), strict=True):
         if revised and f.area_interval_px is not None:
             iv = (0.0, f.area_interval_px[1])
             f = replace(f, area_px=0.0, contact=False, area_interval_px=iv)

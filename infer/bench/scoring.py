@@ -12,6 +12,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from contactcal.infer.calibration.rings import frame_revisions
+
 #: Pressure bins of every table, kPa, ``[lo, hi)``; the last bin includes 20 kPa.
 PRESSURE_BINS: tuple[tuple[float, float], ...] = (
     (0.0, 3.0),
@@ -64,6 +66,19 @@ class ScoredFrame:
             return None
         lower, upper = self.area_interval_px
         return lower <= self.true_area_px <= upper
+
+
+def session_revised(frames: Sequence[ScoredFrame]) -> np.ndarray:
+    """``(N,) bool``: the frames (one method, one pass, any pressure order) that ``calibrate``'s
+    session rule sets to no contact (:func:`~contactcal.infer.calibration.rings.frame_revisions`,
+    both its parts); all False for a method that states no interval."""
+    ring, below = frame_revisions(
+        [f.pressure_kpa for f in frames],
+        [f.area_px for f in frames],
+        [f.contact for f in frames],
+        [f.area_interval_px for f in frames],
+    )
+    return ring | below
 
 
 def median_or_none(values: Sequence[float]) -> float | None:

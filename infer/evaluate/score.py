@@ -15,9 +15,8 @@ from typing import Any
 import cv2
 import numpy as np
 
-from contactcal.infer.bench.scoring import ScoredFrame
+from contactcal.infer.bench.scoring import ScoredFrame, session_revised
 from contactcal.infer.calibration.fit import estimate_onset
-from contactcal.infer.calibration.rings import frame_revisions
 from contactcal.infer.calibration.steps import pool
 from contactcal.infer.evaluate.labels import LabelMask
 from contactcal.infer.methods.base import AreaResult
@@ -175,13 +174,7 @@ def _session_rule(
     Returns:
         Per step, in contact and not revised (unchanged for a method without intervals).
     """
-    ring, below = frame_revisions(
-        [s.pressure_kpa for s in frames],
-        [s.area_px for s in frames],
-        [s.contact for s in frames],
-        [s.area_interval_px for s in frames],
-    )
-    revised = {s.pressure_kpa for s, r in zip(frames, ring | below, strict=True) if r}
+    revised = {s.pressure_kpa for s, r in zip(frames, session_revised(frames), strict=True) if r}
     return [c and q not in revised for c, q in zip(contacts, pressures, strict=True)]
 
 
