@@ -13,7 +13,7 @@ from contactcal.infer.cli import main
 from contactcal.infer.methods.unet.config import PreprocessConfig
 from contactcal.infer.methods.unet.postprocess import postprocess
 from contactcal.infer.methods.unet.prepare import CropBox, to_network, valid_window
-from contactcal.infer.methods.unet.runner import DEFAULT_MODEL, OnnxSegmenter
+from contactcal.infer.methods.unet.runner import DEFAULT_MODEL, OnnxSegmenter, static_dims
 from contactcal.infer.methods.unet.spec import ModelError, ModelSpec
 
 FRAME = Path(__file__).resolve().parents[1] / "examples" / "session" / "p05.0kpa.jpg"
@@ -126,3 +126,34 @@ def test_crop_partly_outside_counts_only_pixels_inside() -> None:
     spec = ModelSpec(1, PreprocessConfig(input_size=32), 0.5, 0.0)
     seg = postprocess(np.ones((32, 32), np.float32), box, shape, spec)
     assert seg.contact and 0.0 < seg.area_px <= shape[0] * shape[1]
+
+
+#: Logits of one graph run with free and with fixed input dimensions differ by float rounding
+#: only (onnxruntime picks other kernels once the shapes are known).
+STATIC_DIMS_ATOL = 1e-4
+
+
+def test_static_dims_fixes_named_dimensions_only() -> None:
+    spec = OnnxSegmenter().spec
+    s, c = spec.preprocess.input_size, spec.channels
+    assert static_dims(["batch", c, "height", "width"], spec) == {
+        "batch": 1,
+        "height": s,
+        "width": s,
+    }
+    assert static_dims([1, c, s, s], spec) == {}
+    assert static_dims([None, c, "", "w"], spec) == {"w": s}
+
+
+def test_deployed_session_runs_the_input_shape_it_is_fed() -> None:
+    ort = pytest.importorskip("onnxruntime")
+    seg = OnnxSegmenter()
+    s, c = seg.spec.preprocess.input_size, seg.spec.channels
+    assert seg.ort_session.get_inputs()[0].shape == [1, c, s, s]
+    free = ort.InferenceSession(str(DEFAULT_MODEL), providers=["CPUExecutionProvider"])
+    assert free.get_inputs()[0].shape == ["batch", c, "height", "width"]  # the file is dynamic
+    x = np.random.default_rng(3).normal(size=(1, c, s, s)).astype(np.float32)
+    got = seg.ort_session.run(None, {seg.input_name: x})[0]
+    want = free.run(None, {free.get_inputs()[0].name: x})[0]
+    assert got.shape == want.shape == (1, 1, s, s)
+    np.testing.assert_allclose(got, want, atol=STATIC_DIMS_ATOL, rtol=0)
