@@ -32,6 +32,88 @@ def test_jpeg_size(tmp_path: Path) -> None:
         jpeg_size(_upscaled(tmp_path, 0, (64, 48), ".png"))
 
 
+def test_jpeg_size_reads_other_headers(tmp_path: Path) -> None:
+    """Progressive, grey, and with an EXIF segment before the frame header: the stored size."""
+    img = cv2.resize(cv2.imread(str(EXAMPLE / "p05.0kpa.jpg")), (203, 117))
+    prog = tmp_path / "prog.jpg"
+    assert cv2.imwrite(str(prog), img, [cv2.IMWRITE_JPEG_PROGRESSIVE, 1])
+    grey = tmp_path / "grey.jpg"
+    assert cv2.imwrite(str(grey), img[:, :, 0])
+    assert jpeg_size(prog) == jpeg_size(grey) == (117, 203)
+    image = pytest.importorskip("PIL.Image")
+    exif = image.Exif()
+    exif[0x0112] = 6  # orientation "rotate 90": not applied to the stored size
+    tagged = tmp_path / "exif.jpg"
+    image.fromarray(img).save(tagged, exif=exif)
+    data = tagged.read_bytes()
+    assert data.index(b"\xff\xe1") < data.index(b"\xff\xc0")  # APP1 before the frame header
+    assert jpeg_size(tagged) == (117, 203)
+
+
+SOF = b"\xff\xc0\x00\x11\x08\x00\x75\x00\xcb"  # baseline frame header: 117 × 203 px
+
+
+@pytest.mark.parametrize(
+    "data",
+    [
+        b"\xff\xd8" + SOF,
+        b"\xff\xd8\xff\xff" + SOF[1:],  # a fill byte before the marker
+        b"\xff\xd8\xff\xd0\xff\x01" + SOF,  # standalone markers (RST0, TEM): no length
+        b"\xff\xd8\xff\xc4\x00\x04\x00\x00" + SOF,  # a table segment first
+    ],
+)
+def test_jpeg_size_walks_the_markers(tmp_path: Path, data: bytes) -> None:
+    path = tmp_path / "header.jpg"
+    path.write_bytes(data)
+    assert jpeg_size(path) == (117, 203)
+
+
+@pytest.mark.parametrize(
+    ("data", "message"),
+    [
+        (b"", "no JPEG start-of-image marker"),
+        (b"II*\x00rest", "got TIFF"),
+        (b"\xff\xd8\xff\xe0\x00\x10JFIF", "header: truncated"),
+        (b"\xff\xd8\x00\x00", "header: no marker where one was expected"),
+        (b"\xff\xd8\xff\x00", "header: data bytes where a marker was expected"),
+        (b"\xff\xd8\xff\xc0\x00\x05\x08\x00\x10", "header: segment FF C0 of length 5"),
+        (b"\xff\xd8\xff\xda\x00\x08", "no frame header before the image data"),
+        (b"\xff\xd8\xff\xc0\x00\x11\x08\x00\x00\x00\x10", "height of 0 is left to a DNL"),
+    ],
+)
+def test_jpeg_size_bad_headers(tmp_path: Path, data: bytes, message: str) -> None:
+    path = tmp_path / "bad.jpg"
+    path.write_bytes(data)
+    with pytest.raises(ImageError, match=message) as info:
+        jpeg_size(path)
+    assert str(info.value).startswith(f"{path}: ")
+
+
+def test_jpeg_size_missing_file_or_folder(tmp_path: Path) -> None:
+    with pytest.raises(ImageError, match="missing.jpg: no such file"):
+        jpeg_size(tmp_path / "missing.jpg")
+    (tmp_path / "d.jpg").mkdir()
+    with pytest.raises(ImageError, match="d.jpg: is a folder, expected a JPEG file"):
+        jpeg_size(tmp_path / "d.jpg")
+
+
+def test_exif_orientation_is_ignored_at_every_reduction(tmp_path: Path) -> None:
+    """A frame tagged "rotate 90" keeps its stored orientation, decoded fully or at 1/k."""
+    image = pytest.importorskip("PIL.Image")
+    img = np.zeros((64, 128, 3), np.uint8)
+    img[:8] = 255  # a bright top band: where it ends up shows the orientation
+    tagged = image.fromarray(img)
+    exif = tagged.getexif()
+    exif[0x0112] = 6
+    path = tmp_path / "tagged.jpg"
+    tagged.save(path, exif=exif, quality=95)
+    assert jpeg_size(path) == (64, 128)
+    for k in (1, 2, 4, 8):
+        gray = load_image(path, reduce=k)
+        assert gray.shape == (64 // k, 128 // k), k
+        assert gray[0].mean() > 200 > gray[-1].mean() + 150, k
+
+
 def test_reduced_decoding_agrees_with_full(tmp_path: Path) -> None:
     ref, frame = _upscaled(tmp_path, 0, (1600, 1200)), _upscaled(tmp_path, 12, (1600, 1200))
     unet = UnetMethod()

@@ -164,10 +164,12 @@ def load_image(
     buf = np.frombuffer(data, dtype=np.uint8)
     jpeg = p.suffix.lower() in (".jpg", ".jpeg")
     if jpeg:
+        # IMREAD_UNCHANGED ignores an EXIF orientation; the reduced flags would apply it, so a
+        # tagged frame would turn at 1/k and not at full size: they ignore it too.
         flag = {
-            2: cv2.IMREAD_REDUCED_GRAYSCALE_2,
-            4: cv2.IMREAD_REDUCED_GRAYSCALE_4,
-            8: cv2.IMREAD_REDUCED_GRAYSCALE_8,
+            2: cv2.IMREAD_REDUCED_GRAYSCALE_2 | cv2.IMREAD_IGNORE_ORIENTATION,
+            4: cv2.IMREAD_REDUCED_GRAYSCALE_4 | cv2.IMREAD_IGNORE_ORIENTATION,
+            8: cv2.IMREAD_REDUCED_GRAYSCALE_8 | cv2.IMREAD_IGNORE_ORIENTATION,
         }.get(reduce, cv2.IMREAD_UNCHANGED)
     else:
         flag = cv2.IMREAD_UNCHANGED
