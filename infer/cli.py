@@ -11,35 +11,62 @@ Exit codes: 0 success, 1 a run that found nothing usable (e.g. no contact in any
 from __future__ import annotations
 
 import argparse
+import contextlib
 import sys
 from collections.abc import Sequence
-from importlib.metadata import entry_points
+from typing import Any
 
 from contactcal.infer.bench import command as bench_command
 from contactcal.infer.calibration import command as calibrate_command
 from contactcal.infer.errors import RunError
 from contactcal.infer.evaluate import command as evaluate_command
+from contactcal.infer.image.cv_threads import opencv_threads
 from contactcal.infer.pipeline import commands as pipeline_commands
 
 #: Entry-point group through which other roles add subcommands (see pyproject.toml).
 COMMAND_GROUP = "contactcal.commands"
 
 
-def build_parser() -> argparse.ArgumentParser:
-    """The argument parser (exposed for tests and docs)."""
-    from contactcal.infer import __version__
+class _Version(argparse.Action):
+    """``--version``: print the installed version and exit (looked up only when asked)."""
 
+    def __init__(self, option_strings: Sequence[str], dest: str, **kwargs: Any) -> None:
+        kwargs.setdefault("help", "show the version and exit")
+        super().__init__(option_strings, dest, nargs=0, default=argparse.SUPPRESS, **kwargs)
+
+    def __call__(
+        self,
+        parser: argparse.ArgumentParser,
+        namespace: argparse.Namespace,
+        values: object,
+        option_string: str | None = None,
+    ) -> None:
+        from contactcal.infer import __version__
+
+        print(f"contactcal {__version__}")
+        parser.exit()
+
+
+def build_parser(command: str | None = None) -> argparse.ArgumentParser:
+    """The argument parser (exposed for tests and docs).
+
+    Args:
+        command: the subcommand about to run. When it is one of the core's, the optional roles'
+            subcommands are not added (finding and importing them costs ~20 ms of every
+            command's start-up); None or any other word: all of them (``--help`` lists all).
+    """
     parser = argparse.ArgumentParser(
         prog="contactcal",
         description="Contact-area calibration of pneumatic fingertip displays from rig images.",
     )
-    parser.add_argument("--version", action="version", version=f"contactcal {__version__}")
+    parser.add_argument("--version", action=_Version)
     sub = parser.add_subparsers(dest="command", required=True, metavar="COMMAND")
     pipeline_commands.add_parsers(sub)  # measure, demo
     calibrate_command.add_parsers(sub)
     bench_command.add_parsers(sub)
     evaluate_command.add_parsers(sub)
-    add_plugin_commands(sub)
+    if command not in sub.choices:
+        add_plugin_commands(sub)
     return parser
 
 
@@ -49,19 +76,24 @@ def add_plugin_commands(sub: argparse._SubParsersAction) -> None:
     Each entry point of the group :data:`COMMAND_GROUP` is a function taking the subparsers
     object; the core names no role, so it imports none.
     """
+    from importlib.metadata import entry_points
+
     for ep in sorted(entry_points(group=COMMAND_GROUP), key=lambda e: e.name):
         ep.load()(sub)
 
 
 def main(argv: Sequence[str] | None = None) -> int:
     """Entry point of the ``contactcal`` console script."""
-    parser = build_parser()
+    argv = list(sys.argv[1:] if argv is None else argv)
+    parser = build_parser(argv[0] if argv else None)
     args = parser.parse_args(argv)
-    args.argv = list(sys.argv[1:] if argv is None else argv)  # recorded in calibration.json
+    args.argv = argv  # recorded in calibration.json
     if getattr(args, "threads", 1) < 1:
         parser.error("--threads must be >= 1")
     try:
-        return int(args.func(args))
+        threads = getattr(args, "threads", None)  # measure, calibrate (not train: torch_threads)
+        with opencv_threads(threads) if threads else contextlib.nullcontext():
+            return int(args.func(args))
     except RunError as exc:
         print(f"contactcal: {exc}", file=sys.stderr)
         return exc.code

@@ -10,6 +10,7 @@ from pathlib import Path
 import cv2
 import pytest
 
+from contactcal.infer import cli
 from contactcal.infer.cli import main
 from contactcal.infer.methods.registry import METHODS
 
@@ -142,3 +143,15 @@ def test_measure_says_which_reference_mode_ran(tmp_path: Path) -> None:
         )
         row = json.loads(out.read_text())[0]
         assert row["reference"] == ref and "no reference frame" not in row["note"]
+
+
+def test_core_commands_skip_the_plugin_commands(monkeypatch: pytest.MonkeyPatch) -> None:
+    """A core command does not look up the synth/train commands; --help and theirs do."""
+    calls: list[int] = []
+    monkeypatch.setattr(cli, "add_plugin_commands", lambda sub: calls.append(1))
+    for command in ("measure", "calibrate", "bench", "demo"):
+        cli.build_parser(command)
+    assert calls == []
+    for command in (None, "--help", "train", "synth"):
+        cli.build_parser(command)
+    assert len(calls) == 4

@@ -14,7 +14,7 @@ class BenchConfig:
     repeats: int = 5  # timing runs per configuration; the median is reported
     timing_frames: int = 6  # frames timed per run (mid-range pressures, several fingers)
     full_size: tuple[int, int] = (2592, 1944)  # (width, height): rig resolution for speed, px
-    threads: tuple[int, ...] = (1, 2)  # onnxruntime intra-op threads timed
+    threads: tuple[int, ...] = (1, 2)  # U-Net threads timed (onnxruntime and OpenCV)
     classical_scales: tuple[float, ...] = (1.0, 0.25)  # full and reduced-resolution baseline
     bins: tuple[tuple[float, float], ...] = field(default=PRESSURE_BINS)  # kPa, [lo, hi)
     robustness_frames: int = 0  # frames of the robustness suite (0: not run); each costs

@@ -2,7 +2,9 @@
 
 Frames of the dataset are upscaled to ``BenchConfig.full_size`` (2592×1944) and timed end to
 end: on decoded arrays, and including the JPEG or PNG decode from a file. Each number is the
-median of several runs in one process, so ratios compare like with like.
+median of several runs in one process, so ratios compare like with like. A configuration's
+thread count holds for onnxruntime and OpenCV alike (OpenCV would otherwise spread the classical
+routine's full-resolution filters over every core).
 """
 
 from __future__ import annotations
@@ -21,6 +23,7 @@ import numpy as np
 
 from contactcal.infer.bench.config import BenchConfig
 from contactcal.infer.bench.dataset import IndexRow
+from contactcal.infer.image.cv_threads import opencv_threads
 from contactcal.infer.image.read import load_image
 from contactcal.infer.image.write import write_image
 from contactcal.infer.methods.base import Method
@@ -180,6 +183,9 @@ def timing(
     picks, reference = pick_frames(sessions, config.timing_frames)
     with tempfile.TemporaryDirectory() as tmp:
         frames = write_timing_frames(Path(tmp), picks, reference, config.full_size)
-        out = [time_config(c, frames, config.repeats) for c in timed_configs(model, frames, config)]
+        out = []
+        for c in timed_configs(model, frames, config):
+            with opencv_threads(c.threads):  # OpenCV's threads too, not only onnxruntime's
+                out.append(time_config(c, frames, config.repeats))
     out.append(time_network(model, config.repeats))
     return out

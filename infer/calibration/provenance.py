@@ -7,7 +7,6 @@ import contextlib
 import os
 from collections.abc import Sequence
 from dataclasses import dataclass
-from importlib import metadata
 from pathlib import Path
 from typing import Any
 
@@ -31,6 +30,8 @@ _DISTRIBUTIONS: dict[str, tuple[str, ...]] = {
 
 def package_versions() -> dict[str, str | None]:
     """Installed versions of contactcal, numpy, opencv, onnxruntime (None if absent)."""
+    from importlib import metadata  # ~10 ms to import: only when a record is written
+
     out: dict[str, str | None] = {}
     for key, dists in _DISTRIBUTIONS.items():
         out[key] = None

@@ -36,7 +36,13 @@ def method_args(p: argparse.ArgumentParser) -> None:
     """``--method``, ``--model``, ``--threads``, ``--overlay``, ``--device-id``."""
     p.add_argument("--method", choices=METHODS, default=METHODS[0], help="default %(default)s")
     p.add_argument("--model", type=Path, help="ONNX model for --method unet (default: shipped)")
-    p.add_argument("--threads", type=int, default=1, help="onnxruntime threads (default 1)")
+    p.add_argument(
+        "--threads",
+        type=int,
+        default=1,
+        help="CPU threads of onnxruntime and OpenCV (default 1: a calibration runs beside other "
+        "work, and the speeds in the model card are on one thread)",
+    )
     p.add_argument(
         "--overlay",
         type=Path,
