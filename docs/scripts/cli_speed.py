@@ -3,9 +3,11 @@
 The example session (20 frames + its 0 kPa reference) is upscaled to the rig's 2592×1944 and
 written as JPEG q95 and as PNG into a temporary folder; each method measures the session through
 the CLI, the two methods alternating, ``--runs`` times per format; the medians and their ratio
-are printed (issue target: JPEG ≤ 0.6×, PNG ≤ 1.0×). Run on an idle machine:
+are printed (issue target: JPEG ≤ 0.6×, PNG ≤ 1.0×). ``--colour`` writes the frames as colour
+images (the example frames are colour JPEGs, as the rig's camera writes them; both methods read
+them as grey). Run on an idle machine:
 
-    .venv/bin/python docs/scripts/cli_speed.py [--runs 5]
+    .venv/bin/python docs/scripts/cli_speed.py [--runs 5] [--colour]
 """
 
 from __future__ import annotations
@@ -27,13 +29,14 @@ SIZE = (2592, 1944)
 FORMATS = {".jpg": [cv2.IMWRITE_JPEG_QUALITY, 95], ".png": []}
 
 
-def _session(folder: Path, ext: str) -> list[Path]:
-    """The example frames upscaled to :data:`SIZE`, reference first."""
+def _session(folder: Path, ext: str, colour: bool) -> list[Path]:
+    """The example frames upscaled to :data:`SIZE` (grey, or colour), reference first."""
     out = []
     for src in sorted((ROOT / "examples" / "session").glob("p*.jpg")):
-        gray = cv2.resize(load_image(src), SIZE, interpolation=cv2.INTER_CUBIC)
+        img = cv2.imread(str(src), cv2.IMREAD_COLOR) if colour else load_image(src)
+        img = cv2.resize(img, SIZE, interpolation=cv2.INTER_CUBIC)
         dst = folder / (src.stem + ext)
-        cv2.imwrite(str(dst), gray, FORMATS[ext])
+        cv2.imwrite(str(dst), img, FORMATS[ext])
         out.append(dst)
     return out
 
@@ -41,11 +44,12 @@ def _session(folder: Path, ext: str) -> list[Path]:
 def main() -> None:
     ap = argparse.ArgumentParser()
     ap.add_argument("--runs", type=int, default=5)
+    ap.add_argument("--colour", action="store_true", help="colour frames (default: grey)")
     args = ap.parse_args()
     cli = Path(sys.executable).with_name("contactcal")
     with tempfile.TemporaryDirectory() as tmp:
         for ext in FORMATS:
-            paths = _session(Path(tmp), ext)
+            paths = _session(Path(tmp), ext, args.colour)
             times: dict[str, list[float]] = {"unet": [], "classical": []}
             for _ in range(args.runs):
                 for method, runs in times.items():
@@ -61,7 +65,8 @@ def main() -> None:
                     runs.append(time.perf_counter() - t0)
             u, c = (statistics.median(times[m]) for m in ("unet", "classical"))
             print(
-                f"{ext}: {len(paths) - 1} frames + reference, median of {args.runs}: "
+                f"{ext} ({'colour' if args.colour else 'grey'}): {len(paths) - 1} frames + "
+                f"reference, median of {args.runs}: "
                 f"unet {u:.2f} s, classical {c:.2f} s, ratio {u / c:.2f}"
             )
 
