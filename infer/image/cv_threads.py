@@ -12,12 +12,10 @@ import cv2
 def opencv_threads(threads: int) -> Iterator[None]:
     """Run the block with OpenCV's parallel loops on ``threads`` threads (restored after).
 
-    OpenCV parallelises its own functions (blur, resize, morphology) over every core unless
-    told otherwise, so without this a "one thread" timing of an OpenCV routine is not on one
-    thread. Setting the count also starts OpenCV's thread pool up front: left to start lazily,
-    small images (a 288² blur) ran ~2× slower on this project's 2-core machine. The setting is
-    process-wide and OpenCV's setter is not thread-safe: call this from the main thread, around
-    whole commands or timed blocks, never inside parallel work.
+    OpenCV parallelises its own functions (blur, resize, morphology) over every core unless told
+    otherwise, so without this a "one thread" timing of an OpenCV routine is not on one thread. The
+    setting is process-wide and OpenCV's setter is not thread-safe: call this from the main thread,
+    around whole commands or timed blocks, never inside parallel work.
 
     Args:
         threads: worker threads, >= 1 (1: everything on the calling thread).
