@@ -1,7 +1,7 @@
 """contactcal.infer: the deployable core (numpy, OpenCV, onnxruntime; never torch or mitsuba).
 
 ``__version__`` is the installed distribution's version (single source: ``pyproject.toml``),
-looked up on first use (``importlib.metadata`` costs ~15 ms of every command's start-up).
+looked up on first use (``importlib.metadata`` costs ~10-15 ms of every command's start-up).
 ``contactcal`` itself is a namespace over the role folders, so it has no ``__version__``; use
 this one or ``contactcal --version``.
 """

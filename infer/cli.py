@@ -52,8 +52,8 @@ def build_parser(command: str | None = None) -> argparse.ArgumentParser:
 
     Args:
         command: the subcommand about to run. When it is one of the core's, the optional roles'
-            subcommands are not added (finding and importing them costs ~20 ms of every
-            command's start-up); None or any other word: all of them (``--help`` lists all).
+            subcommands are not added (finding and importing them took ~10-20 ms of every
+            command's start-up here); None or any other word: all of them (``--help`` lists all).
     """
     parser = argparse.ArgumentParser(
         prog="contactcal",

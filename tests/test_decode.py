@@ -78,7 +78,8 @@ def test_jpeg_size_walks_the_markers(tmp_path: Path, data: bytes) -> None:
         (b"\xff\xd8\xff\x00", "header: data bytes where a marker was expected"),
         (b"\xff\xd8\xff\xc0\x00\x05\x08\x00\x10", "header: segment FF C0 of length 5"),
         (b"\xff\xd8\xff\xda\x00\x08", "no frame header before the image data"),
-        (b"\xff\xd8\xff\xc0\x00\x11\x08\x00\x00\x00\x10", "height of 0 is left to a DNL"),
+        (b"\xff\xd8\xff\xc0\x00\x11\x08\x00\x00\x00\x10", "height 0 in its frame header"),
+        (b"\xff\xd8\xff\xc0\x00\x11\x08\x00\x10\x00\x00", "width 0 in its frame header"),
     ],
 )
 def test_jpeg_size_bad_headers(tmp_path: Path, data: bytes, message: str) -> None:

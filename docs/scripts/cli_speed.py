@@ -4,8 +4,8 @@ The example session (20 frames + its 0 kPa reference) is upscaled to the rig's 2
 written as JPEG q95 and as PNG into a temporary folder; each method measures the session through
 the CLI, the two methods alternating, ``--runs`` times per format; the medians and their ratio
 are printed (issue target: JPEG ≤ 0.6×, PNG ≤ 1.0×). ``--colour`` writes the frames as colour
-images (the example frames are colour JPEGs, as the rig's camera writes them; both methods read
-them as grey). Run on an idle machine:
+images (the rig paper's camera images are RGB, converted to grey by the routine, Figures 5b and
+6b; both methods read them as grey). Run on an idle machine:
 
     .venv/bin/python docs/scripts/cli_speed.py [--runs 5] [--colour]
 """

@@ -30,7 +30,7 @@ _DISTRIBUTIONS: dict[str, tuple[str, ...]] = {
 
 def package_versions() -> dict[str, str | None]:
     """Installed versions of contactcal, numpy, opencv, onnxruntime (None if absent)."""
-    from importlib import metadata  # ~10 ms to import: only when a record is written
+    from importlib import metadata  # ~10-15 ms to import: only when a record is written
 
     out: dict[str, str | None] = {}
     for key, dists in _DISTRIBUTIONS.items():

@@ -1,7 +1,8 @@
 """JPEG frame size from the file header: the frame's SOF segment is read, no pixel is decoded.
 
-A few dozen bytes per file instead of an image library's import (~10 ms of a ``measure`` run's
-start-up, where the U-Net reads every file's header to choose its reduced decode).
+Only the header's first segments are parsed and no image library is imported (importing one
+cost ~10 ms of a ``measure`` run's start-up, where the U-Net reads every file's header to
+choose its reduced decode).
 """
 
 from __future__ import annotations
@@ -95,9 +96,11 @@ def jpeg_size(path: str | os.PathLike[str]) -> tuple[int, int]:
         raise ImageError(f"{p}: not a readable JPEG ({exc.strerror or exc})") from exc
     if size is None:
         raise ImageError(f"{p}: not a readable JPEG (no frame header before the image data)")
-    if 0 in size:
+    if size[1] == 0:
+        raise ImageError(f"{p}: not a readable JPEG (width 0 in its frame header)")
+    if size[0] == 0:
         raise ImageError(
-            f"{p}: frame size {size[1]}×{size[0]} in its header (a height of 0 is left to a DNL "
-            "segment, which contactcal does not read); save the frame again as a baseline JPEG"
+            f"{p}: height 0 in its frame header (left to a DNL segment, which contactcal does "
+            "not read); save the frame again (e.g. with OpenCV), which writes the height there"
         )
     return size
