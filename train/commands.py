@@ -49,8 +49,8 @@ def add_parsers(sub: Any) -> None:
         help="validate and save an exponential average of the weights, DECAY per step in (0, 1) "
         "(0.995 spans ~200 steps; default, or 0: off)",
     )
-    # dest differs from the deployment commands' --threads (onnxruntime threads, an int >= 1
-    # checked by contactcal.infer.cli.main); here 0 or absent means torch's default.
+    # dest differs from the deployment commands' --threads (onnxruntime's and OpenCV's threads,
+    # an int >= 1 checked by contactcal.infer.cli.main); here 0 or absent means torch's default.
     t.add_argument(
         "--threads",
         dest="torch_threads",
