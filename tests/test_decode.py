@@ -9,9 +9,11 @@ import cv2
 import numpy as np
 import pytest
 
+from contactcal.infer.image import read
 from contactcal.infer.image.gray import ImageError, reduce_area
 from contactcal.infer.image.jpeg import jpeg_size
 from contactcal.infer.image.read import load_image
+from contactcal.infer.methods.base import Started
 from contactcal.infer.methods.classical import ClassicalMethod
 from contactcal.infer.methods.unet.method import UnetMethod
 from contactcal.infer.pipeline.measure import measure_files
@@ -118,8 +120,10 @@ def test_exif_orientation_is_ignored_at_every_reduction(tmp_path: Path) -> None:
 def test_reduced_decoding_agrees_with_full(tmp_path: Path) -> None:
     ref, frame = _upscaled(tmp_path, 0, (1600, 1200)), _upscaled(tmp_path, 12, (1600, 1200))
     unet = UnetMethod()
-    k = unet.start([frame], ref)
-    assert k == 4  # crop ≈ 1050 px: 1/4 keeps >= 192 px, 1/8 would not
+    started = unet.start([frame], ref)
+    assert started.reduction == 4  # crop ≈ 1050 px: 1/4 keeps >= 192 px, 1/8 would not
+    # the reference as decoded at 1/4, returned so that the pipeline needs no second decode
+    assert np.array_equal(started.reference, load_image(ref, reduce=4))
     fast = measure_files([frame], unet, ref)[0]
     unet.set_reference(load_image(ref))
     full = unet.measure(load_image(frame))
@@ -127,15 +131,35 @@ def test_reduced_decoding_agrees_with_full(tmp_path: Path) -> None:
     assert fast.result.area_px == pytest.approx(full.area_px, rel=0.03)
 
 
+@pytest.mark.parametrize("method", [UnetMethod, ClassicalMethod])
+def test_reference_is_decoded_once_per_session(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch, method: type
+) -> None:
+    ref, frame = _upscaled(tmp_path, 0, (2592, 1944)), _upscaled(tmp_path, 12, (2592, 1944))
+    decoded: list[str] = []
+    strict = read.decode_strict
+
+    def counted(buf: np.ndarray, flag: int, name: str) -> np.ndarray | None:
+        decoded.append(Path(name).name)
+        return strict(buf, flag, name)
+
+    monkeypatch.setattr(read, "decode_strict", counted)
+    (m,) = measure_files([frame], method(), ref)
+    assert m.result.contact and (m.width, m.height) == (2592, 1944)
+    assert decoded.count(ref.name) == 1 and decoded.count(frame.name) == 1, decoded
+
+
 def test_reduction_not_used_when_unsafe(tmp_path: Path) -> None:
     unet = UnetMethod()
     small = _upscaled(tmp_path, 12, (400, 300))
-    assert unet.start([small], None) == 1  # crop already near the input size
+    assert unet.start([small], None) == Started(1, None)  # crop already near the input size
     odd = _upscaled(tmp_path, 12, (1601, 1201))
-    assert unet.start([odd], None) == 1  # not divisible: areas would not scale exactly
+    assert unet.start([odd], None).reduction == 1  # not divisible: areas would not scale exactly
     png = _upscaled(tmp_path, 12, (1600, 1200), ".png")
-    assert unet.start([png], None) == 1
-    assert ClassicalMethod().start([_upscaled(tmp_path, 5, (1600, 1200))], None) == 1
+    assert unet.start([png], None).reduction == 1
+    ref = _upscaled(tmp_path, 0, (1600, 1200))
+    started = ClassicalMethod().start([_upscaled(tmp_path, 5, (1600, 1200))], ref)
+    assert started.reduction == 1 and np.array_equal(started.reference, load_image(ref))
     assert np.isfinite(measure_files([odd], unet)[0].result.area_px)
 
 
@@ -152,7 +176,7 @@ def test_reduce_area_averages_blocks() -> None:
 def test_decoded_frames_are_shrunk_like_a_reduced_decode(tmp_path: Path) -> None:
     ref, frame = _upscaled(tmp_path, 0, (1600, 1200)), _upscaled(tmp_path, 12, (1600, 1200))
     unet = UnetMethod()
-    k = unet.start([frame], ref)
+    k = unet.start([frame], ref).reduction
     fast = measure_files([frame], unet, ref)[0].result
     unet.set_reference(load_image(ref))  # decoded at full size: the method shrinks it itself
     assert unet.shrink == k and unet.reference.gray.shape == (1200 // k, 1600 // k)
@@ -201,7 +225,7 @@ def test_corrupt_jpeg_in_a_reduced_session(tmp_path: Path) -> None:
     ref, frame = _upscaled(tmp_path, 0, (1600, 1200)), _upscaled(tmp_path, 12, (1600, 1200))
     cut = _cut_in_half(tmp_path, frame)
     unet = UnetMethod()
-    assert unet.start([cut], ref) == 4  # the U-Net decodes this session at 1/4
+    assert unet.start([cut], ref).reduction == 4  # the U-Net decodes this session at 1/4
     with pytest.raises(ImageError, match="Corrupt JPEG data"):
         measure_files([frame, cut], unet, ref)
 

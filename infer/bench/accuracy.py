@@ -39,7 +39,7 @@ def score_session(
         methods that report a probability-mass (sub-pixel) area, and one ``"<name> (session
         rule)"`` frame per frame for methods that state an interval (:func:`session_ruled`).
     """
-    k = method.start([r.frame for r in rows], rows[0].frame if use_reference else None)
+    k = method.start([r.frame for r in rows], rows[0].frame if use_reference else None).reduction
     out: list[ScoredFrame] = []
     for r in rows:
         res = method.measure(load_image(r.frame, reduce=k))

@@ -106,7 +106,7 @@ def timed_configs(
         name = "classical" if s == 1.0 else f"classical@{s:g}"
         out.append(Timed(name, 1, ClassicalMethod(ClassicalConfig(work_scale=s)), 1))
     # The reduction `measure`/`calibrate` would choose for these files.
-    k = UnetMethod(model).start(frames.files[".jpg"], None)
+    k = UnetMethod(model).start(frames.files[".jpg"], None).reduction
     for t in config.threads:
         out.append(Timed("unet", t, UnetMethod(model, threads=t), 1))
         if k > 1:
@@ -114,7 +114,7 @@ def timed_configs(
     for label, path in config.variants:  # one thread, like the error table's scoring
         name = f"unet[{label}]"
         out.append(Timed(name, 1, UnetMethod(path, threads=1), 1))
-        kv = UnetMethod(path).start(frames.files[".jpg"], None)
+        kv = UnetMethod(path).start(frames.files[".jpg"], None).reduction
         if kv > 1:
             out.append(Timed(f"{name}+reduced-decode 1/{kv}", 1, UnetMethod(path, threads=1), kv))
     return out

@@ -52,6 +52,16 @@ class AreaResult:
         )
 
 
+@dataclass(frozen=True)
+class Started:
+    """What :meth:`Method.start` decided for a session of image files."""
+
+    reduction: int  # k: load the frames with ``load_image(path, reduce=k)`` (1: full decode)
+    #: The session's reference frame as the method decoded it, ``(H/k, W/k) uint8`` (None
+    #: without one): the pipeline checks every frame against it without decoding it again.
+    reference: np.ndarray | None
+
+
 class Method(Protocol):
     """What every contact-area method provides."""
 
@@ -59,13 +69,14 @@ class Method(Protocol):
 
     def start(
         self, files: Sequence[Path], reference: Path | None, bit_depth: int | None = None
-    ) -> int:
-        """Begin a session of image files: read the reference, return the decode reduction k.
+    ) -> Started:
+        """Begin a session of image files: read the reference, choose the decode reduction k.
 
         The frames are then to be loaded with ``load_image(path, reduce=k, bit_depth=...)``;
         k > 1 only when every file (frames and reference) has one size whose sides divide by
         k, so a frame decoded at 1/k is exactly k times smaller per side.
-        ``bit_depth`` is the significant bits of 16-bit files (None: from the file).
+        ``bit_depth`` is the significant bits of 16-bit files (None: from the file). The
+        reference is decoded once, here, at 1/k, and returned with k.
         """
 
     def set_reference(self, reference: np.ndarray | None, reduction: int = 1) -> None:

@@ -28,7 +28,7 @@ import cv2
 import numpy as np
 
 from contactcal.infer.image.gray import to_gray_u8
-from contactcal.infer.methods.base import AreaResult, load_reference
+from contactcal.infer.methods.base import AreaResult, Started, load_reference
 
 
 @dataclass(frozen=True)
@@ -204,10 +204,11 @@ class ClassicalMethod:
 
     def start(
         self, files: Sequence[Path], reference: Path | None, bit_depth: int | None = None
-    ) -> int:
+    ) -> Started:
         """Read the reference fully decoded (the routine's constants are for full frames)."""
-        self.set_reference(load_reference(reference, bit_depth=bit_depth))
-        return 1
+        ref = load_reference(reference, bit_depth=bit_depth)
+        self.set_reference(ref)
+        return Started(1, ref)
 
     def set_reference(self, reference: np.ndarray | None, reduction: int = 1) -> None:
         """Take the ROI from the reference frame; without one, each frame finds its own."""

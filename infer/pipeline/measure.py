@@ -125,11 +125,12 @@ def _check_frame(ref: _Reference, path: Path, img: np.ndarray, size: tuple[int, 
 def _start(
     method: Method, images: list[Path], reference: Path | None, bit_depth: int | None
 ) -> tuple[int, _Reference | None]:
-    """Start the method; the decode reduction k and the reference the frames must match."""
-    k = method.start(images, reference, bit_depth)
-    if reference is None:
+    """Start the method; the decode reduction k and the reference the frames must match (the
+    method's own decode of it: the reference is decoded once per session)."""
+    started = method.start(images, reference, bit_depth)
+    k, img = started.reduction, started.reference
+    if reference is None or img is None:
         return k, None
-    img = load_image(reference, reduce=k, bit_depth=bit_depth)
     return k, _Reference(reference, _file_size(img, k), _coarse_ring(img))
 
 

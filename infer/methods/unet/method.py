@@ -21,7 +21,7 @@ from contactcal.infer.files.digest import sha256_file
 from contactcal.infer.image.gray import reduce_area, to_gray_u8
 from contactcal.infer.image.jpeg import jpeg_size
 from contactcal.infer.image.read import load_image
-from contactcal.infer.methods.base import AreaResult, load_reference
+from contactcal.infer.methods.base import AreaResult, Started, load_reference
 from contactcal.infer.methods.unet.postprocess import mask_in_input
 from contactcal.infer.methods.unet.prepare import session_reference
 from contactcal.infer.methods.unet.runner import OnnxSegmenter
@@ -69,20 +69,21 @@ class UnetMethod:
 
     def start(
         self, files: Sequence[Path], reference: Path | None, bit_depth: int | None = None
-    ) -> int:
+    ) -> Started:
         """Choose the decode reduction from the ring's size, then prepare the reference.
 
         A reduction k > 1 is used only when every file is a JPEG of one size divisible by k (so
         areas scale back exactly by k²) and the ring crop stays >= the network input at 1/k
         (:func:`fitting_reduction`). The ring is searched on the 1/8 decode; at k = 8 that
-        search is the session's.
+        search is the session's, and that decode is the reference returned.
         """
         paths = [*files, *([reference] if reference is not None else [])]
         jpegs = bool(paths) and all(p.suffix.lower() in (".jpg", ".jpeg") for p in paths)
         sizes = {jpeg_size(p) for p in paths} if jpegs else set()
         if len(sizes) != 1:  # not all JPEG, or JPEGs of several sizes: decode fully
-            self.set_reference(load_reference(reference, bit_depth=bit_depth))
-            return 1
+            ref = load_reference(reference, bit_depth=bit_depth)
+            self.set_reference(ref)
+            return Started(1, ref)
         (h, w), cfg = sizes.pop(), self.segmenter.spec.preprocess
         # paths[-1] is the reference when there is one.
         coarse = session_reference(load_image(paths[-1], reduce=8, bit_depth=bit_depth), cfg)
@@ -91,9 +92,10 @@ class UnetMethod:
             k = fitting_reduction(coarse.box.side * 8, (h, w), cfg)
         if k == 8 and reference is not None:
             self.reference, self.reduction, self.shrink = coarse, 8, 1
-        else:
-            self.set_reference(load_reference(reference, k, bit_depth), k)
-        return k
+            return Started(8, coarse.gray)
+        ref = load_reference(reference, k, bit_depth)
+        self.set_reference(ref, k)
+        return Started(k, ref)
 
     def set_reference(self, reference: np.ndarray | None, reduction: int = 1) -> None:
         """Fix the crop and the reference channel from the session's zero-pressure frame.

@@ -50,15 +50,19 @@ def ridge_energy(work: np.ndarray, config: PreprocessConfig, reference_level: fl
         raise ValueError("ridge_energy: config.ridge_work_px is 0 (no ridge channel)")
     if work.shape != (w, w):
         raise ValueError(f"ridge_energy: expected a ({w}, {w}) crop, got shape {work.shape}")
-    work = work.astype(np.float32) / max(reference_level, 1.0)
+    # Three (W, W) buffers, reused in place: fresh arrays of this size cost page faults.
+    work = np.divide(work, max(reference_level, 1.0), dtype=np.float32)
     fine = cv2.GaussianBlur(work, (0, 0), config.ridge_sigma_fine_px)
     coarse = cv2.GaussianBlur(work, (0, 0), config.ridge_sigma_coarse_px)
-    band = fine - coarse
-    energy = np.sqrt(cv2.GaussianBlur(band * band, (0, 0), config.ridge_smooth_px))
+    band = np.subtract(fine, coarse, out=fine)
+    np.multiply(band, band, out=band)
+    energy = cv2.GaussianBlur(band, (0, 0), config.ridge_smooth_px, dst=coarse)
+    np.sqrt(energy, out=energy)
     s = config.input_size
     interp = cv2.INTER_AREA if w > s else cv2.INTER_LINEAR
     small = cv2.resize(energy, (s, s), interpolation=interp)
-    return (small / config.ridge_norm).astype(np.float32)
+    small /= config.ridge_norm
+    return small
 
 
 def ridge_band_frequency(config: PreprocessConfig) -> float:

@@ -100,8 +100,13 @@ def _session(path: Path, opts: SessionOptions) -> InferenceSession:
 
 
 def sigmoid(logits: np.ndarray) -> np.ndarray:
-    """Probabilities from logits, float32, without overflow."""
-    return (1.0 / (1.0 + np.exp(-np.clip(logits, -30.0, 30.0)))).astype(np.float32)
+    """Probabilities from logits, float32, without overflow (one new array, updated in place:
+    the same float32 operations as ``1 / (1 + exp(-clip(logits)))``)."""
+    p = np.clip(logits, -30.0, 30.0, dtype=np.float32)
+    np.negative(p, out=p)
+    np.exp(p, out=p)
+    p += np.float32(1.0)
+    return np.reciprocal(p, out=p)
 
 
 class OnnxSegmenter:
@@ -147,7 +152,8 @@ class OnnxSegmenter:
 
     def probabilities(self, x: np.ndarray) -> np.ndarray:
         """Run the network on a ``(C, S, S)`` input; returns ``(S, S) float32`` probabilities."""
-        logits = self.ort_session.run(None, {self.input_name: x[None].astype(np.float32)})[0]
+        feed = np.ascontiguousarray(x[None], dtype=np.float32)  # no copy when already so
+        logits = self.ort_session.run(None, {self.input_name: feed})[0]
         return sigmoid(logits[0, 0])
 
     def segment(self, gray: np.ndarray, reference: SessionReference) -> Segmentation:
