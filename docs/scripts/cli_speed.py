@@ -5,9 +5,13 @@ written as JPEG q95 and as PNG into a temporary folder; each method measures the
 the CLI, the two methods alternating, ``--runs`` times per format; the medians and their ratio
 are printed (issue target: JPEG ≤ 0.6×, PNG ≤ 1.0×). ``--colour`` writes the frames as colour
 images (the rig paper's camera images are RGB, converted to grey by the routine, Figures 5b and
-6b; both methods read them as grey). Run on an idle machine:
+6b; both methods read them as grey). ``--cli PATH`` times another ``contactcal`` executable, e.g.
+one installed from the wheel (``bash .ci/wheel-smoke DIR`` leaves it in ``DIR/venv/bin``): a
+wheel install carries compiled bytecode, while an editable install under
+``PYTHONDONTWRITEBYTECODE=1`` compiles every imported module at each start. Run on an idle
+machine:
 
-    .venv/bin/python docs/scripts/cli_speed.py [--runs 5] [--colour]
+    .venv/bin/python docs/scripts/cli_speed.py [--runs 5] [--colour] [--cli PATH]
 """
 
 from __future__ import annotations
@@ -45,8 +49,9 @@ def main() -> None:
     ap = argparse.ArgumentParser()
     ap.add_argument("--runs", type=int, default=5)
     ap.add_argument("--colour", action="store_true", help="colour frames (default: grey)")
+    ap.add_argument("--cli", type=Path, help="contactcal executable (default: this venv's)")
     args = ap.parse_args()
-    cli = Path(sys.executable).with_name("contactcal")
+    cli = args.cli or Path(sys.executable).with_name("contactcal")
     with tempfile.TemporaryDirectory() as tmp:
         for ext in FORMATS:
             paths = _session(Path(tmp), ext, args.colour)
