@@ -149,6 +149,15 @@ def test_reference_is_decoded_once_per_session(
     assert decoded.count(ref.name) == 1 and decoded.count(frame.name) == 1, decoded
 
 
+def test_a_start_without_the_reference_image_is_a_protocol_error(tmp_path: Path) -> None:
+    ref, frame = _upscaled(tmp_path, 0, (400, 300)), _upscaled(tmp_path, 12, (400, 300))
+    method = ClassicalMethod()
+    method.start = lambda files, reference, bit_depth=None: Started(1, None)  # type: ignore[method-assign]
+    with pytest.raises(TypeError, match=r"classical: start\(\) returned no reference image"):
+        measure_files([frame], method, ref)
+    assert measure_files([frame], method)[0].reference is None  # none given: none needed
+
+
 def test_reduction_not_used_when_unsafe(tmp_path: Path) -> None:
     unet = UnetMethod()
     small = _upscaled(tmp_path, 12, (400, 300))

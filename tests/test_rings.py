@@ -24,7 +24,8 @@ from contactcal.infer.calibration.rings import (
     shrinking_steps,
 )
 from contactcal.infer.errors import RunError
-from contactcal.infer.methods.base import AreaResult
+from contactcal.infer.image.read import load_image
+from contactcal.infer.methods.base import AreaResult, Started
 
 EXAMPLE = Path(__file__).resolve().parents[1] / "examples" / "session"
 NAN = float("nan")
@@ -194,8 +195,8 @@ class _Scripted:
 
     def start(
         self, files: Sequence[Path], reference: Path | None, bit_depth: int | None = None
-    ) -> int:
-        return 1
+    ) -> Started:
+        return Started(1, None if reference is None else load_image(reference))
 
     def set_reference(self, reference: np.ndarray | None, reduction: int = 1) -> None:
         return None

@@ -129,8 +129,10 @@ def _start(
     method's own decode of it: the reference is decoded once per session)."""
     started = method.start(images, reference, bit_depth)
     k, img = started.reduction, started.reference
-    if reference is None or img is None:
+    if reference is None:
         return k, None
+    if img is None:  # a method breaking the protocol, not bad input
+        raise TypeError(f"{method.name}: start() returned no reference image for {reference}")
     return k, _Reference(reference, _file_size(img, k), _coarse_ring(img))
 
 
