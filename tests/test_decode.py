@@ -131,11 +131,22 @@ def test_reduced_decoding_agrees_with_full(tmp_path: Path) -> None:
     assert fast.result.area_px == pytest.approx(full.area_px, rel=0.03)
 
 
-@pytest.mark.parametrize("method", [UnetMethod, ClassicalMethod])
-def test_reference_is_decoded_once_per_session(
-    tmp_path: Path, monkeypatch: pytest.MonkeyPatch, method: type
+@pytest.mark.parametrize(
+    ("method", "size", "reference_decodes"),
+    [
+        (UnetMethod, (2592, 1944), 1),  # k = 8: the ring search's 1/8 decode is the reference
+        (UnetMethod, (1600, 1200), 2),  # k = 4: the ring search at 1/8, then the reference at 1/4
+        (ClassicalMethod, (2592, 1944), 1),
+    ],
+)
+def test_the_frame_check_decodes_no_reference(
+    tmp_path: Path,
+    monkeypatch: pytest.MonkeyPatch,
+    method: type,
+    size: tuple[int, int],
+    reference_decodes: int,
 ) -> None:
-    ref, frame = _upscaled(tmp_path, 0, (2592, 1944)), _upscaled(tmp_path, 12, (2592, 1944))
+    ref, frame = _upscaled(tmp_path, 0, size), _upscaled(tmp_path, 12, size)
     decoded: list[str] = []
     strict = read.decode_strict
 
@@ -145,8 +156,9 @@ def test_reference_is_decoded_once_per_session(
 
     monkeypatch.setattr(read, "decode_strict", counted)
     (m,) = measure_files([frame], method(), ref)
-    assert m.result.contact and (m.width, m.height) == (2592, 1944)
-    assert decoded.count(ref.name) == 1 and decoded.count(frame.name) == 1, decoded
+    assert m.result.contact and (m.width, m.height) == size
+    assert decoded.count(frame.name) == 1, decoded
+    assert decoded.count(ref.name) == reference_decodes, decoded
 
 
 def test_a_start_without_the_reference_image_is_a_protocol_error(tmp_path: Path) -> None:

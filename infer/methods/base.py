@@ -9,7 +9,7 @@ from __future__ import annotations
 
 import os
 from collections.abc import Sequence
-from dataclasses import dataclass, replace
+from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import Any, Protocol
 
@@ -59,7 +59,8 @@ class Started:
     reduction: int  # k: load the frames with ``load_image(path, reduce=k)`` (1: full decode)
     #: The session's reference frame as the method decoded it, ``(H/k, W/k) uint8`` (None
     #: without one): the pipeline checks every frame against it without decoding it again.
-    reference: np.ndarray | None
+    #: Not compared (``==`` compares the reduction only; arrays have no truth value).
+    reference: np.ndarray | None = field(compare=False)
 
 
 class Method(Protocol):
@@ -76,7 +77,7 @@ class Method(Protocol):
         k > 1 only when every file (frames and reference) has one size whose sides divide by
         k, so a frame decoded at 1/k is exactly k times smaller per side.
         ``bit_depth`` is the significant bits of 16-bit files (None: from the file). The
-        reference is decoded once, here, at 1/k, and returned with k.
+        reference decoded at 1/k is returned with k, so that nothing decodes it again.
         """
 
     def set_reference(self, reference: np.ndarray | None, reduction: int = 1) -> None:

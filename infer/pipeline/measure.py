@@ -126,13 +126,16 @@ def _start(
     method: Method, images: list[Path], reference: Path | None, bit_depth: int | None
 ) -> tuple[int, _Reference | None]:
     """Start the method; the decode reduction k and the reference the frames must match (the
-    method's own decode of it: the reference is decoded once per session)."""
+    method's own decode of it at 1/k: the frame check decodes nothing more)."""
     started = method.start(images, reference, bit_depth)
     k, img = started.reduction, started.reference
     if reference is None:
         return k, None
     if img is None:  # a method breaking the protocol, not bad input
-        raise TypeError(f"{method.name}: start() returned no reference image for {reference}")
+        raise TypeError(
+            f"{method.name}: start() returned no reference image for {reference}; expected "
+            "the reference decoded at 1/k (Started.reference)"
+        )
     return k, _Reference(reference, _file_size(img, k), _coarse_ring(img))
 
 

@@ -172,8 +172,7 @@ def _to_network(
     # No network pixel inside the image: nothing to normalise to; postprocess then reports no
     # contact (it ignores every network pixel outside the image), so the scale is immaterial.
     level = max(float(np.percentile(inside, config.norm_percentile)) if inside.size else 1.0, 1.0)
-    # In place on the crop (crop_resize returns a new float32 array): the float32 operations of
-    # unit_to_network(clip(crop / level, 0, 1)) without four fresh (S, S) temporaries.
+    # unit_to_network(clip(crop / level, 0, 1)) in place on the crop (a new float32 array).
     np.divide(crop, level, out=crop)
     np.clip(crop, 0.0, 1.0, out=crop)
     crop -= config.norm_mean

@@ -51,7 +51,7 @@ def ridge_energy(work: np.ndarray, config: PreprocessConfig, reference_level: fl
     if work.shape != (w, w):
         raise ValueError(f"ridge_energy: expected a ({w}, {w}) crop, got shape {work.shape}")
     # Three (W, W) buffers, reused in place: fresh arrays of this size cost page faults.
-    work = np.divide(work, max(reference_level, 1.0), dtype=np.float32)
+    work = np.divide(work, max(float(reference_level), 1.0), dtype=np.float32)
     fine = cv2.GaussianBlur(work, (0, 0), config.ridge_sigma_fine_px)
     coarse = cv2.GaussianBlur(work, (0, 0), config.ridge_sigma_coarse_px)
     band = np.subtract(fine, coarse, out=fine)

@@ -100,8 +100,11 @@ def _session(path: Path, opts: SessionOptions) -> InferenceSession:
 
 
 def sigmoid(logits: np.ndarray) -> np.ndarray:
-    """Probabilities from logits, float32, without overflow (one new array, updated in place:
-    the same float32 operations as ``1 / (1 + exp(-clip(logits)))``)."""
+    """``1 / (1 + exp(-clip(logits, ±30)))`` in float32: probabilities without overflow.
+
+    One new array, updated in place; logits of another dtype are cast to float32 first (the
+    network's are float32).
+    """
     p = np.clip(logits, -30.0, 30.0, dtype=np.float32)
     np.negative(p, out=p)
     np.exp(p, out=p)
