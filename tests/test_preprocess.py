@@ -18,8 +18,10 @@ from contactcal.infer.methods.unet.prepare import (
     session_reference,
     to_network,
     unit_to_network,
+    valid_window,
 )
 from contactcal.infer.methods.unet.ring import RingFit, locate_ring
+from contactcal.infer.methods.unet.runner import sigmoid
 
 W, H = 324, 243  # half the procedural default: fast, ring radius 0.42·H ≈ 102 px
 
@@ -107,6 +109,28 @@ def test_normalisation_is_exposure_invariant(rng: np.random.Generator) -> None:
     a = to_network(img, box)
     b = to_network(np.clip(np.rint(img * 0.6), 0, 255).astype(np.uint8), box)
     assert np.median(np.abs(a - b)) < 0.05
+
+
+def test_in_place_normalisation_equals_the_plain_expression(rng: np.random.Generator) -> None:
+    """``to_network`` works in place; bit for bit it is unit_to_network(clip(crop / P, 0, 1))."""
+    gray = _frame(rng)
+    cfg = PreprocessConfig(input_size=96)
+    box = crop_box(locate_ring(gray, cfg), gray.shape, cfg)
+    crop = crop_resize(gray, box, cfg.input_size)
+    inside = crop[valid_window(box, gray.shape, cfg.input_size)]
+    level = max(float(np.percentile(inside, cfg.norm_percentile)), 1.0)
+    expected = unit_to_network(np.clip(crop / level, 0.0, 1.0), cfg).astype(np.float32)
+    got = to_network(gray, box, cfg)
+    assert got.dtype == np.float32 and np.array_equal(got, expected)
+
+
+def test_sigmoid_equals_the_plain_expression(rng: np.random.Generator) -> None:
+    logits = rng.normal(0.0, 20.0, (64, 64)).astype(np.float32)
+    before = logits.copy()
+    expected = (1.0 / (1.0 + np.exp(-np.clip(logits, -30.0, 30.0)))).astype(np.float32)
+    got = sigmoid(logits)
+    assert got.dtype == np.float32 and np.array_equal(got, expected)
+    assert np.array_equal(logits, before)  # a new array: the caller's logits are kept
 
 
 def test_unit_mapping_inverts() -> None:

@@ -47,6 +47,25 @@ def test_sinusoid_reference_values(period: float) -> None:
     assert float(np.median(centre)) == pytest.approx(expected, rel=0.05)
 
 
+def test_in_place_work_equals_the_plain_expression() -> None:
+    """The in-place steps give, bit for bit, the channel as first written (the float32 ops of
+    the models' training), and leave the caller's crop as it was."""
+    rng = np.random.default_rng(3)
+    work = rng.uniform(0, 255, (WORK, WORK)).astype(np.float32)
+    before = work.copy()
+    level = 187.3
+    w = work.astype(np.float32) / level
+    band = cv2.GaussianBlur(w, (0, 0), CFG.ridge_sigma_fine_px) - cv2.GaussianBlur(
+        w, (0, 0), CFG.ridge_sigma_coarse_px
+    )
+    energy = np.sqrt(cv2.GaussianBlur(band * band, (0, 0), CFG.ridge_smooth_px))
+    small = cv2.resize(energy, (SIZE, SIZE), interpolation=cv2.INTER_AREA)
+    expected = (small / CFG.ridge_norm).astype(np.float32)
+    got = ridge_energy(work, CFG, level)
+    assert got.dtype == np.float32 and np.array_equal(got, expected)
+    assert np.array_equal(work, before)
+
+
 def test_flat_crop_has_no_energy() -> None:
     e = ridge_energy(np.full((WORK, WORK), 90.0, np.float32), CFG, 200.0)
     assert float(np.abs(e).max()) < 1e-4  # float32 rounding of the blurs
