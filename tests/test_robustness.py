@@ -15,7 +15,7 @@ from contactcal.infer.bench import config as bench_config
 from contactcal.infer.bench import run as bench_run
 from contactcal.infer.bench.config import BenchConfig
 from contactcal.infer.bench.dataset import read_index, sessions_of
-from contactcal.infer.bench.perturb import offset, resolution
+from contactcal.infer.bench.perturb import SPECK_DISC, offset, resolution, speck
 from contactcal.infer.bench.robustness import (
     Sample,
     load_sample,
@@ -86,6 +86,40 @@ def test_offset_shifts_by_whole_pixels() -> None:
     assert np.hypot(ys.min() - 10, xs.min() - 20) == pytest.approx(10, abs=0.75)
     edge = offset(mask, 1.0, np.random.default_rng(1), ring=ring)  # 50 px: pushed out
     assert edge.shape == mask.shape and np.count_nonzero(edge) < 100
+
+
+def test_speck_bright_near_the_centre_and_in_the_reference_too(
+    frame: np.ndarray, tmp_path: Path
+) -> None:
+    """The speck only brightens, inside the central disc; stronger levels brighten more at the
+    same place; the reference gets the same speck; levels outside [0, 1] are errors."""
+    ring = locate_ring(frame)
+    peaks = []
+    for level in (0.1, 0.2, 0.4):
+        out = speck(frame, level, np.random.default_rng(5), ring=ring)
+        diff = out.astype(int) - frame.astype(int)
+        assert diff.min() >= 0 and diff.max() > 0
+        ys, xs = np.nonzero(diff)
+        centre = np.hypot(ys.mean() - ring.cy, xs.mean() - ring.cx)
+        assert centre <= SPECK_DISC * ring.radius + 1.0
+        peaks.append((diff.max(), (ys.mean(), xs.mean())))
+    assert peaks[0][0] < peaks[1][0] < peaks[2][0]
+    assert peaks[0][1] == pytest.approx(peaks[2][1], abs=0.5)
+    # On a black frame the peak is the level itself (255 · level^(1/2.2)), up to the blob's
+    # sampling: its centre falls between pixels.
+    black = np.zeros((300, 400), np.uint8)
+    top = int(speck(black, 0.4, np.random.default_rng(5), ring=ring).max())
+    assert 0.85 * 255 * 0.4 ** (1 / 2.2) <= top <= round(255 * 0.4 ** (1 / 2.2))
+    with pytest.raises(ValueError, match="window speck level"):
+        speck(frame, 1.5, np.random.default_rng(0), ring=ring)
+    data = write_dataset(tmp_path / "d", fingers=1)
+    row, ref = sample_rows(sessions_of(read_index(data)), 5)[3]
+    s = load_sample(row, ref)
+    s = Sample(s.row, s.reference.copy(), s.reference, s.mask, s.ring)  # frame == reference
+    by_name = {p.name: p for p in PERTURBATIONS}
+    f, r, true = perturbed(by_name["window speck"], 0.4, s, (0, 0, 0, 0))
+    np.testing.assert_array_equal(f, r)
+    assert not np.array_equal(f, s.frame) and true == row.area_px
 
 
 def test_noise_reference_independent_others_same(tmp_path: Path) -> None:

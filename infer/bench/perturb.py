@@ -29,11 +29,20 @@ unperturbed reference frame) as the keyword ``ring``. What each level means:
 * **no reference**: the frame unchanged, the method given no reference frame (the U-Net then
   finds the ring in the frame and uses the frame as its reference channel; the classical
   routine takes its ROI from the frame).
+* **window speck** ``s``: a bright speck on the window near the centre, where the first contact
+  appears: a Gaussian blob adding ``s`` of white in linear light (linearised with the display
+  gamma 2.2, as for exposure), its centre drawn uniformly over a disc of ``SPECK_DISC`` × the
+  ring radius about the ring's centre, its radius uniformly over ``SPECK_RADIUS_400`` px at
+  400 px wide, scaled with the width. It copies the renderer's bright dust (``synth/look.py``,
+  ``add_dust``: 10-40 % of white, radius 1-4 px at 400 wide, placed uniformly over the frame,
+  so rarely near the centre), which adds it before the camera's exposure and noise; here it is
+  added to the finished frame.
 
 The reference frame (:data:`REFERENCE_MODES`): camera settings are per session, so contrast,
 gamma, exposure, blur, JPEG and resolution perturb it exactly as the frame; noise is drawn
 independently for it (sensor noise differs between exposures); a dimmed sector is a property of
-the rig (a weak LED), present from the 0 kPa frame on, so the reference gets the same sector.
+the rig (a weak LED), present from the 0 kPa frame on, so the reference gets the same sector, and
+so is a speck on the window: the reference gets the same speck (identically seeded).
 The offset leaves the reference as recorded: it is a misregistration between the frame and the
 session's reference, and the ring moves with the frame. For the classical routine (ROI fixed
 from the reference, the ring outside the ROI) that is what an off-centre finger does: the
@@ -62,6 +71,11 @@ SECTOR_DEG = 60.0
 #: Radii of the dimmed annulus, × the ring's outer radius (the bright outer ring, not the
 #: membrane inside it where the contact lies).
 SECTOR_RADII = (0.85, 1.15)
+#: Radius of the disc the window speck is placed in, × the ring's outer radius: the centre of
+#: the window, where a contact starts (first contacts span ~0.1-0.3 ring radii).
+SPECK_DISC = 0.3
+#: Range of the speck's radius (≈ 1.5 σ of its Gaussian), px at 400 px wide: the renderer's dust.
+SPECK_RADIUS_400 = (1.0, 4.0)
 
 
 def _u8(values: np.ndarray) -> np.ndarray:
@@ -179,6 +193,36 @@ def offset(
     out[max(dy, 0) : h + min(dy, 0), max(dx, 0) : w + min(dx, 0)] = gray[
         max(-dy, 0) : h + min(-dy, 0), max(-dx, 0) : w + min(-dx, 0)
     ]
+    return out
+
+
+def speck(gray: np.ndarray, level: float, rng: np.random.Generator, *, ring: RingFit) -> np.ndarray:
+    """A bright speck on the window near the ring's centre, adding ``level`` of white (0 = none).
+
+    Args:
+        gray: ``(H, W) uint8`` frame.
+        level: peak of the added linear radiance, fraction of white (0-1).
+        rng: draws the speck's place (2 draws) and radius (1 draw), in that order.
+        ring: the session's window ring (input pixels).
+    """
+    _check(level, 0.0, 1.0, "window speck")
+    out = gray.copy()
+    if level == 0.0:
+        return out
+    dist = SPECK_DISC * ring.radius * math.sqrt(rng.random())
+    angle = rng.uniform(-math.pi, math.pi)
+    cx, cy = ring.cx + dist * math.cos(angle), ring.cy + dist * math.sin(angle)
+    sigma = max(rng.uniform(*SPECK_RADIUS_400) * gray.shape[1] / 400.0, 0.3) / 1.5
+    reach = 4.0 * sigma  # the blob is < 4e-4 of its peak beyond
+    x0, y0 = max(math.floor(cx - reach), 0), max(math.floor(cy - reach), 0)
+    x1 = min(math.ceil(cx + reach) + 1, gray.shape[1])
+    y1 = min(math.ceil(cy + reach) + 1, gray.shape[0])
+    if x1 <= x0 or y1 <= y0:
+        return out
+    yy, xx = np.mgrid[y0:y1, x0:x1]
+    blob = level * np.exp(-((xx - cx) ** 2 + (yy - cy) ** 2) / (2.0 * sigma**2))
+    linear = (out[y0:y1, x0:x1] / 255.0) ** DISPLAY_GAMMA + blob
+    out[y0:y1, x0:x1] = _u8(255.0 * np.clip(linear, 0.0, 1.0) ** (1.0 / DISPLAY_GAMMA))
     return out
 
 

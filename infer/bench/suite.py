@@ -21,6 +21,7 @@ from contactcal.infer.bench.perturb import (
     noise,
     offset,
     resolution,
+    speck,
     unchanged,
 )
 
@@ -162,5 +163,18 @@ PERTURBATIONS: tuple[Perturbation, ...] = (
         "reference frame",
         "dropped",
         names=((0, "with"), (1, "without")),
+    ),
+    # renders: bright dust specks, 10-40 % of white, placed anywhere (rarely near the centre).
+    # Last in the suite, so the other rows keep their seeds (the seed counts perturbations).
+    Perturbation(
+        "window speck",
+        speck,
+        (0.0, 0.1, 0.2, 0.4),
+        0.0,
+        "added white (linear)",
+        "same",
+        needs_ring=True,
+        names=((0, "none"),),
+        randomised=(0.1, 0.4),
     ),
 )
