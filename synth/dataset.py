@@ -53,6 +53,9 @@ class DatasetConfig:
     # share of the hard sessions with a smooth coating (thin sharp ring before contact,
     # docs/synth.md); 0 keeps the v2 world the shipped model was trained on
     smooth_fraction: float = 0.0
+    # share of all sessions with a bright dust speck on the window near the centre (where the
+    # shipped model calls contact before contact); 0 keeps the shipped model's world
+    speck_fraction: float = 0.0
     render: RenderConfig = field(default_factory=RenderConfig)  # size, spp, mesh, variant
 
     def __post_init__(self) -> None:
@@ -61,13 +64,17 @@ class DatasetConfig:
             raise ValueError(f"--hard-fraction must be in [0, 1], got {self.hard_fraction}")
         if not 0.0 <= self.smooth_fraction <= 1.0:
             raise ValueError(f"--smooth-fraction must be in [0, 1], got {self.smooth_fraction}")
+        if not 0.0 <= self.speck_fraction <= 1.0:
+            raise ValueError(f"--speck-fraction must be in [0, 1], got {self.speck_fraction}")
 
 
 def session_params(config: DatasetConfig, finger: int) -> SessionParams:
     """The deterministic parameters of finger ``finger``."""
     rng = np.random.default_rng([config.seed, finger])
     hard = bool(rng.random() < config.hard_fraction)
-    return sample_session(rng, hard=hard, smooth_fraction=config.smooth_fraction)
+    return sample_session(
+        rng, hard=hard, smooth_fraction=config.smooth_fraction, speck_fraction=config.speck_fraction
+    )
 
 
 def _truth(out: FrameOutput, finger: int, hard: bool) -> dict[str, Any]:
@@ -207,7 +214,8 @@ def _check_config_matches(root: Path, config: DatasetConfig) -> None:
     if path.is_file():
         old = json.loads(path.read_text())
         new = json.loads(json.dumps(data))
-        old.setdefault("smooth_fraction", 0.0)  # folders rendered before the option existed
+        old.setdefault("smooth_fraction", 0.0)  # folders rendered before the options existed
+        old.setdefault("speck_fraction", 0.0)
         old.setdefault("synth_revision", 1)
         if old["synth_revision"] != SYNTH_REVISION:
             raise ValueError(

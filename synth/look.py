@@ -39,6 +39,12 @@ class LookEffects:
     #   1-4 px at 400 px width; they mimic pores/scars, so the segmenter must ignore them
     stray_amplitude: float = 0.0  # peak of a soft bright glare streak, fraction of white;
     #   lifts the dark membrane locally (15 % ≈ half the routine's threshold margin)
+    #: One bright speck on the window near the image centre, where the first contact appears
+    #: (``DatasetConfig.speck_fraction``, opt-in): ``(strength, radius, x, y)`` = peak in
+    #: fraction of white (0 = none), radius px at 400 px width, centre offset from the image
+    #: centre × the image height. Uniformly placed dust is rarely there, and the shipped model
+    #: takes such a speck for contact before contact (models/MODEL_CARD.md, "Limits").
+    centre_speck: tuple[float, float, float, float] = (0.0, 0.0, 0.0, 0.0)
     seed: int = 0  # places the dust and the glare; fixed per session (they sit on the window)
 
     def __post_init__(self) -> None:
@@ -54,6 +60,10 @@ class LookEffects:
             (math.isfinite(self.motion_blur_deg), "motion_blur_deg must be finite"),
             (0 <= self.dust_count <= 1000, "dust_count must be in [0, 1000]"),
             (0.0 <= self.stray_amplitude <= 1.0, "stray_amplitude must be in [0, 1]"),
+            (len(self.centre_speck) == 4, "centre_speck must be (strength, radius, x, y)"),
+            (0.0 <= self.centre_speck[0] <= 1.0, "centre_speck strength must be in [0, 1]"),
+            (0.0 <= self.centre_speck[1] <= 50.0, "centre_speck radius must be in [0, 50] px"),
+            (all(abs(c) <= 0.5 for c in self.centre_speck[2:]), "centre_speck x, y within ±0.5"),
             (self.seed >= 0, "seed must be >= 0"),
         ]
         for ok, what in checks:
@@ -141,6 +151,28 @@ def add_dust(img: np.ndarray, count: int, rng: np.random.Generator) -> np.ndarra
     return img * (1.0 - attenuation)[:, :, None] + glow[:, :, None]
 
 
+def add_centre_speck(img: np.ndarray, speck: tuple[float, float, float, float]) -> np.ndarray:
+    """Add one bright speck (light scattered by dust on the window) near the image centre.
+
+    Args:
+        img: ``(H, W, 3) float32`` linear radiance, 1.0 = white.
+        speck: ``LookEffects.centre_speck``: peak (fraction of white), radius (px at 400 px
+            width, scaled with the width; ≈ 1.5 σ of the Gaussian, as ``add_dust``'s), centre
+            offset from the image centre (× the image height).
+
+    Returns:
+        ``(H, W, 3) float32`` linear radiance (a new array; ``img`` itself when the peak is 0).
+    """
+    strength, radius, x, y = speck
+    if strength <= 0.0:
+        return img
+    h, w = img.shape[:2]
+    centre = ((w - 1) / 2.0 + x * h, (h - 1) / 2.0 + y * h)
+    sigma = max(radius * w / REFERENCE_WIDTH_PX, 0.3) / 1.5
+    blob = strength * _gaussian_blob(h, w, centre, (sigma, sigma), 0.0)
+    return img + blob[:, :, None]
+
+
 def motion_kernel(length_px: float, angle_deg: float) -> np.ndarray:
     """``(k, k) float32`` linear motion-blur kernel (sums to 1), anti-aliased.
 
@@ -185,7 +217,7 @@ def tone_curve(display: np.ndarray, strength: float) -> np.ndarray:
 
 
 def apply_optics(img: np.ndarray, look: LookEffects) -> np.ndarray:
-    """Vignetting, stray glare and dust on ``(H, W, 3) float32`` linear radiance.
+    """Vignetting, stray glare, dust and the centre speck on ``(H, W, 3) float32`` linear radiance.
 
     The dust and glare are placed by ``default_rng(look.seed)``: they sit on the window, so
     they stay put over a session's frames (the per-frame generator only drives the noise).
@@ -199,6 +231,7 @@ def apply_optics(img: np.ndarray, look: LookEffects) -> np.ndarray:
             img = add_stray_glare(img, look.stray_amplitude, rng)
         if look.dust_count > 0:
             img = add_dust(img, look.dust_count, rng)
+    img = add_centre_speck(img, look.centre_speck)
     return motion_blur(img, look.motion_blur_px, look.motion_blur_deg)
 
 

@@ -30,6 +30,8 @@ from contactcal.synth.ranges import (
     LOOK_DRAWS,
     SKIN_DRAWS,
     SMOOTH_DRAWS,
+    SPECK_DISC_HEIGHTS,
+    SPECK_DRAWS,
     STRAY_PROBABILITY,
     Draw,
 )
@@ -107,7 +109,17 @@ def _membrane_and_rig(v: dict[str, Any]) -> tuple[MembraneParams, RigGeometry]:
     return membrane, rig
 
 
-def _camera(v: dict[str, Any], jpeg_quality: int) -> CameraEffects:
+def _centre_speck(v: dict[str, Any], speck_fraction: float) -> tuple[float, float, float, float]:
+    """``LookEffects.centre_speck`` from the ``SPECK_DRAWS`` (none unless drawn)."""
+    if not v["speck_draw"] < speck_fraction:
+        return (0.0, 0.0, 0.0, 0.0)
+    r = SPECK_DISC_HEIGHTS * math.sqrt(float(v["speck_place_r"]))
+    a = math.radians(float(v["speck_place_deg"]))
+    strength, radius = float(v["speck_strength"]), float(v["speck_radius_px"])
+    return (strength, radius, r * math.cos(a), r * math.sin(a))
+
+
+def _camera(v: dict[str, Any], jpeg_quality: int, speck_fraction: float) -> CameraEffects:
     return CameraEffects(
         exposure=BASE_EXPOSURE * v["exposure_gain"],
         defocus_sigma_px=float(v["defocus_sigma_px"]),
@@ -126,6 +138,7 @@ def _camera(v: dict[str, Any], jpeg_quality: int) -> CameraEffects:
             motion_blur_deg=float(v["motion_blur_deg"]),
             dust_count=int(v["dust_count"]),
             stray_amplitude=float(v["stray_amplitude"]) * (v["stray_draw"] < STRAY_PROBABILITY),
+            centre_speck=_centre_speck(v, speck_fraction),
             seed=int(v["look_seed"]),
         ),
     )
@@ -148,7 +161,10 @@ def _optics(v: dict[str, Any], smooth_fraction: float) -> MembraneOptics:
 
 
 def sample_session(
-    rng: np.random.Generator, hard: bool = False, smooth_fraction: float = 0.0
+    rng: np.random.Generator,
+    hard: bool = False,
+    smooth_fraction: float = 0.0,
+    speck_fraction: float = 0.0,
 ) -> SessionParams:
     """Draw one session's parameters (``ranges``' tables, in order, plus conditional draws).
 
@@ -157,6 +173,9 @@ def sample_session(
         hard: draw from the hard-case distribution.
         smooth_fraction: share of hard sessions with a smooth coating (``SMOOTH_DRAWS``: a thin
             sharp inner ring before contact); 0 = none, as in the shipped model's data.
+        speck_fraction: share of all sessions with a bright dust speck near the image centre
+            (``SPECK_DRAWS``, ``LookEffects.centre_speck``); 0 = none, as in the shipped
+            model's data.
 
     Returns:
         The session parameters.
@@ -171,6 +190,7 @@ def sample_session(
     v |= _draw(rng, SKIN_DRAWS, hard)
     v |= _draw(rng, CAMERA2_DRAWS, hard)  # v2 appearance, last: earlier draws keep their values
     v |= _draw(rng, SMOOTH_DRAWS, hard)  # smooth coating, after v2: earlier draws keep theirs
+    v |= _draw(rng, SPECK_DRAWS, hard)  # centre speck, last: every earlier draw keeps its value
     membrane, rig = _membrane_and_rig(v)
     return SessionParams(
         finger=_finger(v),
@@ -183,7 +203,7 @@ def sample_session(
         optics=_optics(v, smooth_fraction),
         lgp_radiance=float(v["lgp_radiance"]),
         lgp_profile=tuple(float(x) for x in np.clip(profile, 0.05, None)),
-        camera=_camera(v, jpeg_quality),
+        camera=_camera(v, jpeg_quality, speck_fraction),
         skin=SkinCondition(
             polarity=-1 if hard and v["inverted"] < 0.5 else 1,
             dryness=float(v["dryness"]),

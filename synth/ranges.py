@@ -169,6 +169,18 @@ SMOOTH_DRAWS = (
     _uniform("smooth_tilt_deg", 0.1, 0.5),  # rms flake tilt (nominal 0.5-1.5°); less = sharper
     Draw("smooth_alpha", "loguniform", (0.005, 0.02)),  # GGX α (nominal 0.02-0.06)
 )
+# Centre speck (opt-in: ``DatasetConfig.speck_fraction``; drawn after every other table): one
+# bright dust speck on the window near the image centre, as ``add_dust``'s bright ones (10-40 %
+# of white, radius 1-4 px at 400 wide), placed uniformly over a disc of 0.12 × the image height
+# (~0.3 window-ring radii: where the first contact appears), in normal and hard sessions alike.
+SPECK_DRAWS = (
+    _uniform("speck_draw", 0.0, 1.0),  # < speck_fraction → a centre speck
+    _uniform("speck_strength", 0.1, 0.4),
+    _uniform("speck_radius_px", 1.0, 4.0),
+    _uniform("speck_place_r", 0.0, 1.0),  # → 0.12 · √r × the image height from the centre
+    _uniform("speck_place_deg", 0.0, 360.0),
+)
+SPECK_DISC_HEIGHTS = 0.12
 STRAY_PROBABILITY = 0.3  # hard only: share of sessions with a stray reflection
 DIM_SECTOR_PROBABILITY = 0.3  # hard only: share of sessions with a dim LED sector
 JPEG_PROBABILITY = 0.5  # share of sessions saved as JPEG (else lossless)

@@ -10,6 +10,7 @@ import pytest
 from contactcal.synth.camera import CameraEffects, apply_camera
 from contactcal.synth.look import (
     LookEffects,
+    add_centre_speck,
     add_dust,
     apply_optics,
     apply_white_balance,
@@ -180,6 +181,46 @@ def test_smooth_coating_in_the_chosen_share_of_hard_sessions_only() -> None:
         else:
             assert 1.0 <= hard.particle_tilt_deg <= 4.0 and hard.roughness_alpha <= 0.15
     assert 18 <= smooth <= 42  # smooth_fraction 0.5 of 60
+
+
+def test_centre_speck_in_the_chosen_share_of_sessions_other_draws_unchanged() -> None:
+    """The option only adds a speck: every other parameter is what the seed gave before."""
+    specks = 0
+    for seed in range(60):
+        for hard in (False, True):
+            plain = sample_session(np.random.default_rng([seed, 2]), hard=hard)
+            with_speck = sample_session(
+                np.random.default_rng([seed, 2]), hard=hard, speck_fraction=0.5
+            )
+            assert plain.camera.look.centre_speck == (0.0, 0.0, 0.0, 0.0)
+            strength, radius, x, y = with_speck.camera.look.centre_speck
+            rest = dataclasses.replace(with_speck.camera.look, centre_speck=(0.0, 0.0, 0.0, 0.0))
+            assert rest == plain.camera.look and with_speck.optics == plain.optics
+            assert with_speck.rig == plain.rig and with_speck.finger == plain.finger
+            if strength > 0:
+                specks += 1
+                assert 0.1 <= strength <= 0.4 and 1.0 <= radius <= 4.0
+                assert np.hypot(x, y) <= 0.12
+    assert 40 <= specks <= 80  # speck_fraction 0.5 of 120
+
+
+def test_centre_speck_brightens_the_centre_only() -> None:
+    img = np.full((H, W, 3), 0.05, np.float32)
+    assert add_centre_speck(img, (0.0, 2.0, 0.1, 0.0)) is img  # none: the image itself
+    # σ = 20 px · 80/400 / 1.5 = 2.7 px; 6 px right and 3 px up of the centre
+    out = add_centre_speck(img, (0.3, 20.0, 0.1, -0.05))
+    glow = out[..., 0] - img[..., 0]
+    assert glow.min() >= 0.0
+    y, x = np.unravel_index(int(np.argmax(glow)), glow.shape)
+    assert (x, y) in {(45, 26), (46, 26), (45, 27), (46, 27)}  # centre (39.5 + 6, 29.5 - 3)
+    assert glow.max() == pytest.approx(0.3, rel=0.1)  # the peak falls between pixels
+    assert glow[0, 0] < 1e-6 and glow[-1, -1] < 1e-6
+    look = dataclasses.replace(LookEffects(), centre_speck=(0.3, 20.0, 0.1, -0.05))
+    np.testing.assert_allclose(apply_optics(img, look), out)
+    with pytest.raises(ValueError, match="centre_speck strength"):
+        LookEffects(centre_speck=(1.5, 2.0, 0.0, 0.0))
+    with pytest.raises(ValueError, match="centre_speck x, y"):
+        LookEffects(centre_speck=(0.2, 2.0, 0.7, 0.0))
 
 
 def test_camera_blur_means_the_same_optics_at_every_width() -> None:
