@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import functools
+import itertools
 import json
 from pathlib import Path
 from typing import Any
@@ -19,6 +20,7 @@ from contactcal.infer.bench.perturb import SPECK_DISC, offset, resolution, speck
 from contactcal.infer.bench.robustness import (
     Sample,
     load_sample,
+    measure_suite,
     perturbed,
     ratio_interval,
     sample_rows,
@@ -27,6 +29,7 @@ from contactcal.infer.bench.run import run_bench
 from contactcal.infer.bench.scoring import ScoredFrame
 from contactcal.infer.bench.suite import PERTURBATIONS, Perturbation
 from contactcal.infer.cli import main
+from contactcal.infer.methods.base import AreaResult
 from contactcal.infer.methods.unet.ring import RingFit, locate_ring
 
 TINY = BenchConfig(
@@ -120,6 +123,44 @@ def test_speck_bright_near_the_centre_and_in_the_reference_too(
     f, r, true = perturbed(by_name["window speck"], 0.4, s, (0, 0, 0, 0))
     np.testing.assert_array_equal(f, r)
     assert not np.array_equal(f, s.frame) and true == row.area_px
+
+
+class _Recorder:
+    """A method stub that records every frame it is given (and finds no contact)."""
+
+    name = "recorder"
+
+    def __init__(self) -> None:
+        self.frames: list[np.ndarray] = []
+
+    def set_reference(self, reference: np.ndarray | None, reduction: int = 1) -> None:
+        pass
+
+    def measure(self, image: np.ndarray) -> AreaResult:
+        self.frames.append(image)
+        return AreaResult(False, 0.0, "no contact", None)
+
+
+def test_suite_draws_the_same_speck_at_every_level(tmp_path: Path) -> None:
+    """Paired draws: the speck's levels differ in strength, not in place; the dimmed sector (not
+    paired) draws its sector anew at each level."""
+    data = write_dataset(tmp_path / "d", fingers=1)
+    row, ref = sample_rows(sessions_of(read_index(data)), 5)[3]
+    recorder = _Recorder()
+    measure_suite([load_sample(row, ref)], [recorder], seed=4)
+    frames = iter(recorder.frames)
+    changed: dict[tuple[str, float], np.ndarray] = {}
+    for p in PERTURBATIONS:
+        for level in p.levels:
+            frame = next(frames)
+            if p.name in ("window speck", "dimmed sector") and level != p.baseline:
+                changed[(p.name, level)] = frame.astype(int) != load_sample(row, ref).frame
+    specks = [changed[("window speck", lv)] for lv in (0.1, 0.2, 0.4)]
+    assert all(m.any() for m in specks)
+    for weak, strong in itertools.pairwise(specks):
+        assert not (weak & ~strong).any()  # the weaker speck lies inside the stronger one
+    sectors = [changed[("dimmed sector", lv)] for lv in (0.3, 0.9)]
+    assert (sectors[0] != sectors[1]).any()
 
 
 def test_noise_reference_independent_others_same(tmp_path: Path) -> None:

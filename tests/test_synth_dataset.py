@@ -131,9 +131,13 @@ def test_bad_arguments(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> No
         dataclasses.replace(CONFIG, smooth_fraction=1.5)
     with pytest.raises(ValueError, match="speck-fraction"):
         dataclasses.replace(CONFIG, speck_fraction=-0.1)
+    specky = dataclasses.replace(CONFIG, fingers=1, speck_fraction=1.0)
     with pytest.raises(ValueError, match="different config"):
-        specky = dataclasses.replace(CONFIG, fingers=1, speck_fraction=1.0)
         build_dataset(tmp_path / "a", specky, progress=False)
+    speck_arg = ["synth", "--fingers", "1", "--speck-fraction", "2", "--out", str(tmp_path / "b")]
+    assert main(speck_arg) == 2  # the flag reaches DatasetConfig's check; nothing rendered
+    assert "--speck-fraction must be in [0, 1], got 2.0" in capsys.readouterr().err
+    assert not (tmp_path / "b").exists()
     smooth = dataclasses.replace(CONFIG, fingers=1, smooth_fraction=0.5)
     with pytest.raises(ValueError, match="different config"):
         build_dataset(tmp_path / "a", smooth, progress=False)

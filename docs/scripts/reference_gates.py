@@ -19,7 +19,12 @@ for regions in frames with and without true contact, the range of each statistic
 false regions a threshold would remove at the price of how many true ones. Validation renders
 only: a veto's threshold read on a test set would be tuned on it.
 
-    .venv/bin/python docs/scripts/reference_gates.py data/val_r3 [--speck 0.2 --draws 3]
+    .venv/bin/python docs/scripts/reference_gates.py data/val_r3 [--speck 0.2 --draws 3] \
+        [--similarity 0.98]... [--seed 0]
+
+``--similarity T`` (repeatable) also prints what a similarity veto at T would remove. The
+frames above 0 kPa without contact are counted once per draw (53 frames × 3 draws = 159 on
+``data/val_r3``).
 """
 
 from __future__ import annotations
@@ -40,21 +45,29 @@ from contactcal.infer.methods.unet.ring import locate_ring
 
 
 def region_stats(m: UnetMethod, frames: list[np.ndarray]) -> list[tuple[float, float] | None]:
-    """Per frame of one session (``frames[0]`` its reference): ``(ridge gain, similarity)`` in
-    the kept region, or None without a kept region."""
+    """The two statistics in each frame's kept region, as the deployed method measures it.
+
+    Args:
+        m: the U-Net method (a 3-channel model: frame, reference, ridge energy).
+        frames: one session's ``(H, W) uint8`` frames, ``frames[0]`` its reference (0 kPa).
+
+    Returns:
+        Per frame ``(ridge gain, similarity)`` (dimensionless), or None without a kept region.
+
+    The reference's ridge channel is computed in each frame's crop (the session's, or the
+    frame's own where the reference's window ring was not found, as ``prepare`` does).
+    """
     spec = m.segmenter.spec
     cfg = spec.preprocess
     m.set_reference(frames[0])
     ref = m.reference
     out: list[tuple[float, float] | None] = []
-    ref_ridge = None
     for gray in frames:
         img, _ = m._shrunk(gray)
         prep = prepare(img, ref, cfg, spec.channels)
         seg = postprocess(m.segmenter.probabilities(prep.x), prep.box, img.shape, spec)
-        if ref_ridge is None:  # the session's crop is fixed by its reference
-            ref_work = crop_resize(ref.gray, prep.box, cfg.ridge_work_px)
-            ref_ridge = ridge_energy(ref_work, cfg, _to_network(ref.gray, prep.box, cfg)[1])
+        ref_work = crop_resize(ref.gray, prep.box, cfg.ridge_work_px)
+        ref_ridge = ridge_energy(ref_work, cfg, _to_network(ref.gray, prep.box, cfg)[1])
         keep = seg.mask_net
         if not seg.contact or keep.sum() < 3:
             out.append(None)
@@ -66,6 +79,7 @@ def region_stats(m: UnetMethod, frames: list[np.ndarray]) -> list[tuple[float, f
 
 
 def main() -> None:
+    """Measure the dataset's kept regions and print each statistic's ranges and vetoes."""
     ap = argparse.ArgumentParser()
     ap.add_argument("data", type=Path)
     ap.add_argument("--speck", type=float, default=0.0, help="window speck level (0: none)")
@@ -97,11 +111,13 @@ def main() -> None:
     for k, name in enumerate(("ridge gain", "similarity")):
         t = np.array([x[k] for x in true_regions])
         f = np.array([x[k] for x in false_regions])
-        print(
-            f"{name}: true {t.min():.3f}-{t.max():.3f}, false "
-            + (f"{f.min():.3f}-{f.max():.3f}" if f.size else "none")
-        )
-        tries = [*(np.quantile(f, [0.25, 0.5, 0.75]) if f.size else []), *(args.similarity * k)]
+        span = {
+            a: f"{v.min():.3f}-{v.max():.3f}" if v.size else "none" for a, v in (("t", t), ("f", f))
+        }
+        print(f"{name}: true {span['t']}, false {span['f']}")
+        tries = list(np.quantile(f, [0.25, 0.5, 0.75])) if f.size else []
+        if name == "similarity":
+            tries += args.similarity
         for q in tries:
             veto = (lambda x, q=q: x <= q) if k == 0 else (lambda x, q=q: x >= q)
             print(

@@ -2,7 +2,7 @@
 
 Each is a pure function ``(gray (H, W) uint8, level, rng) -> gray uint8``, deterministic for a
 given ``numpy.random.Generator`` state, returning a new array (the input is never modified) and
-the input's values unchanged at the perturbation's ``baseline`` level. Two need the session's
+the input's values unchanged at the perturbation's ``baseline`` level. Three need the session's
 window ring (located by :func:`~contactcal.infer.methods.unet.ring.locate_ring` on the
 unperturbed reference frame) as the keyword ``ring``. What each level means:
 
@@ -35,8 +35,9 @@ unperturbed reference frame) as the keyword ``ring``. What each level means:
   ring radius about the ring's centre, its radius uniformly over ``SPECK_RADIUS_400`` px at
   400 px wide, scaled with the width. It copies the renderer's bright dust (``synth/look.py``,
   ``add_dust``: 10-40 % of white, radius 1-4 px at 400 wide, placed uniformly over the frame,
-  so rarely near the centre), which adds it before the camera's exposure and noise; here it is
-  added to the finished frame.
+  so rarely near the centre), which adds it after the exposure and before the camera's defocus
+  and noise; here it is added to the finished frame, so it is never blurred (a sharper speck
+  than a defocused hard render's). The suite draws the same place and radius at every level.
 
 The reference frame (:data:`REFERENCE_MODES`): camera settings are per session, so contrast,
 gamma, exposure, blur, JPEG and resolution perturb it exactly as the frame; noise is drawn
@@ -213,7 +214,7 @@ def speck(gray: np.ndarray, level: float, rng: np.random.Generator, *, ring: Rin
     angle = rng.uniform(-math.pi, math.pi)
     cx, cy = ring.cx + dist * math.cos(angle), ring.cy + dist * math.sin(angle)
     sigma = max(rng.uniform(*SPECK_RADIUS_400) * gray.shape[1] / 400.0, 0.3) / 1.5
-    reach = 4.0 * sigma  # the blob is < 4e-4 of its peak beyond
+    reach = 6.0 * sigma  # the blob is < 2e-8 of its peak beyond: no visible edge after gamma
     x0, y0 = max(math.floor(cx - reach), 0), max(math.floor(cy - reach), 0)
     x1 = min(math.ceil(cx + reach) + 1, gray.shape[1])
     y1 = min(math.ceil(cy + reach) + 1, gray.shape[0])

@@ -6,7 +6,9 @@ in the accuracy tables) ordered by pressure then session, ``n`` taken evenly spa
 perturbed at each level (its session's reference as the perturbation says), and measured by
 each method from decoded arrays (``set_reference`` then ``measure``; no reduced JPEG decode).
 A level's random draws come from ``numpy.random.default_rng([seed, frame, perturbation, level,
-stream])``, so a run is reproducible and levels are independent of each other.
+stream])``, so a run is reproducible and levels are independent of each other; a perturbation
+with ``paired_draws`` (the window speck) leaves the level out, so that its levels draw the same
+placement and differ in strength only.
 
 Per method, perturbation and level: the median |relative area error| over frames with true
 contact at ≥ 5 kPa, its ratio to the same perturbation's baseline level with a 90 % paired-bootstrap
@@ -137,7 +139,8 @@ def measure_suite(
     for i, sample in enumerate(samples):
         for j, p in enumerate(PERTURBATIONS):
             for k, level in enumerate(p.levels):
-                frame, ref, true = perturbed(p, level, sample, (seed, i, j, k))
+                draws = (seed, i, j) if p.paired_draws else (seed, i, j, k)
+                frame, ref, true = perturbed(p, level, sample, draws)
                 for m in methods:
                     scored = _score(m, sample, frame, ref, true)
                     out.setdefault((p.name, level, m.name), []).append(scored)
