@@ -17,6 +17,7 @@ from contactcal.infer.bench import run as bench_run
 from contactcal.infer.bench.config import BenchConfig
 from contactcal.infer.bench.dataset import read_index, sessions_of
 from contactcal.infer.bench.perturb import SPECK_DISC, offset, resolution, speck
+from contactcal.infer.bench.plots import plot_robustness
 from contactcal.infer.bench.robustness import (
     Sample,
     load_sample,
@@ -202,8 +203,10 @@ def bench(tmp_path_factory: pytest.TempPathFactory) -> tuple[Path, dict[str, Any
 def test_report_figure_and_results(bench: tuple[Path, dict[str, Any]]) -> None:
     out, results = bench
     assert (out / "robustness.png").read_bytes().startswith(PNG_MAGIC)
+    assert (out / "robustness_no_contact.png").read_bytes().startswith(PNG_MAGIC)
     report = (out / "report.md").read_text(encoding="utf-8")
     assert "## Robustness to perturbed frames" in report and "](robustness.png)" in report
+    assert "](robustness_no_contact.png)" in report
     assert (
         report.count("worst ratio inside the randomised ranges")
         + report.count("no randomised level with a defined error ratio")
@@ -236,6 +239,14 @@ def test_report_figure_and_results(bench: tuple[Path, dict[str, Any]]) -> None:
         assert f"| {r['perturbation']} | {r['label']} |" in report
 
 
+def test_robustness_figure_of_an_unknown_metric_is_an_error(
+    bench: tuple[Path, dict[str, Any]], tmp_path: Path
+) -> None:
+    with pytest.raises(ValueError, match="metric must be one of"):
+        plot_robustness(tmp_path / "x.png", bench[1]["robustness"], "iou")
+    assert not (tmp_path / "x.png").exists()
+
+
 def test_baselines_agree(bench: tuple[Path, dict[str, Any]]) -> None:
     """Every perturbation's baseline measures the same unperturbed frames: equal numbers."""
     _, results = bench
@@ -256,6 +267,7 @@ def test_off_by_default_and_cli(
     assert main([*args, "--out", str(tmp_path / "plain")]) == 0
     assert "robustness" not in json.loads((tmp_path / "plain" / "results.json").read_text())
     assert not (tmp_path / "plain" / "robustness.png").exists()
+    assert not (tmp_path / "plain" / "robustness_no_contact.png").exists()
     out = tmp_path / "rob"
     assert main([*args, "--out", str(out), "--robustness", "--robustness-frames", "2"]) == 0
     assert len(json.loads((out / "results.json").read_text())["robustness"]["frames"]) == 2

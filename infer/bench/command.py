@@ -41,7 +41,8 @@ def add_parsers(sub: argparse._SubParsersAction) -> None:
     b.add_argument(
         "--robustness",
         action="store_true",
-        help="also run the robustness suite (perturbed frames; robustness.png, report section)",
+        help="also run the robustness suite (perturbed frames; robustness.png, "
+        "robustness_no_contact.png, report section)",
     )
     b.add_argument(
         "--robustness-frames",

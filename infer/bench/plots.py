@@ -1,5 +1,6 @@
 """Figures of ``contactcal bench``: error vs pressure, speed vs error (``pareto.png``) and error
-vs perturbation level (``robustness.png``).
+vs perturbation level (``robustness.png``, and the no-contact accuracy in
+``robustness_no_contact.png``).
 
 matplotlib is imported inside the functions only, with its object API and the Agg canvas (never
 pyplot's global backend); every figure is written atomically.
@@ -163,15 +164,33 @@ def plot_pareto(
     _save(fig, path)
 
 
-def plot_robustness(path: str | os.PathLike[str], robustness: Mapping[str, Any]) -> None:
-    """Median |relative area error| at ≥ 5 kPa vs level, one panel per perturbation, one line
-    per method, log y (errors floored at ``FLOOR_PCT``); the dashed line marks the baseline, the
-    grey span the levels the training randomises (where the 2× target applies).
+#: What :func:`plot_robustness` can draw: row key, y label, log scale.
+ROBUSTNESS_METRICS = {
+    "error": ("median_abs_rel_error_ge5", "median |rel. area error| ≥5 kPa (%)", True),
+    "no_contact": ("no_contact_accuracy", "no-contact accuracy (%)", False),
+}
+
+
+def plot_robustness(
+    path: str | os.PathLike[str], robustness: Mapping[str, Any], metric: str = "error"
+) -> None:
+    """One robustness metric vs level, one panel per perturbation, one line per method; the
+    dashed line marks the baseline, the grey span the levels the training randomises (where the
+    2× error target applies).
 
     Args:
         path: PNG to write.
         robustness: ``results.json``'s ``"robustness"`` (``perturbations`` and ``rows``).
+        metric: ``"error"``: median |relative area error| at ≥ 5 kPa, %, log y (floored at
+            ``FLOOR_PCT``); ``"no_contact"``: share of the frames without true contact reported
+            as no contact, %, linear y from 0 to 100 (:data:`ROBUSTNESS_METRICS`).
+
+    Raises:
+        ValueError: an unknown ``metric``.
     """
+    if metric not in ROBUSTNESS_METRICS:
+        raise ValueError(f"metric must be one of {sorted(ROBUSTNESS_METRICS)}, got {metric!r}")
+    key, ylabel, log = ROBUSTNESS_METRICS[metric]
     perts = robustness["perturbations"]
     cols = min(5, len(perts))
     nrows = -(-len(perts) // cols)
@@ -179,34 +198,33 @@ def plot_robustness(path: str | os.PathLike[str], robustness: Mapping[str, Any])
     axes = fig.subplots(nrows, cols, squeeze=False).ravel()
     methods = sorted({r["method"] for r in robustness["rows"]})
     for ax, p in zip(axes, perts, strict=False):
+        rows = [r for r in robustness["rows"] if r["perturbation"] == p["name"]]
         for i, method in enumerate(methods):
             pts = [
-                (p["levels"].index(r["level"]), 100 * r["median_abs_rel_error_ge5"])
-                for r in robustness["rows"]
-                if r["perturbation"] == p["name"]
-                and r["method"] == method
-                and r["median_abs_rel_error_ge5"] is not None
+                (p["levels"].index(r["level"]), 100 * r[key])
+                for r in rows
+                if r["method"] == method and r[key] is not None
             ]
             if pts:
                 x, y = zip(*pts, strict=True)
-                ax.plot(x, np.maximum(y, FLOOR_PCT), color=f"C{i}", marker="o", ms=3, label=method)
+                y = np.maximum(y, FLOOR_PCT) if log else y
+                ax.plot(x, y, color=f"C{i}", marker="o", ms=3, label=method)
         ax.axvline(p["levels"].index(p["baseline"]), color="0.5", ls="--", lw=0.8)
-        inside = [
-            p["levels"].index(r["level"])
-            for r in robustness["rows"]
-            if r["perturbation"] == p["name"] and r["in_range"]
-        ]
+        inside = [p["levels"].index(r["level"]) for r in rows if r["in_range"]]
         ax.axvspan(min(inside) - 0.3, max(inside) + 0.3, color="0.9", zorder=0)
         ax.set_xticks(range(len(p["levels"])), p["labels"], fontsize=7)
-        ax.set_yscale("log")
-        _plain_log_ticks(ax)
+        if log:
+            ax.set_yscale("log")
+            _plain_log_ticks(ax)
+        else:
+            ax.set_ylim(-3, 103)
         ax.set_title(p["name"], fontsize=9)
         ax.set_xlabel(p["unit"], fontsize=8)
         ax.grid(alpha=0.3, which="both")
     for ax in axes[len(perts) :]:
         ax.set_visible(False)
     for ax in axes[::cols]:
-        ax.set_ylabel("median |rel. area error| ≥5 kPa (%)", fontsize=7)
+        ax.set_ylabel(ylabel, fontsize=7)
     if axes[0].get_legend_handles_labels()[0]:
         axes[0].legend(fontsize=7)
     fig.tight_layout()

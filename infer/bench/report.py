@@ -132,7 +132,9 @@ def robustness_text(rob: Mapping[str, Any]) -> str:
         + _worst_in_range(rob["rows"], methods)
         + "\n\n"
         + md_table(list(table.values()), cols)
-        + "\n\n![robustness](robustness.png)"
+        + "\n\n![robustness](robustness.png)\n\n"
+        + "No-contact accuracy per level (frames without true contact):\n\n"
+        + "![robustness, no-contact accuracy](robustness_no_contact.png)"
     )
 
 
@@ -287,7 +289,8 @@ def write_report(
 ) -> None:
     """Add the ``bins``, ``hard`` and ``coverage`` tables to ``results``; write ``results.json``,
     the figures (``error_vs_pressure.png``, ``pareto.png``, with ``robustness`` results also
-    ``robustness.png``) and ``report.md`` into ``out_dir``, atomically.
+    ``robustness.png`` and ``robustness_no_contact.png``) and ``report.md`` into ``out_dir``,
+    atomically.
 
     Args:
         out_dir: report folder (created if missing).
@@ -305,5 +308,6 @@ def write_report(
     plot_pareto(out / "pareto.png", results["bins"], results["timing"], (size[0], size[1]))
     if "robustness" in results:
         plot_robustness(out / "robustness.png", results["robustness"])
+        plot_robustness(out / "robustness_no_contact.png", results["robustness"], "no_contact")
     text = report_text(results)
     write_text(out / "report.md", text + ("\n" + extra_text if extra_text else ""))
