@@ -89,7 +89,8 @@ def perturbed(
         p: the perturbation.
         level: one of ``p.levels``.
         sample: the unperturbed frame.
-        seed: entropy of this (frame, perturbation, level); stream 1 is the reference's own.
+        seed: entropy of this (frame, perturbation, level), without the level for a perturbation
+            with ``paired_draws``; stream 1 is the reference's own.
 
     Returns:
         ``(frame (H', W') uint8, reference (H', W') uint8 or None, true area px at H'×W')``.
