@@ -83,6 +83,16 @@ def _u8(values: np.ndarray) -> np.ndarray:
     return np.clip(np.rint(values), 0, 255).astype(np.uint8)
 
 
+def _linear(gray: np.ndarray) -> np.ndarray:
+    """Grey levels → linear light in [0, 1] (float64), through :data:`DISPLAY_GAMMA`."""
+    return (gray.astype(np.float64) / 255.0) ** DISPLAY_GAMMA
+
+
+def _display(linear: np.ndarray) -> np.ndarray:
+    """Linear light → grey levels (uint8), clipped at full scale: inverse of :func:`_linear`."""
+    return _u8(255.0 * np.clip(linear, 0.0, 1.0) ** (1.0 / DISPLAY_GAMMA))
+
+
 def _check(level: float, lo: float, hi: float, what: str) -> None:
     if not lo <= level <= hi:
         raise ValueError(f"{what} level must be in [{lo:g}, {hi:g}], got {level!r}")
@@ -103,8 +113,7 @@ def gamma(gray: np.ndarray, level: float, rng: np.random.Generator) -> np.ndarra
 def exposure(gray: np.ndarray, level: float, rng: np.random.Generator) -> np.ndarray:
     """Exposure change of ``level`` stops (0 = unchanged) in linear light, clipped."""
     _check(level, -8.0, 8.0, "exposure")
-    linear = (gray.astype(np.float64) / 255.0) ** DISPLAY_GAMMA * 2.0**level
-    return _u8(255.0 * np.clip(linear, 0.0, 1.0) ** (1.0 / DISPLAY_GAMMA))
+    return _display(_linear(gray) * 2.0**level)
 
 
 def blur(gray: np.ndarray, level: float, rng: np.random.Generator) -> np.ndarray:
@@ -222,8 +231,7 @@ def speck(gray: np.ndarray, level: float, rng: np.random.Generator, *, ring: Rin
         return out
     yy, xx = np.mgrid[y0:y1, x0:x1]
     blob = level * np.exp(-((xx - cx) ** 2 + (yy - cy) ** 2) / (2.0 * sigma**2))
-    linear = (out[y0:y1, x0:x1] / 255.0) ** DISPLAY_GAMMA + blob
-    out[y0:y1, x0:x1] = _u8(255.0 * np.clip(linear, 0.0, 1.0) ** (1.0 / DISPLAY_GAMMA))
+    out[y0:y1, x0:x1] = _display(_linear(out[y0:y1, x0:x1]) + blob)
     return out
 
 
