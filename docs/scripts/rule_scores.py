@@ -1,0 +1,84 @@
+"""Pooled numbers of a ``contactcal bench`` ``results.json`` that its report does not print.
+
+Per method: the median |relative area error| over the frames at or above 5 kPa with true contact,
+pooled over the chosen datasets (the main one and/or its cross-check sets, by label), and the
+no-contact accuracy over every frame without true contact (before the session rule). The
+selection rules in ``docs/training.md`` read these.
+
+    .venv/bin/python docs/scripts/rule_scores.py out/h11_choose/results.json \
+        --sets cc7800_hr cc7900_hr
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import sys
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+#: Lowest pressure of the pooled error, kPa (the issue's "≥ 5 kPa").
+FROM_KPA = 5.0
+
+
+def datasets(results: dict[str, Any]) -> dict[str, list[dict[str, Any]]]:
+    """Records per dataset label (the main dataset is ``main``)."""
+    out = {"main": results["records"]}
+    for res in results.get("crosscheck", []):
+        out[res["label"]] = res["records"]
+    return out
+
+
+def scores(records: list[dict[str, Any]]) -> dict[str, dict[str, float | int]]:
+    """Per method: pooled median error ≥ 5 kPa (%), no-contact accuracy (%), frame counts."""
+    out: dict[str, dict[str, float | int]] = {}
+    for method in sorted({r["method"] for r in records}):
+        rows = [r for r in records if r["method"] == method]
+        errs = [
+            abs(r["area_px"] - r["true_area_px"]) / r["true_area_px"]
+            for r in rows
+            if r["true_area_px"] > 0 and r["pressure_kpa"] >= FROM_KPA
+        ]
+        empty = [r for r in rows if r["true_area_px"] <= 0]
+        out[method] = {
+            "median_err_ge5_pct": float(100 * np.median(errs)) if errs else float("nan"),
+            "frames_ge5": len(errs),
+            "no_contact_pct": (
+                100 * sum(not r["contact"] for r in empty) / len(empty) if empty else float("nan")
+            ),
+            "frames_no_contact": len(empty),
+        }
+    return out
+
+
+def main(argv: list[str] | None = None) -> int:
+    """Print the pooled scores as one Markdown table."""
+    p = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    p.add_argument("results", type=Path, help="results.json of contactcal bench")
+    p.add_argument("--sets", nargs="+", default=["main"], help="dataset labels to pool")
+    args = p.parse_args(argv)
+    try:
+        per_set = datasets(json.loads(args.results.read_text(encoding="utf-8")))
+    except (OSError, ValueError, KeyError) as e:
+        print(f"{args.results}: expected a contactcal bench results.json ({e})", file=sys.stderr)
+        return 2
+    missing = [s for s in args.sets if s not in per_set]
+    if missing:
+        print(f"{args.results}: no dataset {missing}; it has {sorted(per_set)}", file=sys.stderr)
+        return 2
+    pooled = [r for s in args.sets for r in per_set[s]]
+    print(f"pooled over {', '.join(args.sets)}\n")
+    print("| method | median err ≥ 5 kPa | frames | no-contact acc. | frames |")
+    print("|---|---|---|---|---|")
+    for method, s in scores(pooled).items():
+        print(
+            f"| {method} | {s['median_err_ge5_pct']:.2f} % | {s['frames_ge5']} "
+            f"| {s['no_contact_pct']:.1f} % | {s['frames_no_contact']} |"
+        )
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
