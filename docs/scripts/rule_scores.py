@@ -31,9 +31,12 @@ def datasets(results: dict[str, Any]) -> dict[str, list[dict[str, Any]]]:
     return out
 
 
-def scores(records: list[dict[str, Any]]) -> dict[str, dict[str, float | int]]:
-    """Per method: pooled median error ≥ 5 kPa (%), no-contact accuracy (%), frame counts."""
-    out: dict[str, dict[str, float | int]] = {}
+def scores(records: list[dict[str, Any]]) -> dict[str, dict[str, float | int | None]]:
+    """Per method: pooled median error ≥ 5 kPa (%), no-contact accuracy (%), frame counts.
+
+    A share over no frames is None (printed "–"), never NaN.
+    """
+    out: dict[str, dict[str, float | int | None]] = {}
     for method in sorted({r["method"] for r in records}):
         rows = [r for r in records if r["method"] == method]
         errs = [
@@ -43,10 +46,10 @@ def scores(records: list[dict[str, Any]]) -> dict[str, dict[str, float | int]]:
         ]
         empty = [r for r in rows if r["true_area_px"] <= 0]
         out[method] = {
-            "median_err_ge5_pct": float(100 * np.median(errs)) if errs else float("nan"),
+            "median_err_ge5_pct": float(100 * np.median(errs)) if errs else None,
             "frames_ge5": len(errs),
             "no_contact_pct": (
-                100 * sum(not r["contact"] for r in empty) / len(empty) if empty else float("nan")
+                100 * sum(not r["contact"] for r in empty) / len(empty) if empty else None
             ),
             "frames_no_contact": len(empty),
         }
@@ -73,9 +76,10 @@ def main(argv: list[str] | None = None) -> int:
     print("| method | median err ≥ 5 kPa | frames | no-contact acc. | frames |")
     print("|---|---|---|---|---|")
     for method, s in scores(pooled).items():
+        err, acc = s["median_err_ge5_pct"], s["no_contact_pct"]
         print(
-            f"| {method} | {s['median_err_ge5_pct']:.2f} % | {s['frames_ge5']} "
-            f"| {s['no_contact_pct']:.1f} % | {s['frames_no_contact']} |"
+            f"| {method} | {'–' if err is None else f'{err:.2f} %'} | {s['frames_ge5']} "
+            f"| {'–' if acc is None else f'{acc:.1f} %'} | {s['frames_no_contact']} |"
         )
     return 0
 
