@@ -17,10 +17,9 @@ import sys
 from pathlib import Path
 from typing import Any
 
-import numpy as np
-
-#: Lowest pressure of the pooled error, kPa (the issue's "≥ 5 kPa").
-FROM_KPA = 5.0
+from contactcal.infer.bench.accuracy import from_record
+from contactcal.infer.bench.crosscheck import POOLED_FROM_KPA
+from contactcal.infer.bench.scoring import bin_row
 
 
 def datasets(results: dict[str, Any]) -> dict[str, list[dict[str, Any]]]:
@@ -32,28 +31,26 @@ def datasets(results: dict[str, Any]) -> dict[str, list[dict[str, Any]]]:
 
 
 def scores(records: list[dict[str, Any]]) -> dict[str, dict[str, float | int | None]]:
-    """Per method: pooled median error ≥ 5 kPa (%), no-contact accuracy (%), frame counts.
-
-    A share over no frames is None (printed "–"), never NaN.
-    """
+    """Per method: the bench's :func:`bin_row` of the contact frames at ≥ 5 kPa (error) and of
+    every frame (no-contact accuracy); a share over no frames is None (printed "–")."""
+    frames = [from_record(r) for r in records]
     out: dict[str, dict[str, float | int | None]] = {}
-    for method in sorted({r["method"] for r in records}):
-        rows = [r for r in records if r["method"] == method]
-        errs = [
-            abs(r["area_px"] - r["true_area_px"]) / r["true_area_px"]
-            for r in rows
-            if r["true_area_px"] > 0 and r["pressure_kpa"] >= FROM_KPA
-        ]
-        empty = [r for r in rows if r["true_area_px"] <= 0]
+    for method in sorted({f.method for f in frames}):
+        mine = [f for f in frames if f.method == method]
+        high = bin_row([f for f in mine if f.true_contact and f.pressure_kpa >= POOLED_FROM_KPA])
+        every = bin_row(mine)
         out[method] = {
-            "median_err_ge5_pct": float(100 * np.median(errs)) if errs else None,
-            "frames_ge5": len(errs),
-            "no_contact_pct": (
-                100 * sum(not r["contact"] for r in empty) / len(empty) if empty else None
-            ),
-            "frames_no_contact": len(empty),
+            "median_err_ge5_pct": _pct(high["median_abs_rel_error"]),
+            "frames_ge5": high["contact_frames"],
+            "no_contact_pct": _pct(every["no_contact_accuracy"]),
+            "frames_no_contact": every["no_contact_frames"],
         }
     return out
+
+
+def _pct(share: float | int | None) -> float | None:
+    """A share in %, None kept."""
+    return None if share is None else 100 * float(share)
 
 
 def main(argv: list[str] | None = None) -> int:
