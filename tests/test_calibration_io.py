@@ -212,6 +212,7 @@ def test_calibration_records_provenance(tmp_path: Path) -> None:
     )
     assert cfg["spec"]["preprocess"] == json.loads(meta["preprocess"])
     assert cfg["spec"]["min_contact_area_px"] == float(meta["min_contact_area_px"])
+    assert cfg["spec"]["region"] == meta.get("region", "largest")
     digests = {f["file"]: f["sha256"] for f in rec["inputs"]["frames"]}
     assert digests == {p.name: hashlib.sha256(p.read_bytes()).hexdigest() for p in s.glob("*.jpg")}
     assert [f["file"] for f in rec["inputs"]["frames"]] == [p["file"] for p in rec["points"]]

@@ -19,7 +19,12 @@ from test_train import tiny_config  # noqa: E402
 
 from contactcal.infer.methods.unet.config import PreprocessConfig  # noqa: E402
 from contactcal.infer.methods.unet.runner import OnnxSegmenter  # noqa: E402
-from contactcal.infer.methods.unet.spec import PROVENANCE_KEYS, SPEC_KEYS, read_spec  # noqa: E402
+from contactcal.infer.methods.unet.spec import (  # noqa: E402
+    OPTIONAL_SPEC_KEYS,
+    PROVENANCE_KEYS,
+    SPEC_KEYS,
+    read_spec,
+)
 from contactcal.train.data import dataset_digest  # noqa: E402
 from contactcal.train.export import PARITY_ATOL, PARITY_RTOL, export_onnx, load_run, self_check  # noqa: E402
 from contactcal.train.loop import train  # noqa: E402
@@ -41,7 +46,9 @@ def test_export_metadata_and_parity(run_dir: Path, tmp_path: Path) -> None:
     model = onnx.load(str(out))
     onnx.checker.check_model(model, full_check=True)
     meta = {p.key: p.value for p in model.metadata_props}
-    assert sorted(meta) == sorted((*SPEC_KEYS, *PROVENANCE_KEYS))  # no input_size, no reference
+    # no input_size, no reference; the optional region is always written
+    assert sorted(meta) == sorted((*SPEC_KEYS, *OPTIONAL_SPEC_KEYS, *PROVENANCE_KEYS))
+    assert meta["region"] == "largest"
     assert meta["channels"] == "2"
     assert PreprocessConfig(**json.loads(meta["preprocess"])) == PreprocessConfig(input_size=64)
     assert float(meta["threshold"]) == 0.5 and float(meta["min_contact_area_px"]) == 4.0

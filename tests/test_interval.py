@@ -178,9 +178,10 @@ def test_recalibrate_changes_only_the_interval(tmp_path: Path) -> None:
     assert new.graph.SerializeToString() == old.graph.SerializeToString()
     before = {p.key: p.value for p in old.metadata_props}
     after = {p.key: p.value for p in new.metadata_props}
-    assert {k for k in after if after[k] != before.get(k)} <= {
-        "interval"
-    } and after.keys() == before.keys()
+    # a model exported before the region key gains it, with the region it was deployed with
+    assert {k for k in after if after[k] != before.get(k)} <= {"interval", "region"}
+    assert after.keys() == before.keys() | {"region"}
+    assert after["region"] == before.get("region", "largest")
     assert json.loads(after["interval"]) == summary["interval"]
     assert OnnxSegmenter(out).spec.interval is not None
     with pytest.raises(ValueError, match="must not be the input"):

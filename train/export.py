@@ -12,7 +12,9 @@ deployment's :func:`contactcal.infer.methods.unet.spec.read_spec` accepts:
   :class:`~contactcal.infer.methods.unet.spec.IntervalSpec`: the stated 90 % interval of a frame's
   area, ALWAYS calibrated here on the run's validation fingers by
   :func:`contactcal.train.interval.calibrate_run`; a run without validation fingers cannot be
-  exported);
+  exported), and the optional ``region`` (:data:`~contactcal.infer.methods.unet.spec.REGIONS`),
+  written as ``"largest"`` here; ``python -m contactcal.train.interval --region convex`` restates
+  it with the interval recalibrated for the hull;
 * provenance (:data:`~contactcal.infer.methods.unet.spec.PROVENANCE_KEYS`): ``data_digest``
   (sha256 of the training index.csv files), ``contactcal_version``, ``created`` (UTC ISO 8601),
   ``train_config`` (JSON), ``best_epoch``, ``val_metrics`` (JSON).

@@ -16,7 +16,9 @@ Here the thresholds (symmetric in logits around the decision threshold, one of
 
 ``contactcal export`` calibrates on the run's validation fingers (:func:`calibrate_run`);
 ``python -m contactcal.train.interval`` recalibrates an exported model's ``interval`` metadata on
-rendered data (:func:`recalibrate_model`; the weights are copied untouched).
+rendered data (:func:`recalibrate_model`; the weights are copied untouched), and with ``--region``
+states the model's contact region (``region`` metadata, :data:`REGIONS`) at the same time: the
+interval is the region's, so the two are set together.
 """
 
 from __future__ import annotations
@@ -36,7 +38,7 @@ import numpy as np
 from contactcal.infer.bench.dataset import read_index
 from contactcal.infer.files.atomic import atomic_open
 from contactcal.infer.methods.unet.postprocess import Band, Segmentation, boundary_band
-from contactcal.infer.methods.unet.spec import IntervalSpec, ModelSpec, read_spec
+from contactcal.infer.methods.unet.spec import REGIONS, IntervalSpec, ModelSpec, read_spec
 
 #: Stated coverage of the interval.
 LEVEL = 0.9
@@ -156,12 +158,12 @@ def calibrate_run(
 
 
 def _segment_dataset(
-    model: Path, data_dirs: Sequence[Path]
+    model: Path, data_dirs: Sequence[Path], region: str | None = None
 ) -> tuple[list[Segmentation], list[float], ModelSpec]:
     """Every frame of the datasets through the deployment runner (each session's lowest-pressure
     frame is its reference; large frames shrunk as deployment shrinks them: ``session_inputs``),
     the true areas (in pixels of the shrunk frame), and the model's spec without its interval (the
-    model's own ``interval`` key, if any, is not used)."""
+    model's own ``interval`` key, if any, is not used), with ``region`` when given."""
     import onnx
 
     from contactcal.infer.methods.unet.runner import OnnxSegmenter
@@ -171,6 +173,8 @@ def _segment_dataset(
     meta = {p.key: p.value for p in proto.metadata_props}
     # Any valid interval lets the strict reader accept a model exported before intervals.
     meta["interval"] = json.dumps(dataclasses.asdict(IntervalSpec(LEVEL, 1e-6, 1 - 1e-6, 1.0, 1)))
+    if region is not None:
+        meta["region"] = region
     onnx.helper.set_model_props(proto, meta)
     segs, truths = [], []
     with tempfile.TemporaryDirectory() as tmp:
@@ -188,6 +192,7 @@ def recalibrate_model(
     model: str | os.PathLike[str],
     data_dirs: Sequence[str | os.PathLike[str]],
     out: str | os.PathLike[str],
+    region: str | None = None,
 ) -> dict[str, Any]:
     """Write ``model`` with its ``interval`` metadata calibrated on ``data_dirs`` to ``out``.
 
@@ -199,9 +204,13 @@ def recalibrate_model(
         data_dirs: ``contactcal synth`` datasets that are neither its training, its benchmark
             nor any held-out check data.
         out: the new ``.onnx`` file; must not be ``model`` (inputs are never overwritten).
+        region: the contact region to state (one of :data:`REGIONS`); None keeps the model's.
 
     Returns:
-        The calibration summary (:func:`calibrate`).
+        The calibration summary (:func:`calibrate`), with the region it was calibrated for.
+
+    Raises:
+        ValueError: bad output name, an unknown region, or data the calibration cannot use.
     """
     import onnx
 
@@ -210,33 +219,45 @@ def recalibrate_model(
         raise ValueError(f"{dst}: expected an output file name ending in .onnx")
     if dst.exists() and dst.resolve() == src.resolve():
         raise ValueError(f"{dst}: the output must not be the input model {src}")
-    segs, truths, base = _segment_dataset(src, [Path(d) for d in data_dirs])
+    if region is not None and region not in REGIONS:
+        raise ValueError(f"region must be one of {', '.join(REGIONS)}, got {region!r}")
+    segs, truths, base = _segment_dataset(src, [Path(d) for d in data_dirs], region)
     interval, summary = calibrate(segs, truths, base)
     proto = onnx.load(str(src))
     meta = {p.key: p.value for p in proto.metadata_props}
     spec = dataclasses.replace(base, interval=interval)
-    onnx.helper.set_model_props(proto, {**meta, "interval": spec.to_metadata()["interval"]})
+    new = spec.to_metadata()
+    onnx.helper.set_model_props(
+        proto, {**meta, "interval": new["interval"], "region": new["region"]}
+    )
     onnx.checker.check_model(proto, full_check=True)
     if read_spec({p.key: p.value for p in proto.metadata_props}, dst) != spec:
         raise RuntimeError(f"{dst}: the metadata does not read back as the calibrated spec")
     with atomic_open(dst, "wb") as fh:
         fh.write(proto.SerializeToString())
-    return summary
+    return {**summary, "region": spec.region}
 
 
 def main(argv: Sequence[str] | None = None) -> int:
-    """``python -m contactcal.train.interval MODEL --data DIR... --out NEW.onnx``."""
+    """``python -m contactcal.train.interval MODEL --data DIR... --out NEW.onnx [--region R]``."""
     ap = argparse.ArgumentParser(
         prog="python -m contactcal.train.interval",
         description="Recalibrate an exported model's area interval (metadata only) on "
-        "validation renders.",
+        "validation renders, optionally stating its contact region.",
     )
     ap.add_argument("model", type=Path, help="exported .onnx model")
     ap.add_argument("--data", type=Path, nargs="+", required=True, help="dataset folder(s)")
     ap.add_argument("--out", type=Path, required=True, help="new .onnx file")
+    ap.add_argument(
+        "--region",
+        choices=REGIONS,
+        default=None,
+        help="contact region to state: the largest region as segmented, or its convex hull "
+        "(default: keep the model's)",
+    )
     args = ap.parse_args(argv)
     try:
-        summary = recalibrate_model(args.model, args.data, args.out)
+        summary = recalibrate_model(args.model, args.data, args.out, args.region)
     except (ValueError, OSError) as exc:
         print(f"error: {exc}")
         return 2

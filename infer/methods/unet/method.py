@@ -165,5 +165,6 @@ class UnetMethod:
                 "threshold": spec.threshold,
                 "min_contact_area_px": spec.min_contact_area_px,
                 "interval": None if spec.interval is None else dataclasses.asdict(spec.interval),
+                "region": spec.region,
             },
         }

@@ -25,6 +25,15 @@ class ModelError(ValueError):
 
 #: Metadata keys that define the pre- and post-processing (all required).
 SPEC_KEYS = ("channels", "preprocess", "threshold", "min_contact_area_px", "output", "interval")
+#: Metadata keys that define the post-processing and may be absent, with the value a model
+#: exported before the key existed was deployed with.
+OPTIONAL_SPEC_KEYS = {"region": "largest"}
+#: How the kept region becomes the contact region (metadata ``region``): ``"largest"``, the
+#: largest connected region above the threshold as it is; ``"convex"``, its convex hull (a finger
+#: pulp pressed on the membrane touches it in a convex region, and the rig paper's reference areas
+#: are ellipses; the hull restores edge lobes the network left out, at the price of the pixels
+#: it adds across a ragged outline).
+REGIONS = ("largest", "convex")
 #: Metadata keys that describe the model's provenance (all required; recorded, not interpreted).
 PROVENANCE_KEYS = (
     "data_digest",
@@ -79,6 +88,7 @@ class ModelSpec:
     min_contact_area_px: float  # network pixels; smaller predicted regions are "no contact"
     #: None only before calibration (training's validation); every exported model states one.
     interval: IntervalSpec | None = None
+    region: str = "largest"  # one of REGIONS; "convex" fills the kept region's convex hull
 
     @property
     def uses_reference(self) -> bool:
@@ -98,6 +108,8 @@ class ModelSpec:
             raise ValueError(
                 f"min_contact_area_px must be finite and >= 0, got {self.min_contact_area_px}"
             )
+        if self.region not in REGIONS:
+            raise ValueError(f"region must be one of {', '.join(REGIONS)}, got {self.region!r}")
         iv = self.interval
         if iv is not None and not iv.threshold_low < self.threshold < iv.threshold_high:
             raise ValueError(
@@ -120,6 +132,7 @@ class ModelSpec:
             "min_contact_area_px": repr(self.min_contact_area_px),
             "output": "logits",
             "interval": json.dumps(dataclasses.asdict(self.interval)),
+            "region": self.region,
         }
 
 
@@ -158,13 +171,14 @@ def read_spec(meta: Mapping[str, str], path: str | Path) -> ModelSpec:
         path: the model file, for messages.
 
     Returns:
-        The spec.
+        The spec. A model without the optional ``region`` key (exported before it existed) gets
+        ``"largest"``, the decision it was deployed with.
 
     Raises:
         ModelError: a missing, unknown or invalid key; the message names it and the file.
     """
-    known = (*SPEC_KEYS, *PROVENANCE_KEYS)
-    missing = [k for k in known if k not in meta]
+    known = (*SPEC_KEYS, *OPTIONAL_SPEC_KEYS, *PROVENANCE_KEYS)
+    missing = [k for k in (*SPEC_KEYS, *PROVENANCE_KEYS) if k not in meta]
     unknown = sorted(k for k in meta if k not in known)
     fix = "re-export the model with this version's `contactcal export`"
     if missing:
@@ -180,6 +194,7 @@ def read_spec(meta: Mapping[str, str], path: str | Path) -> ModelSpec:
             threshold=float(meta["threshold"]),
             min_contact_area_px=float(meta["min_contact_area_px"]),
             interval=_interval(meta["interval"]),
+            region=meta.get("region", OPTIONAL_SPEC_KEYS["region"]),
         )
     except (ValueError, TypeError) as exc:
         raise ModelError(f"{path}: invalid model metadata: {exc}; {fix}") from exc
