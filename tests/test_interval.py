@@ -172,17 +172,25 @@ def test_recalibrate_changes_only_the_interval(tmp_path: Path) -> None:
     from contactcal.train.interval import recalibrate_model
 
     data = write_dataset(tmp_path / "data", fingers=4)
-    out = tmp_path / "m.onnx"
-    summary = recalibrate_model(DEFAULT_MODEL, [data], out)
-    old, new = onnx.load(str(DEFAULT_MODEL)), onnx.load(str(out))
-    assert new.graph.SerializeToString() == old.graph.SerializeToString()
-    before = {p.key: p.value for p in old.metadata_props}
-    after = {p.key: p.value for p in new.metadata_props}
-    # a model exported before the region key gains it, with the region it was deployed with
-    assert {k for k in after if after[k] != before.get(k)} <= {"interval", "region"}
-    assert after.keys() == before.keys() | {"region"}
-    assert after["region"] == before.get("region", "largest")
-    assert json.loads(after["interval"]) == summary["interval"]
-    assert OnnxSegmenter(out).spec.interval is not None
+    old = onnx.load(str(DEFAULT_MODEL))
+    legacy = onnx.load(str(DEFAULT_MODEL))  # as exported before the region key existed
+    meta = {p.key: p.value for p in legacy.metadata_props if p.key != "region"}
+    del legacy.metadata_props[:]
+    onnx.helper.set_model_props(legacy, meta)
+    onnx.save(legacy, str(tmp_path / "legacy.onnx"))
+    for src, model in ((DEFAULT_MODEL, old), (tmp_path / "legacy.onnx", legacy)):
+        out = tmp_path / f"re-{Path(src).name}"
+        summary = recalibrate_model(src, [data], out)
+        new = onnx.load(str(out))
+        assert new.graph.SerializeToString() == model.graph.SerializeToString()
+        before = {p.key: p.value for p in model.metadata_props}
+        after = {p.key: p.value for p in new.metadata_props}
+        # a model without the region key gains it, with the region it was deployed with
+        assert {k for k in after if after[k] != before.get(k)} <= {"interval", "region"}
+        assert after.keys() == before.keys() | {"region"}
+        assert after["region"] == before.get("region", "largest")
+        assert json.loads(after["interval"]) == summary["interval"]
+        assert OnnxSegmenter(out).spec.interval is not None
+    assert "region" not in meta and after["region"] == "largest"  # the legacy path ran last
     with pytest.raises(ValueError, match="must not be the input"):
         recalibrate_model(out, [data], out)

@@ -11,7 +11,7 @@ import numpy as np
 import pytest
 
 from contactcal.infer.methods.unet.config import PreprocessConfig
-from contactcal.infer.methods.unet.postprocess import convex_region, postprocess
+from contactcal.infer.methods.unet.postprocess import boundary_band, convex_region, postprocess
 from contactcal.infer.methods.unet.prepare import CropBox
 from contactcal.infer.methods.unet.runner import DEFAULT_MODEL, OnnxSegmenter
 from contactcal.infer.methods.unet.spec import (
@@ -65,8 +65,24 @@ def test_convex_region_is_exactly_the_pixels_in_the_hull() -> None:
 def test_convex_region_keeps_a_convex_region() -> None:
     yy, xx = np.mgrid[0:SIZE, 0:SIZE] - 31.5
     disk = np.hypot(xx, yy) <= 12.0
-    hull = convex_region(disk)
-    assert disk.sum() <= hull.sum() <= disk.sum() * 1.03  # only the digitised outline's notches
+    # every pixel centre in the hull of a digitised disk's centres is in the disk (OpenCV's
+    # polygon fill adds ~2 % here)
+    np.testing.assert_array_equal(convex_region(disk), disk)
+
+
+def test_convex_region_edge_cases() -> None:
+    one = np.zeros((8, 8), bool)
+    one[3, 5] = True
+    np.testing.assert_array_equal(convex_region(one), one)
+    line = np.zeros((8, 8), bool)
+    line[np.arange(8), np.arange(8)] = True  # a diagonal from corner to corner
+    np.testing.assert_array_equal(convex_region(line), line)
+    corner = np.zeros((8, 8), bool)  # an L along two borders: its hull is the triangle
+    corner[0, :] = True
+    corner[:, 0] = True
+    np.testing.assert_array_equal(
+        convex_region(corner), np.add.outer(np.arange(8), np.arange(8)) <= 7
+    )
 
 
 def test_convex_postprocess_measures_the_hull() -> None:
@@ -80,6 +96,19 @@ def test_convex_postprocess_measures_the_hull() -> None:
     assert convex.soft_area_px == pytest.approx((340 * 0.8 + 60) * 4.0, rel=1e-6)
     lower, upper = convex.interval_px
     assert 0.0 <= lower <= convex.area_px <= upper
+
+
+def test_band_loose_joins_the_components_the_hull_touches() -> None:
+    prob = notched_square()
+    prob[17:24, 29:31] = 0.3  # a faint streak (14 px) from above into the notch, detached at 0.1
+    iv = CONVEX.interval
+    largest = postprocess(prob, BOX, SHAPE, SPEC)
+    assert boundary_band(prob, largest.mask_net, iv, 20.0).loose == 340.0  # the square only
+    hull = postprocess(prob, BOX, SHAPE, CONVEX).mask_net
+    assert hull.sum() == 400
+    # the hull, the streak's 6 px outside it: the square's component, the whole streak, and the
+    # 52 notch pixels that lie in no component
+    assert boundary_band(prob, hull, iv, 20.0).loose == 406.0
 
 
 def test_convex_region_does_not_change_the_contact_decision() -> None:
@@ -118,16 +147,24 @@ def test_recalibrate_states_the_region(tmp_path: Path) -> None:
     from contactcal.train.interval import main, recalibrate_model
 
     data = write_dataset(tmp_path / "data", fingers=4)
-    out = tmp_path / "convex.onnx"
-    summary = recalibrate_model(DEFAULT_MODEL, [data], out, region="convex")
-    old, new = onnx.load(str(DEFAULT_MODEL)), onnx.load(str(out))
-    assert new.graph.SerializeToString() == old.graph.SerializeToString()
-    after = {p.key: p.value for p in new.metadata_props}
-    assert after["region"] == summary["region"] == "convex"
-    assert json.loads(after["interval"]) == summary["interval"]
-    assert OnnxSegmenter(out).spec.region == "convex"
-    with pytest.raises(ValueError, match="region must be one of"):
-        recalibrate_model(DEFAULT_MODEL, [data], tmp_path / "x.onnx", region="hull")
+    proto = onnx.load(str(DEFAULT_MODEL))
+    meta = {p.key: p.value for p in proto.metadata_props if p.key != "region"}
+    del proto.metadata_props[:]
+    onnx.helper.set_model_props(proto, meta)
+    legacy = tmp_path / "legacy.onnx"  # exported before the region key existed
+    onnx.save(proto, str(legacy))
+    for region, expected in ((None, "largest"), ("convex", "convex"), ("largest", "largest")):
+        out = tmp_path / f"{expected}-{region}.onnx"
+        summary = recalibrate_model(legacy, [data], out, region=region)
+        new = onnx.load(str(out))
+        after = {p.key: p.value for p in new.metadata_props}
+        assert new.graph.SerializeToString() == proto.graph.SerializeToString()
+        assert after["region"] == summary["region"] == expected
+        assert json.loads(after["interval"]) == summary["interval"]
+        assert OnnxSegmenter(out).spec.region == expected
+    with pytest.raises(ValueError, match="legacy.onnx: region must be one of"):
+        recalibrate_model(legacy, [data], tmp_path / "x.onnx", region="hull")
+    bad = tmp_path / "y.onnx"
     with pytest.raises(SystemExit) as exc:
-        main([str(DEFAULT_MODEL), "--data", str(data), "--out", str(out), "--region", "hull"])
-    assert exc.value.code == 2 and not (tmp_path / "x.onnx").exists()
+        main([str(legacy), "--data", str(data), "--out", str(bad), "--region", "hull"])
+    assert exc.value.code == 2 and not bad.exists()

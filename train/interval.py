@@ -220,7 +220,7 @@ def recalibrate_model(
     if dst.exists() and dst.resolve() == src.resolve():
         raise ValueError(f"{dst}: the output must not be the input model {src}")
     if region is not None and region not in REGIONS:
-        raise ValueError(f"region must be one of {', '.join(REGIONS)}, got {region!r}")
+        raise ValueError(f"{src}: region must be one of {', '.join(REGIONS)}, got {region!r}")
     segs, truths, base = _segment_dataset(src, [Path(d) for d in data_dirs], region)
     interval, summary = calibrate(segs, truths, base)
     proto = onnx.load(str(src))

@@ -99,7 +99,11 @@ def main() -> int:
     ap.add_argument("model", type=Path, help="exported .onnx model")
     ap.add_argument("--data", type=Path, nargs="+", required=True, help="dataset folder(s)")
     args = ap.parse_args()
-    names, a = errors(args.model, args.data)
+    try:
+        names, a = errors(args.model, args.data)
+    except (ValueError, OSError) as exc:
+        print(f"error: {exc}")
+        return 2
     print(f"{args.model}: {', '.join(map(str, args.data))}, {len(a)} frames in contact")
     for lo, hi in BINS:
         b = a[(a[:, 0] >= lo) & (a[:, 0] < hi)]

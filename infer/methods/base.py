@@ -32,7 +32,7 @@ class AreaResult:
     area_px: float  # in pixels of the input file; 0.0 when no contact
     note: str  # "" or why there is no contact
     contour: np.ndarray | None  # (N, 1, 2) int32 outline in input pixels, for overlays
-    soft_area_px: float | None = None  # U-Net: sum of probabilities over the region (sub-pixel)
+    soft_area_px: float | None = None  # U-Net: probabilities summed around the region, hull px as 1
     area_interval_px: tuple[float, float] | None = None  # (lower, upper) px; None: none stated
 
     def upscaled(self, k: int) -> AreaResult:

@@ -1,7 +1,10 @@
 """The U-Net's decision: from a probability map to contact / no contact, an area and its interval.
 
 One function for validation during training, threshold tuning, export checks, interval
-calibration and deployment, so that the model is selected on the decision it ships with.
+calibration and deployment, so that the model is selected on the decision it ships with. (The
+contact decision, that is: training validates with the region as segmented, ``"largest"``; a
+model's ``"convex"`` region, stated later by ``python -m contactcal.train.interval --region``,
+changes its areas, never which frames are contact.)
 """
 
 from __future__ import annotations
@@ -66,19 +69,22 @@ def convex_region(keep: np.ndarray) -> np.ndarray:
 def boundary_band(
     prob: np.ndarray, keep: np.ndarray, interval: IntervalSpec, min_area: float
 ) -> Band:
-    """Measure the kept region at the interval's stricter and looser thresholds.
+    """Measure the contact region at the interval's stricter and looser thresholds.
 
     Args:
         prob: ``(S, S) float32`` probabilities (0 outside the image).
-        keep: ``(S, S) bool`` kept region (empty: the frame is called "no contact").
+        keep: ``(S, S) bool`` contact region, the kept region or its convex hull (empty: the
+            frame is called "no contact").
         interval: the two thresholds.
         min_area: network pixels, the spec's minimum contact area.
 
     Returns:
-        The band. With a kept region, ``loose`` is the connected region at ``threshold_low``
-        that contains it. Without one (no contact, area 0), ``loose`` is the largest region at
-        ``threshold_low`` if it covers at least ``min_area`` (and one pixel), else 0: the
-        interval is then ``(0, widen·loose)``, i.e. ``(0, 0)`` when nothing looser is found.
+        The band. With a contact region, ``loose`` is the union of that region and every
+        connected region at ``threshold_low`` it touches, whole (for a region as segmented: the
+        one that contains it; a hull may reach into further, detached ones). Without one (no
+        contact, area 0), ``loose`` is the largest region at ``threshold_low`` if it covers at
+        least ``min_area`` (and one pixel), else 0: the interval is then ``(0, widen·loose)``,
+        i.e. ``(0, 0)`` when nothing looser is found.
     """
     n, labels, stats, _ = cv2.connectedComponentsWithStats(
         (prob >= interval.threshold_low).astype(np.uint8), connectivity=8
@@ -87,8 +93,7 @@ def boundary_band(
     if area == 0.0:
         big = float(stats[1:, cv2.CC_STAT_AREA].max()) if n > 1 else 0.0
         return Band(0.0, 0.0, big if big >= max(min_area, 1.0) else 0.0, 0.0)
-    # The components at threshold_low that the kept region touches, joined with it (one
-    # component for a kept region above the threshold; a convex hull may reach into more).
+    # Components are disjoint: their areas add up, plus the region's pixels outside all of them.
     touched = np.unique(labels[keep])
     touched = touched[touched > 0]
     loose = float(stats[touched, cv2.CC_STAT_AREA].sum() + (keep & (labels == 0)).sum())
@@ -152,7 +157,7 @@ def postprocess(
         keep = np.zeros_like(keep)
     segmented = keep
     if spec.region == "convex":
-        keep = convex_region(keep) & inside
+        keep = convex_region(keep)  # stays inside the (rectangular) valid window
     interval = None
     if spec.interval is not None:
         band = boundary_band(prob, keep, spec.interval, spec.min_contact_area_px)

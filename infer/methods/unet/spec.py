@@ -197,4 +197,6 @@ def read_spec(meta: Mapping[str, str], path: str | Path) -> ModelSpec:
             region=meta.get("region", OPTIONAL_SPEC_KEYS["region"]),
         )
     except (ValueError, TypeError) as exc:
+        if "region" in str(exc):
+            fix = "restate it with `python -m contactcal.train.interval MODEL --region …`"
         raise ModelError(f"{path}: invalid model metadata: {exc}; {fix}") from exc
