@@ -185,6 +185,12 @@ def read_spec(meta: Mapping[str, str], path: str | Path) -> ModelSpec:
         raise ModelError(f"{path}: model metadata lacks key(s) {', '.join(missing)}; {fix}")
     if unknown:
         raise ModelError(f"{path}: unknown model metadata key(s) {', '.join(unknown)}; {fix}")
+    region = meta.get("region", OPTIONAL_SPEC_KEYS["region"])
+    if region not in REGIONS:
+        raise ModelError(
+            f"{path}: invalid model metadata: region must be one of {', '.join(REGIONS)}, got "
+            f"{region!r}; restate it with `python -m contactcal.train.interval MODEL --region …`"
+        )
     if meta["output"] != "logits":
         raise ModelError(f"{path}: metadata 'output' must be 'logits', got {meta['output']!r}")
     try:
@@ -194,9 +200,7 @@ def read_spec(meta: Mapping[str, str], path: str | Path) -> ModelSpec:
             threshold=float(meta["threshold"]),
             min_contact_area_px=float(meta["min_contact_area_px"]),
             interval=_interval(meta["interval"]),
-            region=meta.get("region", OPTIONAL_SPEC_KEYS["region"]),
+            region=region,
         )
     except (ValueError, TypeError) as exc:
-        if "region" in str(exc):
-            fix = "restate it with `python -m contactcal.train.interval MODEL --region …`"
         raise ModelError(f"{path}: invalid model metadata: {exc}; {fix}") from exc
