@@ -44,7 +44,7 @@ from contactcal.infer.methods.unet.ridge import ridge_energy
 from contactcal.infer.methods.unet.ring import locate_ring
 
 
-def region_stats(m: UnetMethod, frames: list[np.ndarray]) -> list[tuple[float, float] | None]:
+def region_stats(m: UnetMethod, frames: list[np.ndarray]) -> list[tuple[float, float, float] | None]:
     """The two statistics in each frame's kept region, as the deployed method measures it.
 
     Args:
@@ -61,7 +61,7 @@ def region_stats(m: UnetMethod, frames: list[np.ndarray]) -> list[tuple[float, f
     cfg = spec.preprocess
     m.set_reference(frames[0])
     ref = m.reference
-    out: list[tuple[float, float] | None] = []
+    out: list[tuple[float, float, float] | None] = []
     for gray in frames:
         img, _ = m._shrunk(gray)
         prep = prepare(img, ref, cfg, spec.channels)
@@ -74,7 +74,8 @@ def region_stats(m: UnetMethod, frames: list[np.ndarray]) -> list[tuple[float, f
             continue
         gain = float(prep.x[-1][keep].mean() / max(ref_ridge[keep].mean(), 1e-6))
         sim = float(np.corrcoef(prep.x[0][keep], prep.x[1][keep])[0, 1])
-        out.append((gain, sim))
+        change = float(np.abs(prep.x[0][keep] - prep.x[1][keep]).mean())
+        out.append((gain, sim, change))
     return out
 
 
@@ -108,7 +109,7 @@ def main() -> None:
         f"{len(true_regions)} regions in contact frames; {len(false_regions)} regions in the "
         f"{frames_below} frames above 0 kPa without contact (false contacts)"
     )
-    for k, name in enumerate(("ridge gain", "similarity")):
+    for k, name in enumerate(("ridge gain", "similarity", "change")):
         t = np.array([x[k] for x in true_regions])
         f = np.array([x[k] for x in false_regions])
         span = {
@@ -119,7 +120,7 @@ def main() -> None:
         if name == "similarity":
             tries += args.similarity
         for q in tries:
-            veto = (lambda x, q=q: x <= q) if k == 0 else (lambda x, q=q: x >= q)
+            veto = (lambda x, q=q: x >= q) if k == 1 else (lambda x, q=q: x <= q)
             print(
                 f"  veto at {q:.3f}: removes {int(veto(f).sum())} false, "
                 f"{int(veto(t).sum())} true regions"
