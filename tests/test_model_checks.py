@@ -77,6 +77,7 @@ def _identity_model(path: Path, channels_in: int, channels_meta: int) -> Path:
     shipped = onnx.load(str(DEFAULT_MODEL))
     meta = {p.key: p.value for p in shipped.metadata_props}
     meta["channels"] = str(channels_meta)
+    meta.pop("min_change", None)  # the shipped change gate needs a reference channel
     helper.set_model_props(proto, meta)
     onnx.save(proto, str(path))
     return path

@@ -36,9 +36,9 @@ from typing import Any
 import numpy as np
 
 from contactcal.infer.bench.dataset import read_index
-from contactcal.infer.files.atomic import atomic_open
 from contactcal.infer.methods.unet.postprocess import Band, Segmentation, boundary_band
-from contactcal.infer.methods.unet.spec import REGIONS, IntervalSpec, ModelSpec, read_spec
+from contactcal.infer.methods.unet.spec import REGIONS, IntervalSpec, ModelSpec
+from contactcal.train.restate import check_paths, metadata_of, save_restated
 
 #: Stated coverage of the interval.
 LEVEL = 0.9
@@ -170,7 +170,7 @@ def _segment_dataset(
     from contactcal.train.sessions import session_inputs
 
     proto = onnx.load(str(model))
-    meta = {p.key: p.value for p in proto.metadata_props}
+    meta = metadata_of(proto)
     # Any valid interval lets the strict reader accept a model exported before intervals.
     meta["interval"] = json.dumps(dataclasses.asdict(IntervalSpec(LEVEL, 1e-6, 1 - 1e-6, 1.0, 1)))
     if region is not None:
@@ -214,27 +214,15 @@ def recalibrate_model(
     """
     import onnx
 
-    src, dst = Path(model), Path(out)
-    if dst.suffix.lower() != ".onnx":
-        raise ValueError(f"{dst}: expected an output file name ending in .onnx")
-    if dst.exists() and dst.resolve() == src.resolve():
-        raise ValueError(f"{dst}: the output must not be the input model {src}")
+    src, dst = check_paths(model, out)
     if region is not None and region not in REGIONS:
         raise ValueError(f"{src}: region must be one of {', '.join(REGIONS)}, got {region!r}")
     segs, truths, base = _segment_dataset(src, [Path(d) for d in data_dirs], region)
     interval, summary = calibrate(segs, truths, base)
-    proto = onnx.load(str(src))
-    meta = {p.key: p.value for p in proto.metadata_props}
     spec = dataclasses.replace(base, interval=interval)
     new = spec.to_metadata()
-    onnx.helper.set_model_props(
-        proto, {**meta, "interval": new["interval"], "region": new["region"]}
-    )
-    onnx.checker.check_model(proto, full_check=True)
-    if read_spec({p.key: p.value for p in proto.metadata_props}, dst) != spec:
-        raise RuntimeError(f"{dst}: the metadata does not read back as the calibrated spec")
-    with atomic_open(dst, "wb") as fh:
-        fh.write(proto.SerializeToString())
+    updates = {"interval": new["interval"], "region": new["region"]}
+    save_restated(onnx.load(str(src)), updates, spec, dst)
     return {**summary, "region": spec.region}
 
 

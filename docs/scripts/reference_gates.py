@@ -1,8 +1,8 @@
-"""Could a check against the reference frame veto the U-Net's false contacts? Two candidates.
+"""Could a check against the reference frame veto the U-Net's false contacts? Three candidates.
 
 A bright speck on the window near the centre is taken for contact before contact
 (``models/MODEL_CARD.md``, "Limits"), although the session's zero-pressure frame shows the same
-speck. Two post-processing vetoes suggest themselves, both measured here on the kept region of
+speck. Three post-processing vetoes suggest themselves, all measured here on the kept region of
 the shipped model (``postprocess``'s ``mask_net``, network pixels) of every frame of a dataset:
 
 * **ridge gain**: the ridge-energy channel's mean inside the region, frame over reference (the
@@ -10,6 +10,11 @@ the shipped model (``postprocess``'s ``mask_net``, network pixels) of every fram
   on the window is in both frames: a gain near 1 would mean "no new evidence".
 * **similarity**: the correlation of the frame and reference channels inside the region. Contact
   changes the pattern, a speck leaves it: a correlation near 1 would mean "unchanged".
+* **change**: the mean |frame channel − reference channel| inside the region, network input
+  units (:func:`~contactcal.infer.methods.unet.postprocess.region_change`): contact changes the
+  image where it happens. The deployed change gate (metadata ``min_change``,
+  ``python -m contactcal.train.change_gate``) is this statistic; this script measures it with
+  the shipped model's gate off.
 
 ``--speck LEVEL --draws N`` adds a window speck (``contactcal.infer.bench.perturb.speck``, the
 robustness suite's, same speck in the frame and its reference) N times per session, each draw
@@ -30,6 +35,7 @@ frames above 0 kPa without contact are counted once per draw (53 frames × 3 dra
 from __future__ import annotations
 
 import argparse
+import dataclasses
 from pathlib import Path
 
 import numpy as np
@@ -44,15 +50,18 @@ from contactcal.infer.methods.unet.ridge import ridge_energy
 from contactcal.infer.methods.unet.ring import locate_ring
 
 
-def region_stats(m: UnetMethod, frames: list[np.ndarray]) -> list[tuple[float, float, float] | None]:
-    """The two statistics in each frame's kept region, as the deployed method measures it.
+def region_stats(
+    m: UnetMethod, frames: list[np.ndarray]
+) -> list[tuple[float, float, float] | None]:
+    """The three statistics in each frame's kept region, as the deployed method measures it.
 
     Args:
         m: the U-Net method (a 3-channel model: frame, reference, ridge energy).
         frames: one session's ``(H, W) uint8`` frames, ``frames[0]`` its reference (0 kPa).
 
     Returns:
-        Per frame ``(ridge gain, similarity)`` (dimensionless), or None without a kept region.
+        Per frame ``(ridge gain, similarity, change)`` (dimensionless; change in network input
+        units), or None without a kept region.
 
     The reference's ridge channel is computed in each frame's crop (the session's, or the
     frame's own where the reference's window ring was not found, as ``prepare`` does).
@@ -65,7 +74,7 @@ def region_stats(m: UnetMethod, frames: list[np.ndarray]) -> list[tuple[float, f
     for gray in frames:
         img, _ = m._shrunk(gray)
         prep = prepare(img, ref, cfg, spec.channels)
-        seg = postprocess(m.segmenter.probabilities(prep.x), prep.box, img.shape, spec)
+        seg = postprocess(m.segmenter.probabilities(prep.x), prep.box, img.shape, spec)  # no gate
         ref_work = crop_resize(ref.gray, prep.box, cfg.ridge_work_px)
         ref_ridge = ridge_energy(ref_work, cfg, _to_network(ref.gray, prep.box, cfg)[1])
         keep = seg.mask_net
@@ -91,6 +100,7 @@ def main() -> None:
     )
     args = ap.parse_args()
     m = UnetMethod()
+    m.segmenter.spec = dataclasses.replace(m.segmenter.spec, min_change=0.0)  # the gate off
     true_regions, false_regions, frames_below = [], [], 0
     for s, rows in enumerate(sessions_of(read_index(args.data)).values()):
         rows = sorted(rows, key=lambda r: r.pressure_kpa)

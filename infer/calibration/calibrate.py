@@ -51,6 +51,7 @@ def calibrate_session(
     inverse_phase: str = LOADING,
     manifest_as: str | os.PathLike[str] | None = None,
     session_rule: bool = True,
+    change_gate: bool = True,
 ) -> CalibrationReport:
     """Calibrate the session listed in ``manifest`` and write its outputs into ``out_dir``.
 
@@ -83,6 +84,8 @@ def calibrate_session(
             itself is an output staged in this run (video input); None → ``manifest``.
         session_rule: apply the session rule (``--per-frame-contact`` turns it off); recorded
             in the record's ``extra``.
+        change_gate: apply the U-Net model's change gate (``--no-change-gate`` turns it off);
+            recorded in the method's configuration (``describe()``).
 
     Returns:
         The :class:`CalibrationReport` (table, measurements, curve, written files).
@@ -97,7 +100,8 @@ def calibrate_session(
     provenance = Provenance(argv=None if argv is None else list(argv), device_id=device_id)
     session = read_session(manifest)
     frames, files = session.frames, [f.file for f in session.frames]
-    method = make_method(method_name, None if model is None else str(model), outline=outline)
+    model = None if model is None else str(model)
+    method = make_method(method_name, model, outline=outline, change_gate=change_gate)
     measured = measure_files(files, method, frames[0].file, scale, bit_depth=bit_depth)
     measured_points = _points(manifest, frames, measured, scale)
     results = revise_points(measured_points) if session_rule else measured_points
@@ -130,9 +134,16 @@ def _check_contact(
             "shrinks at a higher pressure or lies below any contact range); check the pressure "
             "range, or keep the frames' own flags with --per-frame-contact"
         )
+    gated = sum("unchanged from the reference frame" in r.note for r in measured)
+    hint = (
+        f"; the change gate called {gated} of them unchanged from the reference frame (their "
+        "notes): if the contacts on this rig change the image that little, use --no-change-gate"
+        if gated
+        else ""
+    )
     raise RunError(
         f"{manifest}: no contact detected in any of its {len(results)} frames "
-        f"(method {name}); check the frames, the pressure range or the method"
+        f"(method {name}); check the frames, the pressure range or the method{hint}"
     )
 
 

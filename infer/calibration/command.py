@@ -65,6 +65,7 @@ def _cmd_calibrate(args: argparse.Namespace) -> int:
             bit_depth=args.bit_depth,
             inverse_phase=args.inverse_phase,
             session_rule=not args.per_frame_contact,
+            change_gate=not args.no_change_gate,
         )
         if args.overlay is not None:
             files = [f.file for f in rep.frames]

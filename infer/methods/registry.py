@@ -16,6 +16,7 @@ def make_method(
     model: str | os.PathLike[str] | None = None,
     threads: int = 1,
     outline: bool = False,
+    change_gate: bool = True,
 ) -> Method:
     """Build a method by name.
 
@@ -25,6 +26,8 @@ def make_method(
         threads: onnxruntime intra-op threads for ``"unet"``.
         outline: compute the U-Net's outline in input pixels (for overlays; costs a full-size
             warp per frame). The classical ellipse outline is always given.
+        change_gate: apply the U-Net model's change gate (``min_change``); False measures every
+            kept region as contact (``--no-change-gate``), recorded in ``describe()``.
 
     Raises:
         ValueError: unknown method name; ``ModelError`` for an unusable model file.
@@ -34,5 +37,5 @@ def make_method(
     if name == "unet":
         from contactcal.infer.methods.unet.method import UnetMethod
 
-        return UnetMethod(model, threads, outline)
+        return UnetMethod(model, threads, outline, change_gate)
     raise ValueError(f"unknown method {name!r}; expected one of {', '.join(METHODS)}")

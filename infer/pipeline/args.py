@@ -33,9 +33,17 @@ def bit_depth_arg(p: argparse.ArgumentParser) -> None:
 
 
 def method_args(p: argparse.ArgumentParser) -> None:
-    """``--method``, ``--model``, ``--threads``, ``--overlay``, ``--device-id``."""
+    """``--method``, ``--model``, ``--no-change-gate``, ``--threads``, ``--overlay``,
+    ``--device-id``."""
     p.add_argument("--method", choices=METHODS, default=METHODS[0], help="default %(default)s")
     p.add_argument("--model", type=Path, help="ONNX model for --method unet (default: shipped)")
+    p.add_argument(
+        "--no-change-gate",
+        action="store_true",
+        help="--method unet: call a region contact even when it has not changed since the "
+        "reference frame (the model's min_change gate is off; recorded). For a rig whose "
+        "contacts look almost like its 0 kPa frame: each such frame's note says 'unchanged'",
+    )
     p.add_argument(
         "--threads",
         type=int,
@@ -83,6 +91,8 @@ def overlay_runs(
     runs = {args.method: primary}
     for name in METHODS:
         if name not in runs:
-            method = make_method(name, args.model, args.threads, outline=True)
+            method = make_method(
+                name, args.model, args.threads, outline=True, change_gate=not args.no_change_gate
+            )
             runs[name] = measure_files(files, method, reference, bit_depth=args.bit_depth)
     return runs

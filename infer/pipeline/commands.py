@@ -50,7 +50,13 @@ def _cmd_measure(args: argparse.Namespace) -> int:
         )
     with run_outputs([*args.images, *run_inputs(args)]) as outs:
         json_path = None if to_stdout else outs.stage(args.out)  # refused here, before work
-        method = make_method(args.method, args.model, args.threads, args.overlay is not None)
+        method = make_method(
+            args.method,
+            args.model,
+            args.threads,
+            args.overlay is not None,
+            change_gate=not args.no_change_gate,
+        )
         measured = measure_files(
             args.images, method, args.reference, resolve_scale(args), bit_depth=args.bit_depth
         )

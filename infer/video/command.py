@@ -104,7 +104,9 @@ def _preview(
 
     if not (args.show or args.preview or args.camera is not None):
         return None
-    method = make_method("unet", args.model, args.threads, outline=True)
+    method = make_method(
+        "unet", args.model, args.threads, outline=True, change_gate=not args.no_change_gate
+    )
     if args.show:
         return Preview(method, extractor, None, "", fps)
     suffix, fourcc = preview_format()
@@ -165,6 +167,7 @@ def calibrate_video(args: argparse.Namespace, scale: PixelScale | None) -> int:
             inverse_phase=args.inverse_phase,
             manifest_as=final_manifest,
             session_rule=not args.per_frame_contact,
+            change_gate=not args.no_change_gate,
         )
     print(rep.table)
     print(ex.summary())

@@ -22,7 +22,7 @@ from contactcal.infer.image.gray import reduce_area, to_gray_u8
 from contactcal.infer.image.jpeg import jpeg_size
 from contactcal.infer.image.read import load_image
 from contactcal.infer.methods.base import AreaResult, Started, load_reference
-from contactcal.infer.methods.unet.postprocess import mask_in_input
+from contactcal.infer.methods.unet.postprocess import Segmentation, mask_in_input
 from contactcal.infer.methods.unet.prepare import session_reference
 from contactcal.infer.methods.unet.runner import OnnxSegmenter
 from contactcal.infer.methods.unet.shrink import (
@@ -51,15 +51,27 @@ class UnetMethod:
         threads: onnxruntime intra-op threads.
         outline: map the mask back to input pixels for an outline (overlays; costs a full-size
             warp per frame).
+        change_gate: apply the model's change gate (metadata ``min_change``); False turns it
+            off (``--no-change-gate``: for a rig whose contacts change the image less than the
+            validation renders' did), which ``describe()`` records.
     """
 
     name = "unet"
 
     def __init__(
-        self, model: str | os.PathLike[str] | None = None, threads: int = 1, outline: bool = False
+        self,
+        model: str | os.PathLike[str] | None = None,
+        threads: int = 1,
+        outline: bool = False,
+        change_gate: bool = True,
     ) -> None:
         self.segmenter = OnnxSegmenter(model, threads=threads)
         spec = self.segmenter.spec
+        self.model_min_change = spec.min_change
+        self.change_gate = change_gate and spec.min_change > 0.0
+        if not change_gate:
+            spec = dataclasses.replace(spec, min_change=0.0)
+            self.segmenter.spec = spec
         mode = spec.preprocess.no_reference if spec.uses_reference else "none"
         self.NO_REFERENCE = NO_REFERENCE_NOTES[mode]
         self.outline = outline
@@ -141,19 +153,36 @@ class UnetMethod:
         k = self.reduction * shrink
         seg = self.segmenter.segment(image, self.reference)
         if not seg.contact:
-            res = AreaResult(False, 0.0, "no contact", None, area_interval_px=seg.interval_px)
+            res = AreaResult(False, 0.0, self._note(seg), None, area_interval_px=seg.interval_px)
             return res.upscaled(k)
         contour = None
         if self.outline:
             mask = mask_in_input(seg, image.shape[:2]).astype(np.uint8)
             contours, _ = cv2.findContours(mask, cv2.RETR_EXTERNAL, cv2.CHAIN_APPROX_SIMPLE)
             contour = max(contours, key=cv2.contourArea) if contours else None
-        res = AreaResult(True, seg.area_px, "", contour, seg.soft_area_px, seg.interval_px)
+        note = self._note(seg)
+        res = AreaResult(True, seg.area_px, note, contour, seg.soft_area_px, seg.interval_px)
         return res.upscaled(k)
 
+    def _note(self, seg: Segmentation) -> str:
+        """Why a frame has no contact ("no contact", or the change gate's numbers), and that the
+        change gate was turned off when it was (a contact frame's note is otherwise "")."""
+        notes = [] if seg.contact else ["no contact"]
+        if seg.unchanged:
+            notes = [
+                f"no contact: the region is unchanged from the reference frame (change "
+                f"{seg.change:.3f} < {self.model_min_change:.3f})"
+            ]
+        if self.model_min_change > 0.0 and not self.change_gate and self.reference.gray is not None:
+            notes.append("change gate off (--no-change-gate)")
+        return "; ".join(notes)
+
     def describe(self) -> dict[str, Any]:
-        """The model file, its sha256, its training ``data_digest`` and its deployment spec."""
+        """The model file, its sha256, its training ``data_digest``, its deployment spec (as the
+        model states it) and whether its change gate ran (``on``, ``off (--no-change-gate)`` or
+        ``none in the model``)."""
         seg, spec = self.segmenter, self.segmenter.spec
+        gate = "on" if self.change_gate else "off (--no-change-gate)"
         return {
             "name": self.name,
             "model": str(seg.path.resolve()),
@@ -166,5 +195,7 @@ class UnetMethod:
                 "min_contact_area_px": spec.min_contact_area_px,
                 "interval": None if spec.interval is None else dataclasses.asdict(spec.interval),
                 "region": spec.region,
+                "min_change": self.model_min_change,
             },
+            "change_gate": gate if self.model_min_change > 0.0 else "none in the model",
         }

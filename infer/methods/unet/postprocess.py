@@ -116,17 +116,41 @@ class Segmentation:
     box: CropBox  # crop that maps network pixels to input pixels
     #: The stated interval of the area, input pixels (None when the spec has no interval).
     interval_px: tuple[float, float] | None = None
+    #: The kept region's mean |frame − reference| (network input units; :func:`region_change`),
+    #: None when not measured (no reference frame, or no region of the minimum area).
+    change: float | None = None
+    #: True when the change gate (``spec.min_change``) turned a kept region into "no contact".
+    unchanged: bool = False
+
+
+def region_change(difference: np.ndarray, keep: np.ndarray) -> float:
+    """The change of a region against the session's zero-pressure frame.
+
+    Args:
+        difference: ``(S, S) float32`` |frame channel − reference channel|, network input units.
+        keep: ``(S, S) bool`` the kept region (non-empty).
+
+    Returns:
+        The mean of ``difference`` over ``keep`` (network input units, >= 0).
+    """
+    return float(difference[keep].mean())
 
 
 def postprocess(
-    prob: np.ndarray, box: CropBox, shape: tuple[int, int], spec: ModelSpec
+    prob: np.ndarray,
+    box: CropBox,
+    shape: tuple[int, int],
+    spec: ModelSpec,
+    difference: np.ndarray | None = None,
 ) -> Segmentation:
     """Keep the largest connected region above the threshold; decide contact; measure it.
 
     Network pixels whose centres fall outside the image are ignored (a crop that barely overlaps
     the image may have none inside: then no contact, area 0). Ring reflections and
     sparkle give small or detached specks: only the largest region counts, and only if it covers
-    at least ``spec.min_contact_area_px`` network pixels. With ``spec.region == "convex"`` the
+    at least ``spec.min_contact_area_px`` network pixels and, when ``difference`` is given, only if
+    its :func:`region_change` reaches ``spec.min_change`` (a region that looks as it did in the
+    zero-pressure frame is not contact). With ``spec.region == "convex"`` the
     contact region is then that region's :func:`convex_region` (the contact decision is the same;
     the area, the mask, the soft area and the interval are the hull's). When the spec states an
     interval, the area's interval comes from the region's :func:`boundary_band` (``(0, upper)``
@@ -136,7 +160,9 @@ def postprocess(
         prob: ``(S, S)`` probabilities in network pixels.
         box: the crop the network input was made with.
         shape: input image ``(H, W)``.
-        spec: threshold, minimum area, region and interval.
+        spec: threshold, minimum area, minimum change, region and interval.
+        difference: ``(S, S) float32`` |frame channel − reference channel| (network input units)
+            when the session has a reference frame; None without one (no change gate).
 
     Returns:
         The segmentation; areas and interval in input pixels (network pixels × the crop's
@@ -155,6 +181,10 @@ def postprocess(
     region_net = float(keep.sum())
     if region_net < spec.min_contact_area_px or region_net == 0.0:
         keep = np.zeros_like(keep)
+    change = None if difference is None or not keep.any() else region_change(difference, keep)
+    unchanged = change is not None and change < spec.min_change
+    if unchanged:
+        keep = np.zeros_like(keep)
     segmented = keep
     if spec.region == "convex":
         keep = convex_region(keep)  # stays inside the (rectangular) valid window
@@ -164,11 +194,15 @@ def postprocess(
         lower, upper = band.interval(spec.interval.widen)
         interval = (lower * px_per_net, upper * px_per_net)
     if not keep.any():
-        return Segmentation(False, 0.0, 0.0, region_net, prob, keep, box, interval)
+        return Segmentation(
+            False, 0.0, 0.0, region_net, prob, keep, box, interval, change, unchanged
+        )
     near = cv2.dilate(keep.astype(np.uint8), np.ones((5, 5), np.uint8)).astype(bool)
     soft = float(np.where(keep & ~segmented, 1.0, prob)[near].sum())  # hull pixels count whole
     area = float(keep.sum()) * px_per_net
-    return Segmentation(True, area, soft * px_per_net, region_net, prob, keep, box, interval)
+    return Segmentation(
+        True, area, soft * px_per_net, region_net, prob, keep, box, interval, change
+    )
 
 
 def mask_in_input(seg: Segmentation, shape: tuple[int, int]) -> np.ndarray:

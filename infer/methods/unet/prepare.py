@@ -301,3 +301,27 @@ def prepare(
         work = crop_resize(gray, box, config.ridge_work_px)
         chans.append(ridge_energy(work, config, level))
     return Prepared(np.stack(chans), box, ring)
+
+
+def reference_difference(
+    x: np.ndarray, reference: SessionReference, channels: int, config: PreprocessConfig
+) -> np.ndarray | None:
+    """|frame channel − reference channel| of a prepared input, when there is a reference frame.
+
+    What the change gate (``ModelSpec.min_change``, :func:`~contactcal.infer.methods.unet.
+    postprocess.postprocess`) measures a kept region with.
+
+    Args:
+        x: ``(C, S, S)`` network input from :func:`prepare`.
+        reference: the session's reference (:func:`session_reference`).
+        channels: the model's input channels.
+        config: preprocessing (whether the last channel is the ridge energy).
+
+    Returns:
+        ``(S, S) float32`` in network input units, or None when the model has no reference
+        channel or the session no reference frame (its reference channel is then the frame
+        itself or a blank plane: nothing to compare with).
+    """
+    if channels - (config.ridge_work_px > 0) != 2 or reference.gray is None:
+        return None
+    return np.abs(x[0] - x[1])

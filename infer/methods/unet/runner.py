@@ -17,7 +17,11 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from contactcal.infer.methods.unet.postprocess import Segmentation, postprocess
-from contactcal.infer.methods.unet.prepare import SessionReference, prepare
+from contactcal.infer.methods.unet.prepare import (
+    SessionReference,
+    prepare,
+    reference_difference,
+)
 from contactcal.infer.methods.unet.spec import ModelError, ModelSpec, read_spec
 
 if TYPE_CHECKING:
@@ -164,4 +168,5 @@ class OnnxSegmenter:
         cfg = self.spec.preprocess
         prep = prepare(gray, reference, cfg, self.spec.channels)
         prob = self.probabilities(prep.x)
-        return postprocess(prob, prep.box, gray.shape[:2], self.spec)
+        diff = reference_difference(prep.x, reference, self.spec.channels, cfg)
+        return postprocess(prob, prep.box, gray.shape[:2], self.spec, diff)

@@ -27,7 +27,7 @@ class ModelError(ValueError):
 SPEC_KEYS = ("channels", "preprocess", "threshold", "min_contact_area_px", "output", "interval")
 #: Metadata keys that define the post-processing and may be absent, with the value a model
 #: exported before the key existed was deployed with.
-OPTIONAL_SPEC_KEYS = {"region": "largest"}
+OPTIONAL_SPEC_KEYS = {"region": "largest", "min_change": "0.0"}
 #: How the kept region becomes the contact region (metadata ``region``): ``"largest"``, the
 #: largest connected region above the threshold as it is; ``"convex"``, its convex hull (a finger
 #: pulp pressed on the membrane touches it in a convex region, and the rig paper's reference areas
@@ -89,6 +89,13 @@ class ModelSpec:
     #: None only before calibration (training's validation); every exported model states one.
     interval: IntervalSpec | None = None
     region: str = "largest"  # one of REGIONS; "convex" fills the kept region's convex hull
+    #: Network input units (the crop over its bright percentile, normalised), >= 0: a kept region
+    #: whose mean |frame − reference| channel difference is below it is "no contact" (a speck on
+    #: the window, a pre-contact glare: things the zero-pressure frame already shows). 0: no gate.
+    #: Higher rejects more such regions and risks the faint first contact of a hard session;
+    #: calibrated on validation renders by ``python -m contactcal.train.change_gate``. Applies
+    #: only when the session has a reference frame.
+    min_change: float = 0.0
 
     @property
     def uses_reference(self) -> bool:
@@ -110,6 +117,12 @@ class ModelSpec:
             )
         if self.region not in REGIONS:
             raise ValueError(f"region must be one of {', '.join(REGIONS)}, got {self.region!r}")
+        if not (math.isfinite(self.min_change) and self.min_change >= 0.0):
+            raise ValueError(f"min_change must be finite and >= 0, got {self.min_change}")
+        if self.min_change > 0.0 and not self.uses_reference:
+            raise ValueError(
+                f"min_change {self.min_change} needs a reference channel, and the model has none"
+            )
         iv = self.interval
         if iv is not None and not iv.threshold_low < self.threshold < iv.threshold_high:
             raise ValueError(
@@ -133,6 +146,7 @@ class ModelSpec:
             "output": "logits",
             "interval": json.dumps(dataclasses.asdict(self.interval)),
             "region": self.region,
+            "min_change": repr(self.min_change),
         }
 
 
@@ -163,6 +177,20 @@ def _interval(text: str) -> IntervalSpec:
     return IntervalSpec(**{**values, **{k: float(values[k]) for k in floats}})
 
 
+def _min_change(text: str, path: str | Path) -> float:
+    """Metadata ``min_change`` as a number >= 0, or an error naming the file and the fix."""
+    try:
+        value = float(text)
+    except ValueError:
+        value = math.nan
+    if not (math.isfinite(value) and value >= 0.0):
+        raise ModelError(
+            f"{path}: invalid model metadata: min_change must be a finite number >= 0, got "
+            f"{text!r}; restate it with `python -m contactcal.train.change_gate MODEL …`"
+        )
+    return value
+
+
 def read_spec(meta: Mapping[str, str], path: str | Path) -> ModelSpec:
     """Build the deployment spec from a model's metadata; every key must be known.
 
@@ -171,8 +199,9 @@ def read_spec(meta: Mapping[str, str], path: str | Path) -> ModelSpec:
         path: the model file, for messages.
 
     Returns:
-        The spec. A model without the optional ``region`` key (exported before it existed) gets
-        ``"largest"``, the decision it was deployed with.
+        The spec. A model without an optional key (exported before it existed) gets the value it
+        was deployed with (:data:`OPTIONAL_SPEC_KEYS`): ``region`` ``"largest"``, ``min_change``
+        0 (no gate).
 
     Raises:
         ModelError: a missing, unknown or invalid key; the message names it and the file.
@@ -191,6 +220,7 @@ def read_spec(meta: Mapping[str, str], path: str | Path) -> ModelSpec:
             f"{path}: invalid model metadata: region must be one of {', '.join(REGIONS)}, got "
             f"{region!r}; restate it with `python -m contactcal.train.interval MODEL --region …`"
         )
+    min_change = _min_change(meta.get("min_change", OPTIONAL_SPEC_KEYS["min_change"]), path)
     if meta["output"] != "logits":
         raise ModelError(f"{path}: metadata 'output' must be 'logits', got {meta['output']!r}")
     try:
@@ -201,6 +231,7 @@ def read_spec(meta: Mapping[str, str], path: str | Path) -> ModelSpec:
             min_contact_area_px=float(meta["min_contact_area_px"]),
             interval=_interval(meta["interval"]),
             region=region,
+            min_change=min_change,
         )
     except (ValueError, TypeError) as exc:
         raise ModelError(f"{path}: invalid model metadata: {exc}; {fix}") from exc

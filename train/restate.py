@@ -1,0 +1,58 @@
+"""Write an exported model again with some of its deployment metadata restated.
+
+The graph and weights are copied untouched; the new metadata must pass ``onnx.checker`` (full
+check) and read back through deployment's ``read_spec`` as the intended spec before the file is
+written (atomically). Used by :mod:`contactcal.train.interval` (``interval``, ``region``) and
+:mod:`contactcal.train.change_gate` (``min_change``).
+"""
+
+from __future__ import annotations
+
+import os
+from collections.abc import Mapping
+from pathlib import Path
+from typing import Any
+
+from contactcal.infer.files.atomic import atomic_open
+from contactcal.infer.methods.unet.spec import ModelSpec, read_spec
+
+
+def check_paths(model: str | os.PathLike[str], out: str | os.PathLike[str]) -> tuple[Path, Path]:
+    """``(model, out)`` as paths, or an error: ``out`` must end in ``.onnx`` and not be ``model``.
+
+    Raises:
+        ValueError: bad output name, or the output is the input (inputs are never overwritten).
+    """
+    src, dst = Path(model), Path(out)
+    if dst.suffix.lower() != ".onnx":
+        raise ValueError(f"{dst}: expected an output file name ending in .onnx")
+    if dst.exists() and dst.resolve() == src.resolve():
+        raise ValueError(f"{dst}: the output must not be the input model {src}")
+    return src, dst
+
+
+def metadata_of(proto: Any) -> dict[str, str]:
+    """An ONNX ``ModelProto``'s ``metadata_props`` as a dict."""
+    return {p.key: p.value for p in proto.metadata_props}
+
+
+def save_restated(proto: Any, updates: Mapping[str, str], spec: ModelSpec, out: Path) -> None:
+    """Write ``proto`` to ``out`` with ``updates`` merged into its metadata.
+
+    Args:
+        proto: the loaded source model (modified in place: its metadata).
+        updates: metadata key → new string value.
+        spec: the spec the new metadata must read back as.
+        out: destination ``.onnx`` (replaced atomically, only on success).
+
+    Raises:
+        RuntimeError: the new metadata does not read back as ``spec``.
+    """
+    import onnx
+
+    onnx.helper.set_model_props(proto, {**metadata_of(proto), **updates})
+    onnx.checker.check_model(proto, full_check=True)
+    if read_spec(metadata_of(proto), out) != spec:
+        raise RuntimeError(f"{out}: the metadata does not read back as the intended spec")
+    with atomic_open(out, "wb") as fh:
+        fh.write(proto.SerializeToString())
