@@ -102,6 +102,10 @@ def test_min_change_metadata_round_trip_default_and_errors() -> None:
         dataclasses.replace(SPEC, min_change=-1.0)
     with pytest.raises(ValueError, match="reference channel"):
         dataclasses.replace(SPEC, channels=1, min_change=0.1)
+    single = {**meta, "channels": "2", "min_change": "0.1"}  # frame + ridge: no reference
+    with pytest.raises(ModelError, match=r"m.onnx.*reference channel.*remove the min_change key"):
+        read_spec(single, "m.onnx")
+    assert read_spec({**single, "min_change": "0"}, "m.onnx").min_change == 0.0
 
 
 def test_margin_threshold_reference_values_and_bad_input() -> None:
@@ -194,7 +198,8 @@ def test_no_change_gate_measures_the_region_and_says_so(tmp_path: Path) -> None:
     off = UnetMethod(strict, change_gate=False)
     off.set_reference(load_image(rows[0].frame))
     res = off.measure(load_image(rows[-1].frame))
-    assert res.contact and res.note == "change gate off (--no-change-gate)"
+    assert res.contact and res.note.startswith("kept by --no-change-gate: change ")
+    assert res.note.endswith(" < 100.000")
     assert off.describe()["change_gate"] == "off (--no-change-gate)"
     assert off.describe()["spec"]["min_change"] == 100.0  # the model's, as stated
     assert UnetMethod(strict).describe()["change_gate"] == "on"
@@ -211,7 +216,7 @@ def test_no_change_gate_measures_the_region_and_says_so(tmp_path: Path) -> None:
     args = ["measure", "--model", str(strict), "--reference", ref, "--out", str(out), frame]
     assert main([*args, "--no-change-gate"]) == 0
     (row,) = json.loads(out.read_text())
-    assert row["contact"] and "change gate off" in row["note"]
+    assert row["contact"] and "kept by --no-change-gate" in row["note"]
     out.unlink()
     assert main(args) == 0
     (row,) = json.loads(out.read_text())
@@ -236,3 +241,51 @@ def test_calibrate_says_when_the_gate_removed_every_contact(tmp_path: Path) -> N
     assert any(m.result.contact for m in rep.measured)
     record = json.loads((tmp_path / "b" / "calibration.json").read_text())
     assert record["method_config"]["change_gate"] == "off (--no-change-gate)"
+
+
+def test_a_frame_against_itself_is_unchanged(tmp_path: Path) -> None:
+    from procedural import write_dataset
+
+    from contactcal.infer.bench.dataset import read_index, sessions_of
+    from contactcal.infer.image.read import load_image
+    from contactcal.infer.methods.base import UNCHANGED_NOTE
+    from contactcal.infer.methods.unet.method import UnetMethod
+
+    rows = next(iter(sessions_of(read_index(write_dataset(tmp_path / "d", fingers=1))).values()))
+    frame = load_image(max(rows, key=lambda r: r.pressure_kpa).frame)  # in contact
+    m = UnetMethod()  # the shipped gate
+    assert m.segmenter.spec.min_change > 0.0
+    m.set_reference(None)
+    assert m.measure(frame).contact  # no reference frame: no gate
+    m.set_reference(frame)  # the frame is its own reference: nothing changed
+    res = m.measure(frame)
+    limit = f"{m.segmenter.spec.min_change:.3f}"
+    assert not res.contact and res.note == f"{UNCHANGED_NOTE} (change 0.000 < {limit})"
+
+
+def test_cli_refuses_a_gate_flag_it_would_ignore_and_records_it_otherwise(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    from contactcal.infer.cli import main
+
+    example = Path(__file__).resolve().parents[1] / "examples" / "session"
+    frames = [str(example / "p00.0kpa.jpg"), str(example / "p08.0kpa.jpg")]
+    out = tmp_path / "r.json"
+    code = main(
+        ["measure", "--method", "classical", "--no-change-gate", "--out", str(out), *frames]
+    )
+    err = capsys.readouterr().err
+    assert code == 2 and "--no-change-gate applies to the U-Net only" in err and not out.exists()
+    cal = tmp_path / "cal"
+    manifest = str(example / "manifest.csv")
+    assert main(["calibrate", manifest, "--no-change-gate", "--out", str(cal)]) == 0
+    record = json.loads((cal / "calibration.json").read_text())
+    assert record["method_config"]["change_gate"] == "off (--no-change-gate)"
+    ev = tmp_path / "ev"
+    labels = str(example / "masks")
+    assert (
+        main(["evaluate", manifest, "--labels", labels, "--no-change-gate", "--out", str(ev)]) == 0
+    )
+    assert (
+        json.loads((ev / "evaluation.json").read_text())["change_gate"] == "off (--no-change-gate)"
+    )

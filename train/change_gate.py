@@ -100,6 +100,16 @@ def collect_changes(
 ) -> tuple[np.ndarray, np.ndarray, dict[str, int]]:
     """Every kept region's change, the gate off, through the deployment path.
 
+    Args:
+        model: an exported ``.onnx`` model with a reference channel.
+        data_dirs: ``contactcal synth`` datasets (each session's lowest pressure is its
+            reference frame).
+        specks: window speck levels (fraction of white, (0, 1]) added besides the frames as
+            rendered.
+        draws: specks per session and level.
+        seed: the specks' places and sizes; session ``s`` of a dataset (counted from 0 in each)
+            and draw ``d`` use ``default_rng([seed, s, d])`` at every level.
+
     Returns:
         ``(change (N,), contact (N,) bool, frames measured per speck level)``.
 
@@ -108,8 +118,7 @@ def collect_changes(
     """
     if draws < 1 or any(not 0.0 < s <= 1.0 for s in specks):
         raise ValueError(f"speck levels must be in (0, 1] and draws >= 1, got {specks}, {draws}")
-    m = UnetMethod(model)
-    m.segmenter.spec = dataclasses.replace(m.segmenter.spec, min_change=0.0)
+    m = UnetMethod(model, change_gate=False)
     cfg = m.segmenter.spec.preprocess
     rows: list[tuple[float, bool]] = []
     frames: dict[str, int] = {}
@@ -122,10 +131,8 @@ def collect_changes(
             for level in (0.0, *specks):
                 for k in range(draws if level > 0.0 else 1):
                     # One speck on the window: the same place and size in every frame.
-                    g = [
-                        speck(x, level, np.random.default_rng([seed, s, k]), ring=ring)
-                        for x in grays
-                    ]
+                    rng = [np.random.default_rng([seed, s, k]) for _ in grays]
+                    g = [speck(x, level, r, ring=ring) for x, r in zip(grays, rng, strict=True)]
                     rows += _session_changes(m, g, truth)
                     frames[str(level)] = frames.get(str(level), 0) + len(grays) - 1
     change = np.array([c for c, _ in rows], np.float64)
@@ -159,9 +166,12 @@ def gate_model(
     import onnx
 
     src, dst = check_paths(model, out)
+    base = UnetMethod(src).segmenter.spec
+    if not base.uses_reference:
+        raise ValueError(f"{src}: the change gate needs a model with a reference channel")
     change, contact, frames = collect_changes(src, data_dirs, specks, draws, seed)
     t, summary = margin_threshold(change, contact)
-    spec = dataclasses.replace(UnetMethod(src).segmenter.spec, min_change=t)
+    spec = dataclasses.replace(base, min_change=t)
     save_restated(onnx.load(str(src)), {"min_change": repr(t)}, spec, dst)
     return {**summary, "frames": frames, "specks": list(specks), "draws": draws, "seed": seed}
 

@@ -14,7 +14,8 @@ deployment's :func:`contactcal.infer.methods.unet.spec.read_spec` accepts:
   :func:`contactcal.train.interval.calibrate_run`; a run without validation fingers cannot be
   exported), and the optional ``region`` (:data:`~contactcal.infer.methods.unet.spec.REGIONS`),
   written as ``"largest"`` here; ``python -m contactcal.train.interval --region convex`` restates
-  it with the interval recalibrated for the hull;
+  it with the interval recalibrated for the hull; and the optional ``min_change`` (the change
+  gate), written as 0.0 (none) here; ``python -m contactcal.train.change_gate`` calibrates it;
 * provenance (:data:`~contactcal.infer.methods.unet.spec.PROVENANCE_KEYS`): ``data_digest``
   (sha256 of the training index.csv files), ``contactcal_version``, ``created`` (UTC ISO 8601),
   ``train_config`` (JSON), ``best_epoch``, ``val_metrics`` (JSON).

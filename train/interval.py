@@ -163,7 +163,9 @@ def _segment_dataset(
     """Every frame of the datasets through the deployment runner (each session's lowest-pressure
     frame is its reference; large frames shrunk as deployment shrinks them: ``session_inputs``),
     the true areas (in pixels of the shrunk frame), and the model's spec without its interval (the
-    model's own ``interval`` key, if any, is not used), with ``region`` when given."""
+    model's own ``interval`` key, if any, is not used), with ``region`` when given. The model's
+    change gate (``min_change``) acts as deployed, so the interval is the gated decision's
+    (:func:`calibrate_run`, at export, has no gate yet)."""
     import onnx
 
     from contactcal.infer.methods.unet.runner import OnnxSegmenter

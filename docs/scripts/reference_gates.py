@@ -35,7 +35,6 @@ frames above 0 kPa without contact are counted once per draw (53 frames × 3 dra
 from __future__ import annotations
 
 import argparse
-import dataclasses
 from pathlib import Path
 
 import numpy as np
@@ -99,8 +98,7 @@ def main() -> None:
         "--similarity", type=float, action="append", default=[], help="also try this veto"
     )
     args = ap.parse_args()
-    m = UnetMethod()
-    m.segmenter.spec = dataclasses.replace(m.segmenter.spec, min_change=0.0)  # the gate off
+    m = UnetMethod(change_gate=False)  # every kept region, as the statistics are about them
     true_regions, false_regions, frames_below = [], [], 0
     for s, rows in enumerate(sessions_of(read_index(args.data)).values()):
         rows = sorted(rows, key=lambda r: r.pressure_kpa)

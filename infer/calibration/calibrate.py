@@ -18,6 +18,7 @@ from contactcal.infer.calibration.session import SessionFit, fit_session
 from contactcal.infer.calibration.table import format_table
 from contactcal.infer.errors import RunError
 from contactcal.infer.files.atomic import OutputSet, run_outputs
+from contactcal.infer.methods.base import UNCHANGED_NOTE
 from contactcal.infer.methods.registry import make_method
 from contactcal.infer.pipeline.manifest import Frame, read_session
 from contactcal.infer.pipeline.measure import Measured, measure_files
@@ -134,7 +135,7 @@ def _check_contact(
             "shrinks at a higher pressure or lies below any contact range); check the pressure "
             "range, or keep the frames' own flags with --per-frame-contact"
         )
-    gated = sum("unchanged from the reference frame" in r.note for r in measured)
+    gated = sum(r.note.startswith(UNCHANGED_NOTE) for r in measured)
     hint = (
         f"; the change gate called {gated} of them unchanged from the reference frame (their "
         "notes): if the contacts on this rig change the image that little, use --no-change-gate"

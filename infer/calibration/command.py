@@ -7,6 +7,7 @@ import argparse
 from pathlib import Path
 
 from contactcal.infer.pipeline.args import (
+    check_change_gate,
     method_args,
     overlay_runs,
     resolve_scale,
@@ -48,6 +49,7 @@ def _cmd_calibrate(args: argparse.Namespace) -> int:
     from contactcal.infer.video.command import calibrate_video, is_video_run
 
     check_device_id(args.device_id)
+    check_change_gate(args)
     if is_video_run(args):  # --video / --camera: contactcal.infer.video.command
         return calibrate_video(args, resolve_scale(args))
     scale = resolve_scale(args, args.manifest.parent / "rig.json")

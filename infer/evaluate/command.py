@@ -6,7 +6,7 @@ import argparse
 from pathlib import Path
 
 from contactcal.infer.methods.registry import METHODS
-from contactcal.infer.pipeline.args import bit_depth_arg
+from contactcal.infer.pipeline.args import bit_depth_arg, change_gate_arg
 
 
 def add_parsers(sub: argparse._SubParsersAction) -> None:
@@ -25,6 +25,7 @@ def add_parsers(sub: argparse._SubParsersAction) -> None:
         "--method", choices=(*METHODS, "both"), default=METHODS[0], help="default %(default)s"
     )
     e.add_argument("--model", type=Path, help="ONNX model for the U-Net (default: shipped)")
+    change_gate_arg(e)
     bit_depth_arg(e)
     e.set_defaults(func=_cmd_evaluate)
 
@@ -33,7 +34,13 @@ def _cmd_evaluate(args: argparse.Namespace) -> int:
     from contactcal.infer.evaluate.run import evaluate_session
 
     rep = evaluate_session(
-        args.manifest, args.labels, args.out, args.method, args.model, args.bit_depth
+        args.manifest,
+        args.labels,
+        args.out,
+        args.method,
+        args.model,
+        args.bit_depth,
+        change_gate=not args.no_change_gate,
     )
     print(rep.table)
     print(f"evaluation: {rep.files['json']}, {rep.files['png']}")

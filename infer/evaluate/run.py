@@ -54,11 +54,12 @@ def _measure(
     files: list[Path],
     model: str | os.PathLike[str] | None,
     bit_depth: int | None,
+    change_gate: bool = True,
 ) -> dict[str, list[Measured]]:
     """Each method's measurements of ``files``; the manifest's first frame is the reference."""
     out = {}
     for name in names:
-        method = make_method(name, model, outline=True)
+        method = make_method(name, model, outline=True, change_gate=change_gate)
         out[name] = measure_files(files, method, frames[0].file, bit_depth=bit_depth)
     return out
 
@@ -71,6 +72,7 @@ def evaluate_session(
     model: str | os.PathLike[str] | None = None,
     bit_depth: int | None = None,
     outputs: OutputSet | None = None,
+    change_gate: bool = True,
 ) -> Evaluation:
     """Score ``method`` on the frames of ``manifest`` labelled in ``labels``.
 
@@ -92,6 +94,7 @@ def evaluate_session(
         model: ONNX model for the U-Net (None → the shipped one).
         bit_depth: significant bits of 16-bit frames; None → from the files.
         outputs: the enclosing run's outputs to stage into (None: this call is the run).
+        change_gate: apply the U-Net model's change gate (``--no-change-gate``: off; recorded).
 
     Returns:
         The :class:`Evaluation`.
@@ -113,7 +116,8 @@ def evaluate_session(
     with run_outputs(protect, join=outputs) as outs:
         paths = {"png": out / "evaluation.png", "json": out / "evaluation.json"}
         staged = {k: outs.stage(p) for k, p in paths.items()}  # refused here, before work
-        measured = _measure(names, frames, [f.file for f in labelled], model, bit_depth)
+        files = [f.file for f in labelled]
+        measured = _measure(names, frames, files, model, bit_depth, change_gate)
         first = measured[names[0]]
         masks = [label_mask(lab, (m.width, m.height)) for lab, m in zip(labs, first, strict=True)]
         scored = score_frames(str(manifest), [f.pressure_kpa for f in labelled], masks, measured)
@@ -123,6 +127,7 @@ def evaluate_session(
             "labels": str(labels.resolve()),
             "methods": names,
             "model": None if model is None else os.fspath(model),
+            "change_gate": "on" if change_gate else "off (--no-change-gate)",
             "area_note": "errors and IoU against the label's rasterised pixel count",
             "frames": frame_records(base, masks, [lab.where() for lab in labs], scored),
             "unlabelled": unlabelled,

@@ -17,6 +17,10 @@ import numpy as np
 
 from contactcal.infer.image.read import load_image
 
+#: The start of a frame's note when a method's change gate found its region unchanged from the
+#: reference frame (the U-Net's ``min_change``); ``calibrate`` looks for it to name the gate.
+UNCHANGED_NOTE = "no contact: the region is unchanged from the reference frame"
+
 
 @dataclass(frozen=True)
 class AreaResult:

@@ -37,13 +37,7 @@ def method_args(p: argparse.ArgumentParser) -> None:
     ``--device-id``."""
     p.add_argument("--method", choices=METHODS, default=METHODS[0], help="default %(default)s")
     p.add_argument("--model", type=Path, help="ONNX model for --method unet (default: shipped)")
-    p.add_argument(
-        "--no-change-gate",
-        action="store_true",
-        help="--method unet: call a region contact even when it has not changed since the "
-        "reference frame (the model's min_change gate is off; recorded). For a rig whose "
-        "contacts look almost like its 0 kPa frame: each such frame's note says 'unchanged'",
-    )
+    change_gate_arg(p)
     p.add_argument(
         "--threads",
         type=int,
@@ -60,6 +54,31 @@ def method_args(p: argparse.ArgumentParser) -> None:
     p.add_argument(
         "--device-id", help="identifier of the display (1-100 printable characters), recorded"
     )
+
+
+def change_gate_arg(p: argparse.ArgumentParser) -> None:
+    """``--no-change-gate``: the U-Net model's change gate off (recorded)."""
+    p.add_argument(
+        "--no-change-gate",
+        action="store_true",
+        help="--method unet: call a region contact even when it has not changed since the "
+        "reference frame (the model's min_change gate is off; recorded). For a rig whose "
+        "contacts look almost like its 0 kPa frame, i.e. whose frames' notes say 'unchanged "
+        "from the reference frame' without it",
+    )
+
+
+def check_change_gate(args: argparse.Namespace) -> None:
+    """Refuse ``--no-change-gate`` where no U-Net would run (it would be silently ignored).
+
+    Raises:
+        ValueError: ``--no-change-gate`` with ``--method classical`` and no ``--overlay``.
+    """
+    if args.no_change_gate and args.method != "unet" and getattr(args, "overlay", None) is None:
+        raise ValueError(
+            f"--no-change-gate applies to the U-Net only, and --method {args.method} runs none; "
+            "drop it, or use --method unet"
+        )
 
 
 def resolve_scale(args: argparse.Namespace, default_rig: Path | None = None) -> PixelScale | None:

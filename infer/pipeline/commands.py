@@ -7,6 +7,7 @@ import sys
 from pathlib import Path
 
 from contactcal.infer.pipeline.args import (
+    check_change_gate,
     method_args,
     overlay_runs,
     resolve_scale,
@@ -42,6 +43,7 @@ def _cmd_measure(args: argparse.Namespace) -> int:
     from contactcal.infer.pipeline.overlay import write_overlays
 
     check_device_id(args.device_id)
+    check_change_gate(args)
     to_stdout = str(args.out) == "-"
     if args.out.suffix.lower() in SUPPORTED_SUFFIXES:
         raise ValueError(

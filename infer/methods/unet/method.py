@@ -21,7 +21,7 @@ from contactcal.infer.files.digest import sha256_file
 from contactcal.infer.image.gray import reduce_area, to_gray_u8
 from contactcal.infer.image.jpeg import jpeg_size
 from contactcal.infer.image.read import load_image
-from contactcal.infer.methods.base import AreaResult, Started, load_reference
+from contactcal.infer.methods.base import UNCHANGED_NOTE, AreaResult, Started, load_reference
 from contactcal.infer.methods.unet.postprocess import Segmentation, mask_in_input
 from contactcal.infer.methods.unet.prepare import session_reference
 from contactcal.infer.methods.unet.runner import OnnxSegmenter
@@ -165,22 +165,22 @@ class UnetMethod:
         return res.upscaled(k)
 
     def _note(self, seg: Segmentation) -> str:
-        """Why a frame has no contact ("no contact", or the change gate's numbers), and that the
-        change gate was turned off when it was (a contact frame's note is otherwise "")."""
-        notes = [] if seg.contact else ["no contact"]
+        """Why a frame has no contact ("no contact", or the change gate's numbers); for a contact
+        that only ``--no-change-gate`` kept, that it did (otherwise a contact's note is "")."""
+        limit = f"{self.model_min_change:.3f}"
         if seg.unchanged:
-            notes = [
-                f"no contact: the region is unchanged from the reference frame (change "
-                f"{seg.change:.3f} < {self.model_min_change:.3f})"
-            ]
-        if self.model_min_change > 0.0 and not self.change_gate and self.reference.gray is not None:
-            notes.append("change gate off (--no-change-gate)")
-        return "; ".join(notes)
+            return f"{UNCHANGED_NOTE} (change {seg.change:.3f} < {limit})"
+        if not seg.contact:
+            return "no contact"
+        if seg.change is not None and seg.change < self.model_min_change:  # the gate is off
+            return f"kept by --no-change-gate: change {seg.change:.3f} < {limit}"
+        return ""
 
     def describe(self) -> dict[str, Any]:
         """The model file, its sha256, its training ``data_digest``, its deployment spec (as the
-        model states it) and whether its change gate ran (``on``, ``off (--no-change-gate)`` or
-        ``none in the model``)."""
+        model states it) and whether its change gate is enabled (``on``, ``off
+        (--no-change-gate)`` or ``none in the model``; it acts only on frames measured with a
+        reference frame)."""
         seg, spec = self.segmenter, self.segmenter.spec
         gate = "on" if self.change_gate else "off (--no-change-gate)"
         return {

@@ -136,6 +136,15 @@ def region_change(difference: np.ndarray, keep: np.ndarray) -> float:
     return float(difference[keep].mean())
 
 
+def _gate(
+    difference: np.ndarray | None, keep: np.ndarray, min_change: float
+) -> tuple[float | None, bool]:
+    """``(change, unchanged)`` of a kept region: its :func:`region_change` (None without a
+    difference or a region) and whether that is below ``min_change`` (never, when None)."""
+    change = None if difference is None or not keep.any() else region_change(difference, keep)
+    return change, change is not None and change < min_change
+
+
 def postprocess(
     prob: np.ndarray,
     box: CropBox,
@@ -181,8 +190,7 @@ def postprocess(
     region_net = float(keep.sum())
     if region_net < spec.min_contact_area_px or region_net == 0.0:
         keep = np.zeros_like(keep)
-    change = None if difference is None or not keep.any() else region_change(difference, keep)
-    unchanged = change is not None and change < spec.min_change
+    change, unchanged = _gate(difference, keep, spec.min_change)
     if unchanged:
         keep = np.zeros_like(keep)
     segmented = keep

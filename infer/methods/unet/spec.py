@@ -131,7 +131,8 @@ class ModelSpec:
             )
 
     def to_metadata(self) -> dict[str, str]:
-        """The :data:`SPEC_KEYS` part of the metadata (what ``contactcal export`` writes).
+        """The :data:`SPEC_KEYS` and :data:`OPTIONAL_SPEC_KEYS` part of the metadata (what
+        ``contactcal export`` writes; the optional keys with their values).
 
         Raises:
             ValueError: the interval is not calibrated yet (``interval`` is None).
@@ -224,14 +225,20 @@ def read_spec(meta: Mapping[str, str], path: str | Path) -> ModelSpec:
     if meta["output"] != "logits":
         raise ModelError(f"{path}: metadata 'output' must be 'logits', got {meta['output']!r}")
     try:
-        return ModelSpec(
+        spec = ModelSpec(
             channels=int(meta["channels"]),
             preprocess=_preprocess(meta["preprocess"]),
             threshold=float(meta["threshold"]),
             min_contact_area_px=float(meta["min_contact_area_px"]),
             interval=_interval(meta["interval"]),
             region=region,
-            min_change=min_change,
         )
     except (ValueError, TypeError) as exc:
         raise ModelError(f"{path}: invalid model metadata: {exc}; {fix}") from exc
+    if min_change > 0.0 and not spec.uses_reference:
+        raise ModelError(
+            f"{path}: invalid model metadata: min_change {min_change} needs a reference channel "
+            "and the model has none; remove the min_change key (a change gate compares the "
+            "frame with the session's zero-pressure frame)"
+        )
+    return dataclasses.replace(spec, min_change=min_change)
