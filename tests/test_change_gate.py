@@ -85,6 +85,17 @@ def test_reference_difference_needs_a_reference_frame_and_channel() -> None:
     assert reference_difference(x[:1], ref, 1, cfg) is None
 
 
+def _gated(path: Path, min_change: float) -> Path:
+    """The shipped model written to ``path`` with ``min_change`` set (metadata only)."""
+    onnx = pytest.importorskip("onnx")
+    from contactcal.infer.methods.unet.method import UnetMethod
+    from contactcal.train.restate import save_restated
+
+    spec = dataclasses.replace(UnetMethod().segmenter.spec, min_change=min_change)
+    save_restated(onnx.load(str(DEFAULT_MODEL)), {"min_change": repr(min_change)}, spec, path)
+    return path
+
+
 def _metadata() -> dict[str, str]:
     return dict(OnnxSegmenter().metadata)
 
@@ -149,25 +160,22 @@ def test_gate_model_writes_the_threshold_and_refuses_bad_paths(tmp_path: Path) -
     assert not (tmp_path / "x.txt").exists()
 
 
-def test_a_gated_frame_says_why_and_no_reference_means_no_gate(tmp_path: Path) -> None:
-    onnx = pytest.importorskip("onnx")
+def _session(root: Path) -> list:
+    """One procedural session's index rows, lowest pressure first."""
     from procedural import write_dataset
 
     from contactcal.infer.bench.dataset import read_index, sessions_of
+
+    rows = next(iter(sessions_of(read_index(write_dataset(root, fingers=1))).values()))
+    return sorted(rows, key=lambda r: r.pressure_kpa)
+
+
+def test_a_gated_frame_says_why_and_no_reference_means_no_gate(tmp_path: Path) -> None:
     from contactcal.infer.image.read import load_image
     from contactcal.infer.methods.unet.method import UnetMethod
-    from contactcal.train.restate import save_restated
 
-    rows = next(iter(sessions_of(read_index(write_dataset(tmp_path / "d", fingers=1))).values()))
-    rows = sorted(rows, key=lambda r: r.pressure_kpa)
-    base = UnetMethod().segmenter.spec
-    out = tmp_path / "strict.onnx"  # a gate no contact passes
-    save_restated(
-        onnx.load(str(DEFAULT_MODEL)),
-        {"min_change": "100.0"},
-        dataclasses.replace(base, min_change=100.0),
-        out,
-    )
+    rows = _session(tmp_path / "d")
+    out = _gated(tmp_path / "strict.onnx", 100.0)  # a gate no contact passes
     frame = load_image(rows[-1].frame)  # the highest pressure: in contact
     shipped, strict = UnetMethod(), UnetMethod(out)
     for m in (shipped, strict):
@@ -181,20 +189,12 @@ def test_a_gated_frame_says_why_and_no_reference_means_no_gate(tmp_path: Path) -
 
 
 def test_no_change_gate_measures_the_region_and_says_so(tmp_path: Path) -> None:
-    onnx = pytest.importorskip("onnx")
-    from procedural import write_dataset
-
-    from contactcal.infer.bench.dataset import read_index, sessions_of
     from contactcal.infer.cli import main
     from contactcal.infer.image.read import load_image
     from contactcal.infer.methods.unet.method import UnetMethod
-    from contactcal.train.restate import save_restated
 
-    rows = next(iter(sessions_of(read_index(write_dataset(tmp_path / "d", fingers=1))).values()))
-    rows = sorted(rows, key=lambda r: r.pressure_kpa)
-    strict = tmp_path / "strict.onnx"
-    spec = dataclasses.replace(UnetMethod().segmenter.spec, min_change=100.0)
-    save_restated(onnx.load(str(DEFAULT_MODEL)), {"min_change": "100.0"}, spec, strict)
+    rows = _session(tmp_path / "d")
+    strict = _gated(tmp_path / "strict.onnx", 100.0)
     off = UnetMethod(strict, change_gate=False)
     off.set_reference(load_image(rows[0].frame))
     res = off.measure(load_image(rows[-1].frame))
@@ -203,13 +203,7 @@ def test_no_change_gate_measures_the_region_and_says_so(tmp_path: Path) -> None:
     assert off.describe()["change_gate"] == "off (--no-change-gate)"
     assert off.describe()["spec"]["min_change"] == 100.0  # the model's, as stated
     assert UnetMethod(strict).describe()["change_gate"] == "on"
-    legacy = tmp_path / "legacy.onnx"  # a model without a gate
-    save_restated(
-        onnx.load(str(DEFAULT_MODEL)),
-        {"min_change": "0.0"},
-        dataclasses.replace(spec, min_change=0.0),
-        legacy,
-    )
+    legacy = _gated(tmp_path / "legacy.onnx", 0.0)  # a model without a gate
     assert UnetMethod(legacy, change_gate=False).describe()["change_gate"] == "none in the model"
     out = tmp_path / "r.json"
     ref, frame = str(rows[0].frame), str(rows[-1].frame)
@@ -224,16 +218,11 @@ def test_no_change_gate_measures_the_region_and_says_so(tmp_path: Path) -> None:
 
 
 def test_calibrate_says_when_the_gate_removed_every_contact(tmp_path: Path) -> None:
-    onnx = pytest.importorskip("onnx")
     from contactcal.infer.calibration.calibrate import calibrate_session
     from contactcal.infer.errors import RunError
-    from contactcal.infer.methods.unet.method import UnetMethod
-    from contactcal.train.restate import save_restated
 
     manifest = Path(__file__).resolve().parents[1] / "examples" / "session" / "manifest.csv"
-    strict = tmp_path / "strict.onnx"
-    spec = dataclasses.replace(UnetMethod().segmenter.spec, min_change=100.0)
-    save_restated(onnx.load(str(DEFAULT_MODEL)), {"min_change": "100.0"}, spec, strict)
+    strict = _gated(tmp_path / "strict.onnx", 100.0)
     with pytest.raises(RunError, match=r"change gate called \d+ of them.*--no-change-gate"):
         calibrate_session(manifest, tmp_path / "a", "unet", strict)
     assert not (tmp_path / "a").exists()
@@ -244,15 +233,11 @@ def test_calibrate_says_when_the_gate_removed_every_contact(tmp_path: Path) -> N
 
 
 def test_a_frame_against_itself_is_unchanged(tmp_path: Path) -> None:
-    from procedural import write_dataset
-
-    from contactcal.infer.bench.dataset import read_index, sessions_of
     from contactcal.infer.image.read import load_image
     from contactcal.infer.methods.base import UNCHANGED_NOTE
     from contactcal.infer.methods.unet.method import UnetMethod
 
-    rows = next(iter(sessions_of(read_index(write_dataset(tmp_path / "d", fingers=1))).values()))
-    frame = load_image(max(rows, key=lambda r: r.pressure_kpa).frame)  # in contact
+    frame = load_image(_session(tmp_path / "d")[-1].frame)  # the highest pressure: in contact
     m = UnetMethod()  # the shipped gate
     assert m.segmenter.spec.min_change > 0.0
     m.set_reference(None)

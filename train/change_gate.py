@@ -20,9 +20,7 @@ writes the model again with ``min_change`` set (graph and weights copied untouch
 
 from __future__ import annotations
 
-import argparse
 import dataclasses
-import json
 import os
 from collections.abc import Sequence
 from pathlib import Path
@@ -35,7 +33,12 @@ from contactcal.infer.bench.perturb import speck
 from contactcal.infer.image.read import load_image
 from contactcal.infer.methods.unet.method import UnetMethod
 from contactcal.infer.methods.unet.ring import locate_ring
-from contactcal.train.restate import check_paths, save_restated
+from contactcal.train.restate import (
+    check_paths,
+    restating_parser,
+    run_restating,
+    save_restated,
+)
 
 #: The gate sits this factor below the smallest change of a validation region in contact. The
 #: largest gate that loses no validation contact would sit just below that change (0.3 % on
@@ -178,28 +181,20 @@ def gate_model(
 
 def main(argv: Sequence[str] | None = None) -> int:
     """``python -m contactcal.train.change_gate MODEL --data DIR... --out NEW.onnx``."""
-    ap = argparse.ArgumentParser(
-        prog="python -m contactcal.train.change_gate",
-        description="Calibrate an exported model's change gate (metadata min_change only) on "
-        "validation renders.",
+    ap = restating_parser(
+        "python -m contactcal.train.change_gate",
+        "Calibrate an exported model's change gate (metadata min_change only) on validation "
+        "renders.",
     )
-    ap.add_argument("model", type=Path, help="exported .onnx model")
-    ap.add_argument("--data", type=Path, nargs="+", required=True, help="dataset folder(s)")
-    ap.add_argument("--out", type=Path, required=True, help="new .onnx file")
     ap.add_argument(
         "--speck", type=float, nargs="*", default=[], help="window speck levels to add (0-1]"
     )
     ap.add_argument("--draws", type=int, default=3, help="specks per session and level")
     ap.add_argument("--seed", type=int, default=0, help="seeds the specks' places and sizes")
-    args = ap.parse_args(argv)
-    try:
-        summary = gate_model(args.model, args.data, args.out, args.speck, args.draws, args.seed)
-    except (ValueError, OSError) as exc:
-        print(f"error: {exc}")
-        return 2
-    print(json.dumps(summary, indent=1))
-    print(f"wrote {args.out}")
-    return 0
+    a = ap.parse_args(argv)
+    return run_restating(
+        lambda: gate_model(a.model, a.data, a.out, a.speck, a.draws, a.seed), a.out
+    )
 
 
 if __name__ == "__main__":

@@ -23,7 +23,6 @@ interval is the region's, so the two are set together.
 
 from __future__ import annotations
 
-import argparse
 import dataclasses
 import json
 import math
@@ -38,7 +37,13 @@ import numpy as np
 from contactcal.infer.bench.dataset import read_index
 from contactcal.infer.methods.unet.postprocess import Band, Segmentation, boundary_band
 from contactcal.infer.methods.unet.spec import REGIONS, IntervalSpec, ModelSpec
-from contactcal.train.restate import check_paths, metadata_of, save_restated
+from contactcal.train.restate import (
+    check_paths,
+    metadata_of,
+    restating_parser,
+    run_restating,
+    save_restated,
+)
 
 #: Stated coverage of the interval.
 LEVEL = 0.9
@@ -230,14 +235,11 @@ def recalibrate_model(
 
 def main(argv: Sequence[str] | None = None) -> int:
     """``python -m contactcal.train.interval MODEL --data DIR... --out NEW.onnx [--region R]``."""
-    ap = argparse.ArgumentParser(
-        prog="python -m contactcal.train.interval",
-        description="Recalibrate an exported model's area interval (metadata only) on "
-        "validation renders, optionally stating its contact region.",
+    ap = restating_parser(
+        "python -m contactcal.train.interval",
+        "Recalibrate an exported model's area interval (metadata only) on validation renders, "
+        "optionally stating its contact region.",
     )
-    ap.add_argument("model", type=Path, help="exported .onnx model")
-    ap.add_argument("--data", type=Path, nargs="+", required=True, help="dataset folder(s)")
-    ap.add_argument("--out", type=Path, required=True, help="new .onnx file")
     ap.add_argument(
         "--region",
         choices=REGIONS,
@@ -245,15 +247,8 @@ def main(argv: Sequence[str] | None = None) -> int:
         help="contact region to state: the largest region as segmented, or its convex hull "
         "(default: keep the model's)",
     )
-    args = ap.parse_args(argv)
-    try:
-        summary = recalibrate_model(args.model, args.data, args.out, args.region)
-    except (ValueError, OSError) as exc:
-        print(f"error: {exc}")
-        return 2
-    print(json.dumps(summary, indent=1))
-    print(f"wrote {args.out}")
-    return 0
+    a = ap.parse_args(argv)
+    return run_restating(lambda: recalibrate_model(a.model, a.data, a.out, a.region), a.out)
 
 
 if __name__ == "__main__":

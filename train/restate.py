@@ -8,8 +8,10 @@ written (atomically). Used by :mod:`contactcal.train.interval` (``interval``, ``
 
 from __future__ import annotations
 
+import argparse
+import json
 import os
-from collections.abc import Mapping
+from collections.abc import Callable, Mapping
 from pathlib import Path
 from typing import Any
 
@@ -56,3 +58,29 @@ def save_restated(proto: Any, updates: Mapping[str, str], spec: ModelSpec, out: 
         raise RuntimeError(f"{out}: the metadata does not read back as the intended spec")
     with atomic_open(out, "wb") as fh:
         fh.write(proto.SerializeToString())
+
+
+def restating_parser(prog: str, description: str) -> argparse.ArgumentParser:
+    """The command line every restating tool shares: ``MODEL --data DIR... --out NEW.onnx``."""
+    ap = argparse.ArgumentParser(prog=prog, description=description)
+    ap.add_argument("model", type=Path, help="exported .onnx model")
+    ap.add_argument("--data", type=Path, nargs="+", required=True, help="dataset folder(s)")
+    ap.add_argument("--out", type=Path, required=True, help="new .onnx file")
+    return ap
+
+
+def run_restating(restate: Callable[[], dict[str, Any]], out: Path) -> int:
+    """Run a restating tool: print its summary and 0, or one error line and 2 (nothing written).
+
+    Args:
+        restate: writes ``out`` and returns the summary (raises ``ValueError`` / ``OSError``).
+        out: the file it writes, for the last line.
+    """
+    try:
+        summary = restate()
+    except (ValueError, OSError) as exc:
+        print(f"error: {exc}")
+        return 2
+    print(json.dumps(summary, indent=1))
+    print(f"wrote {out}")
+    return 0
