@@ -217,21 +217,6 @@ def test_no_change_gate_measures_the_region_and_says_so(tmp_path: Path) -> None:
     assert not row["contact"] and "unchanged from the reference frame" in row["note"]
 
 
-def test_calibrate_says_when_the_gate_removed_every_contact(tmp_path: Path) -> None:
-    from contactcal.infer.calibration.calibrate import calibrate_session
-    from contactcal.infer.errors import RunError
-
-    manifest = Path(__file__).resolve().parents[1] / "examples" / "session" / "manifest.csv"
-    strict = _gated(tmp_path / "strict.onnx", 100.0)
-    with pytest.raises(RunError, match=r"change gate called \d+ of them.*--no-change-gate"):
-        calibrate_session(manifest, tmp_path / "a", "unet", strict)
-    assert not (tmp_path / "a").exists()
-    rep = calibrate_session(manifest, tmp_path / "b", "unet", strict, change_gate=False)
-    assert any(m.result.contact for m in rep.measured)
-    record = json.loads((tmp_path / "b" / "calibration.json").read_text())
-    assert record["method_config"]["change_gate"] == "off (--no-change-gate)"
-
-
 def test_a_frame_against_itself_is_unchanged(tmp_path: Path) -> None:
     from contactcal.infer.image.read import load_image
     from contactcal.infer.methods.base import UNCHANGED_NOTE
@@ -246,31 +231,3 @@ def test_a_frame_against_itself_is_unchanged(tmp_path: Path) -> None:
     res = m.measure(frame)
     limit = f"{m.segmenter.spec.min_change:.3f}"
     assert not res.contact and res.note == f"{UNCHANGED_NOTE} (change 0.000 < {limit})"
-
-
-def test_cli_refuses_a_gate_flag_it_would_ignore_and_records_it_otherwise(
-    tmp_path: Path, capsys: pytest.CaptureFixture[str]
-) -> None:
-    from contactcal.infer.cli import main
-
-    example = Path(__file__).resolve().parents[1] / "examples" / "session"
-    frames = [str(example / "p00.0kpa.jpg"), str(example / "p08.0kpa.jpg")]
-    out = tmp_path / "r.json"
-    code = main(
-        ["measure", "--method", "classical", "--no-change-gate", "--out", str(out), *frames]
-    )
-    err = capsys.readouterr().err
-    assert code == 2 and "--no-change-gate applies to the U-Net only" in err and not out.exists()
-    cal = tmp_path / "cal"
-    manifest = str(example / "manifest.csv")
-    assert main(["calibrate", manifest, "--no-change-gate", "--out", str(cal)]) == 0
-    record = json.loads((cal / "calibration.json").read_text())
-    assert record["method_config"]["change_gate"] == "off (--no-change-gate)"
-    ev = tmp_path / "ev"
-    labels = str(example / "masks")
-    assert (
-        main(["evaluate", manifest, "--labels", labels, "--no-change-gate", "--out", str(ev)]) == 0
-    )
-    assert (
-        json.loads((ev / "evaluation.json").read_text())["change_gate"] == "off (--no-change-gate)"
-    )

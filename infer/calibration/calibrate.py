@@ -9,6 +9,7 @@ from pathlib import Path
 
 from contactcal.infer.calibration.curve import MM2, PX, Curve
 from contactcal.infer.calibration.fit import CurveConfig
+from contactcal.infer.calibration.gate_check import flag_gated_above_contact
 from contactcal.infer.calibration.phases import LOADING
 from contactcal.infer.calibration.points import CalibrationPoint
 from contactcal.infer.calibration.provenance import Provenance, input_digests
@@ -107,10 +108,15 @@ def calibrate_session(
     measured_points = _points(manifest, frames, measured, scale)
     results = revise_points(measured_points) if session_rule else measured_points
     _check_contact(manifest, measured_points, results, method.name)
+    results, gated_above = flag_gated_above_contact(results)
     unit = PX if scale is None else MM2
     fit = fit_session(results, unit, curve_config, inverse_phase, session.phase_source)
     recorded = Path(manifest_as if manifest_as is not None else manifest).resolve()
-    extra = {**_extra(recorded, scale), "session_rule": session_rule}
+    extra = {
+        **_extra(recorded, scale),
+        "session_rule": session_rule,
+        "gated_above_contact": gated_above,
+    }
     provenance = replace(
         provenance, method_config=method.describe(), inputs=input_digests(manifest, files, recorded)
     )

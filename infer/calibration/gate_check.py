@@ -1,0 +1,51 @@
+"""A session check on the U-Net's change gate: no frame "unchanged" above a pressure in contact.
+
+The change gate (model metadata ``min_change``) decides frame by frame: a region that has not
+changed since the zero-pressure frame is no contact. Within one pass of a session the contact
+area does not fall as the pressure rises, so a frame the gate called unchanged at a pressure above
+one already in contact contradicts the session: a contact there may be too faint for the gate (a
+dark patch whose ridges barely show). Such frames keep their decision and get a note that says so
+and points to ``--no-change-gate``; the record counts them (``extra.gated_above_contact``).
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Sequence
+from dataclasses import replace
+
+from contactcal.infer.calibration.points import CalibrationPoint
+from contactcal.infer.methods.base import UNCHANGED_NOTE
+
+#: Appended to the note of a frame the gate called unchanged above a pressure in contact.
+ABOVE_CONTACT_NOTE = (
+    "above {p:g} kPa, which is in contact: contact does not end as the pressure rises; if this "
+    "rig's contacts change the image this little, measure with --no-change-gate"
+)
+
+
+def flag_gated_above_contact(
+    points: Sequence[CalibrationPoint],
+) -> tuple[list[CalibrationPoint], int]:
+    """Note the frames the change gate called unchanged above the lowest contact of their pass.
+
+    Args:
+        points: the session's frames (after the session rule), any order.
+
+    Returns:
+        ``(points, n)``: the same points in the same order, the flagged ones with
+        :data:`ABOVE_CONTACT_NOTE` appended to their note (decision and area unchanged), and how
+        many were flagged.
+    """
+    lowest: dict[str, float] = {}
+    for r in points:
+        if r.contact:
+            lowest[r.phase] = min(lowest.get(r.phase, math.inf), r.pressure_kpa)
+    out, n = [], 0
+    for r in points:
+        p = lowest.get(r.phase)
+        if p is not None and r.note.startswith(UNCHANGED_NOTE) and r.pressure_kpa > p:
+            r = replace(r, note=f"{r.note}; {ABOVE_CONTACT_NOTE.format(p=p)}")
+            n += 1
+        out.append(r)
+    return out, n
