@@ -78,11 +78,11 @@ def test_reference_difference_needs_a_reference_frame_and_channel() -> None:
     x = rng.normal(size=(2, SIZE, SIZE)).astype(np.float32)
     gray = np.full((96, 128), 40, np.uint8)
     ref = session_reference(gray, cfg)
-    diff = reference_difference(x, ref, 2, cfg)
+    diff = reference_difference(x, ref, True)
     assert diff is not None and diff.shape == (SIZE, SIZE)
     np.testing.assert_array_equal(diff, np.abs(x[0] - x[1]))
-    assert reference_difference(x, session_reference(None, cfg), 2, cfg) is None
-    assert reference_difference(x[:1], ref, 1, cfg) is None
+    assert reference_difference(x, session_reference(None, cfg), True) is None
+    assert reference_difference(x[:1], ref, False) is None
 
 
 def _gated(path: Path, min_change: float) -> Path:

@@ -304,7 +304,7 @@ def prepare(
 
 
 def reference_difference(
-    x: np.ndarray, reference: SessionReference, channels: int, config: PreprocessConfig
+    x: np.ndarray, reference: SessionReference, uses_reference: bool
 ) -> np.ndarray | None:
     """|frame channel − reference channel| of a prepared input, when there is a reference frame.
 
@@ -314,14 +314,13 @@ def reference_difference(
     Args:
         x: ``(C, S, S)`` network input from :func:`prepare`.
         reference: the session's reference (:func:`session_reference`).
-        channels: the model's input channels.
-        config: preprocessing (whether the last channel is the ridge energy).
+        uses_reference: whether channel 1 is a reference channel (``ModelSpec.uses_reference``).
 
     Returns:
         ``(S, S) float32`` in network input units, or None when the model has no reference
         channel or the session no reference frame (its reference channel is then the frame
         itself or a blank plane: nothing to compare with).
     """
-    if channels - (config.ridge_work_px > 0) != 2 or reference.gray is None:
+    if not uses_reference or reference.gray is None:
         return None
     return np.abs(x[0] - x[1])

@@ -168,5 +168,5 @@ class OnnxSegmenter:
         cfg = self.spec.preprocess
         prep = prepare(gray, reference, cfg, self.spec.channels)
         prob = self.probabilities(prep.x)
-        diff = reference_difference(prep.x, reference, self.spec.channels, cfg)
+        diff = reference_difference(prep.x, reference, self.spec.uses_reference)
         return postprocess(prob, prep.box, gray.shape[:2], self.spec, diff)
