@@ -22,6 +22,27 @@ if TYPE_CHECKING:
 
 #: Smallest error drawn on the log axes (an exact area shows here instead of vanishing).
 FLOOR_PCT, FLOOR_MM2 = 0.01, 1e-3
+#: Line styles of the methods, in drawing order: each later line is thinner and broken, so a
+#: method whose curve coincides with an earlier one's still shows (both colours visible).
+LINE_STYLES = ({"ls": "-", "lw": 2.2}, {"ls": "--", "lw": 1.6}, {"ls": ":", "lw": 1.4})
+
+
+def line_style(i: int) -> dict[str, Any]:
+    """Matplotlib keyword arguments of the ``i``-th method's line (:data:`LINE_STYLES`, cycled)."""
+    return dict(LINE_STYLES[i % len(LINE_STYLES)])
+
+
+def same_as(curve: np.ndarray, drawn: Mapping[str, np.ndarray]) -> str | None:
+    """The first already drawn method whose curve equals ``curve`` exactly, or None.
+
+    Args:
+        curve: ``(P, K)`` values of one method (e.g. pressures and medians).
+        drawn: label → curve of the methods drawn before it.
+    """
+    for label, other in drawn.items():
+        if other.shape == curve.shape and np.array_equal(other, curve):
+            return label
+    return None
 
 
 def _figure(width: float, height: float) -> Figure:
@@ -84,15 +105,20 @@ def plot_error_vs_pressure(path: str | os.PathLike[str], frames: Sequence[Scored
     )
     derived = (SOFT_SUFFIX, SESSION_SUFFIX)
     methods = sorted({f.method for f in frames if not f.method.endswith(derived)})
+    drawn: list[dict[str, np.ndarray]] = [{}, {}]  # per panel: label → (pressure, quartiles)
     for i, method in enumerate(methods):
         colour = f"C{i}"
-        for ax, (mm2, floor, _) in zip(axes, panels, strict=True):
+        for ax, seen, (mm2, floor, _) in zip(axes, drawn, panels, strict=True):
             ps, q = error_quartiles(frames, method, mm2)
             if not ps:
                 continue
             q = np.maximum(q, floor)
+            curve = np.column_stack([ps, q])
+            twin = same_as(curve, seen)
+            seen[method] = curve
+            label = method if twin is None else f"{method} (same as {twin})"
             ax.fill_between(ps, q[:, 0], q[:, 2], color=colour, alpha=0.2, lw=0)
-            ax.plot(ps, q[:, 1], color=colour, marker="o", ms=3, label=method)
+            ax.plot(ps, q[:, 1], color=colour, marker="o", ms=3, label=label, **line_style(i))
     for ax, (_, _, label) in zip(axes, panels, strict=True):
         ax.set_yscale("log")
         _plain_log_ticks(ax)
@@ -208,7 +234,7 @@ def plot_robustness(
             if pts:
                 x, y = zip(*pts, strict=True)
                 y = np.maximum(y, FLOOR_PCT) if log else y
-                ax.plot(x, y, color=f"C{i}", marker="o", ms=3, label=method)
+                ax.plot(x, y, color=f"C{i}", marker="o", ms=3, label=method, **line_style(i))
         ax.axvline(p["levels"].index(p["baseline"]), color="0.5", ls="--", lw=0.8)
         inside = [p["levels"].index(r["level"]) for r in rows if r["in_range"]]
         ax.axvspan(min(inside) - 0.3, max(inside) + 0.3, color="0.9", zorder=0)

@@ -1,0 +1,63 @@
+"""Bench figures: coinciding method curves stay visible and are named in the legend."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from contactcal.infer.bench.plots import (
+    LINE_STYLES,
+    line_style,
+    plot_error_vs_pressure,
+    same_as,
+)
+from contactcal.infer.bench.scoring import ScoredFrame
+
+pytest.importorskip("matplotlib")
+
+
+def _frames(method: str, errors: list[float]) -> list[ScoredFrame]:
+    """One contact frame per pressure 5, 6, ... kPa with the given relative area errors."""
+    return [
+        ScoredFrame(
+            method=method,
+            session="s0",
+            frame=f"p{5 + i:02d}.png",
+            pressure_kpa=5.0 + i,
+            true_area_px=1000.0,
+            area_px=1000.0 * (1 + e),
+            contact=True,
+            mm_per_px=0.01,
+        )
+        for i, e in enumerate(errors)
+    ]
+
+
+def test_line_styles_differ_and_cycle() -> None:
+    styles = [line_style(i) for i in range(len(LINE_STYLES))]
+    assert len({(s["ls"], s["lw"]) for s in styles}) == len(LINE_STYLES)
+    widths = [s["lw"] for s in styles]
+    assert widths == sorted(widths, reverse=True)  # later lines thinner: earlier ones show
+    assert line_style(len(LINE_STYLES)) == styles[0]
+    line_style(0)["lw"] = 99.0  # a copy: the table is not changed
+    assert LINE_STYLES[0]["lw"] != 99.0
+
+
+def test_same_as_finds_only_an_exact_twin() -> None:
+    a = np.array([[5.0, 1.0], [6.0, 2.0]])
+    drawn = {"classical": a + 1.0, "unet": a.copy()}
+    assert same_as(a, drawn) == "unet"
+    assert same_as(a + 1e-9, drawn) is None
+    assert same_as(a[:1], drawn) is None  # another shape
+    assert same_as(a, {}) is None
+
+
+def test_error_vs_pressure_with_identical_methods(tmp_path: Path) -> None:
+    errs = [0.01, -0.02, 0.03]
+    frames = _frames("unet", errs) + _frames("unet[v23]", errs) + _frames("classical", [0.4] * 3)
+    out = tmp_path / "evp.png"
+    plot_error_vs_pressure(out, frames)
+    assert out.read_bytes().startswith(b"\x89PNG")
+    assert [p.name for p in tmp_path.iterdir()] == ["evp.png"]  # no temporary left
