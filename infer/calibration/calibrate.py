@@ -21,6 +21,7 @@ from contactcal.infer.errors import RunError
 from contactcal.infer.files.atomic import OutputSet, run_outputs
 from contactcal.infer.methods.base import UNCHANGED_NOTE
 from contactcal.infer.methods.registry import make_method
+from contactcal.infer.pipeline.boundary import BoundaryOffset
 from contactcal.infer.pipeline.manifest import Frame, read_session
 from contactcal.infer.pipeline.measure import Measured, measure_files
 from contactcal.infer.pipeline.scale import PixelScale
@@ -54,6 +55,7 @@ def calibrate_session(
     manifest_as: str | os.PathLike[str] | None = None,
     session_rule: bool = True,
     change_gate: bool = True,
+    boundary: BoundaryOffset | None = None,
 ) -> CalibrationReport:
     """Calibrate the session listed in ``manifest`` and write its outputs into ``out_dir``.
 
@@ -88,6 +90,9 @@ def calibrate_session(
             in the record's ``extra``.
         change_gate: apply the U-Net model's change gate (``--no-change-gate`` turns it off);
             recorded in the method's configuration (``describe()``).
+        boundary: the rig's boundary offset (from the rig config), applied to the areas of the
+            model it was measured for (:func:`~contactcal.infer.pipeline.measure.measure_files`);
+            the one applied is recorded in ``extra.boundary_offset_mm`` (null: none).
 
     Returns:
         The :class:`CalibrationReport` (table, measurements, curve, written files).
@@ -104,7 +109,9 @@ def calibrate_session(
     frames, files = session.frames, [f.file for f in session.frames]
     model = None if model is None else str(model)
     method = make_method(method_name, model, outline=outline, change_gate=change_gate)
-    measured = measure_files(files, method, frames[0].file, scale, bit_depth=bit_depth)
+    measured = measure_files(
+        files, method, frames[0].file, scale, bit_depth=bit_depth, boundary=boundary
+    )
     measured_points = _points(manifest, frames, measured, scale)
     results = revise_points(measured_points) if session_rule else measured_points
     _check_contact(manifest, measured_points, results, method.name)
@@ -113,7 +120,7 @@ def calibrate_session(
     fit = fit_session(results, unit, curve_config, inverse_phase, session.phase_source)
     recorded = Path(manifest_as if manifest_as is not None else manifest).resolve()
     extra = {
-        **_extra(recorded, scale),
+        **_extra(recorded, scale, measured),
         "session_rule": session_rule,
         "gated_above_contact": gated_above,
     }
@@ -188,10 +195,14 @@ def _points(
     ]
 
 
-def _extra(manifest: Path, scale: PixelScale | None) -> dict[str, object]:
-    """The record's ``extra``: the manifest's path and the pixel scale used."""
+def _extra(
+    manifest: Path, scale: PixelScale | None, measured: Sequence[Measured]
+) -> dict[str, object]:
+    """The record's ``extra``: the manifest's path, the pixel scale and the boundary offset
+    applied (mm; null: none, e.g. none in the rig config, or the classical routine)."""
     return {
         "manifest": str(manifest),
         "mm_per_px": None if scale is None else scale.mm_per_px,
         "scale_image_width_px": None if scale is None else scale.image_width_px,
+        "boundary_offset_mm": measured[0].boundary_offset_mm if measured else None,
     }

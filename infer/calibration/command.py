@@ -10,6 +10,7 @@ from contactcal.infer.pipeline.args import (
     check_change_gate,
     method_args,
     overlay_runs,
+    resolve_boundary,
     resolve_scale,
     run_inputs,
     scale_args,
@@ -51,8 +52,9 @@ def _cmd_calibrate(args: argparse.Namespace) -> int:
     check_device_id(args.device_id)
     check_change_gate(args)
     if is_video_run(args):  # --video / --camera: contactcal.infer.video.command
-        return calibrate_video(args, resolve_scale(args))
-    scale = resolve_scale(args, args.manifest.parent / "rig.json")
+        return calibrate_video(args, resolve_scale(args), resolve_boundary(args))
+    rig = args.manifest.parent / "rig.json"
+    scale, boundary = resolve_scale(args, rig), resolve_boundary(args, rig)
     with run_outputs(run_inputs(args)) as outs:
         rep = calibrate_session(
             args.manifest,
@@ -68,6 +70,7 @@ def _cmd_calibrate(args: argparse.Namespace) -> int:
             inverse_phase=args.inverse_phase,
             session_rule=not args.per_frame_contact,
             change_gate=not args.no_change_gate,
+            boundary=boundary,
         )
         if args.overlay is not None:
             files = [f.file for f in rep.frames]

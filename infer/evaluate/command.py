@@ -6,7 +6,12 @@ import argparse
 from pathlib import Path
 
 from contactcal.infer.methods.registry import METHODS
-from contactcal.infer.pipeline.args import bit_depth_arg, change_gate_arg
+from contactcal.infer.pipeline.args import (
+    change_gate_arg,
+    resolve_boundary,
+    resolve_scale,
+    scale_args,
+)
 
 
 def add_parsers(sub: argparse._SubParsersAction) -> None:
@@ -26,13 +31,14 @@ def add_parsers(sub: argparse._SubParsersAction) -> None:
     )
     e.add_argument("--model", type=Path, help="ONNX model for the U-Net (default: shipped)")
     change_gate_arg(e)
-    bit_depth_arg(e)
+    scale_args(e)
     e.set_defaults(func=_cmd_evaluate)
 
 
 def _cmd_evaluate(args: argparse.Namespace) -> int:
     from contactcal.infer.evaluate.run import evaluate_session
 
+    rig = args.manifest.parent / "rig.json"
     rep = evaluate_session(
         args.manifest,
         args.labels,
@@ -41,6 +47,8 @@ def _cmd_evaluate(args: argparse.Namespace) -> int:
         args.model,
         args.bit_depth,
         change_gate=not args.no_change_gate,
+        scale=resolve_scale(args, rig),
+        boundary=resolve_boundary(args, rig),
     )
     print(rep.table)
     print(f"evaluation: {rep.files['json']}, {rep.files['png']}")

@@ -12,14 +12,17 @@ from typing import Any
 
 from contactcal.infer.bench.scoring import PRESSURE_BINS, bin_table
 from contactcal.infer.evaluate.labels import Label, LabelError, label_mask, read_labels
+from contactcal.infer.evaluate.offset import boundary_offset, offset_line
 from contactcal.infer.evaluate.plots import plot_evaluation
 from contactcal.infer.evaluate.report import format_table
 from contactcal.infer.evaluate.score import frame_records, onset_summary, score_frames
 from contactcal.infer.files.atomic import OutputSet, run_outputs, write_synced
 from contactcal.infer.files.jsonable import json_text
 from contactcal.infer.methods.registry import METHODS, make_method
+from contactcal.infer.pipeline.boundary import BoundaryOffset
 from contactcal.infer.pipeline.manifest import Frame, read_manifest
 from contactcal.infer.pipeline.measure import Measured, measure_files
+from contactcal.infer.pipeline.scale import PixelScale
 
 #: ``--method`` choices: one method, or ``both`` (every method of the registry).
 METHOD_CHOICES = (*METHODS, "both")
@@ -48,20 +51,35 @@ def _labelled(
     return done, [by_frame[f.file] for f in done]
 
 
+@dataclass(frozen=True)
+class _Setup:
+    """How the frames are measured: besides the methods, what ``calibrate`` would also use."""
+
+    model: str | os.PathLike[str] | None
+    bit_depth: int | None
+    change_gate: bool
+    scale: PixelScale | None
+    boundary: BoundaryOffset | None
+
+
 def _measure(
-    names: list[str],
-    frames: list[Frame],
-    files: list[Path],
-    model: str | os.PathLike[str] | None,
-    bit_depth: int | None,
-    change_gate: bool = True,
-) -> dict[str, list[Measured]]:
-    """Each method's measurements of ``files``; the manifest's first frame is the reference."""
-    out = {}
+    names: list[str], frames: list[Frame], files: list[Path], setup: _Setup
+) -> tuple[dict[str, list[Measured]], dict[str, Any]]:
+    """Each method's measurements of ``files`` (the manifest's first frame is the reference),
+    and its ``describe()``."""
+    out, described = {}, {}
     for name in names:
-        method = make_method(name, model, outline=True, change_gate=change_gate)
-        out[name] = measure_files(files, method, frames[0].file, bit_depth=bit_depth)
-    return out
+        method = make_method(name, setup.model, outline=True, change_gate=setup.change_gate)
+        described[name] = method.describe()
+        out[name] = measure_files(
+            files,
+            method,
+            frames[0].file,
+            setup.scale,
+            bit_depth=setup.bit_depth,
+            boundary=setup.boundary,
+        )
+    return out, described
 
 
 def evaluate_session(
@@ -73,6 +91,8 @@ def evaluate_session(
     bit_depth: int | None = None,
     outputs: OutputSet | None = None,
     change_gate: bool = True,
+    scale: PixelScale | None = None,
+    boundary: BoundaryOffset | None = None,
 ) -> Evaluation:
     """Score ``method`` on the frames of ``manifest`` labelled in ``labels``.
 
@@ -95,6 +115,10 @@ def evaluate_session(
         bit_depth: significant bits of 16-bit frames; None → from the files.
         outputs: the enclosing run's outputs to stage into (None: this call is the run).
         change_gate: apply the U-Net model's change gate (``--no-change-gate``: off; recorded).
+        scale: the rig's pixel scale (the boundary offset in mm; None: pixels only).
+        boundary: the rig's boundary offset, applied as ``calibrate`` applies it; the offset
+            measured here (``boundary_offset``, :mod:`~contactcal.infer.evaluate.offset`) is
+            then what remains.
 
     Returns:
         The :class:`Evaluation`.
@@ -117,9 +141,15 @@ def evaluate_session(
         paths = {"png": out / "evaluation.png", "json": out / "evaluation.json"}
         staged = {k: outs.stage(p) for k, p in paths.items()}  # refused here, before work
         files = [f.file for f in labelled]
-        measured = _measure(names, frames, files, model, bit_depth, change_gate)
+        setup = _Setup(model, bit_depth, change_gate, scale, boundary)
+        measured, described = _measure(names, frames, files, setup)
         first = measured[names[0]]
         masks = [label_mask(lab, (m.width, m.height)) for lab, m in zip(labs, first, strict=True)]
+        offset = None
+        if "unet" in measured:
+            areas = [float(mask.area_px) for mask in masks]
+            sha = described["unet"]["model_sha256"]
+            offset = boundary_offset(measured["unet"], areas, scale, sha)
         scored = score_frames(str(manifest), [f.pressure_kpa for f in labelled], masks, measured)
         onset, bins = onset_summary(scored), bin_table(scored, PRESSURE_BINS)
         record = {
@@ -132,11 +162,14 @@ def evaluate_session(
             "frames": frame_records(base, masks, [lab.where() for lab in labs], scored),
             "unlabelled": unlabelled,
             "summary": {"bins": bins, "onset": onset},
+            "boundary_offset": offset,
         }  # the evaluation.json content
         text = json_text(record)
         plot_evaluation(staged["png"], scored)
         write_synced(staged["json"], text)
     table = format_table(bins, onset)
+    if offset is not None:
+        table += "\n" + offset_line(offset)
     if unlabelled:
         table += f"\n{len(unlabelled)} frame(s) without a label, skipped: {', '.join(unlabelled)}"
     return Evaluation(record, table, paths)

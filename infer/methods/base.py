@@ -38,12 +38,15 @@ class AreaResult:
     contour: np.ndarray | None  # (N, 1, 2) int32 outline in input pixels, for overlays
     soft_area_px: float | None = None  # U-Net: probabilities summed around the region, hull px as 1
     area_interval_px: tuple[float, float] | None = None  # (lower, upper) px; None: none stated
+    perimeter_px: float | None = None  # px, the contact region's outline length (the U-Net's;
+    #   None: not measured); a boundary offset of d px changes the area by about d·perimeter
 
     def upscaled(self, k: int) -> AreaResult:
         """The same result for an image ``k`` times larger per side (areas and interval × k²)."""
         if k == 1:
             return self
         soft = None if self.soft_area_px is None else self.soft_area_px * k * k
+        perimeter = None if self.perimeter_px is None else self.perimeter_px * k
         contour = None if self.contour is None else self.contour * k
         iv = self.area_interval_px
         interval = None if iv is None else (iv[0] * k * k, iv[1] * k * k)
@@ -53,6 +56,7 @@ class AreaResult:
             contour=contour,
             soft_area_px=soft,
             area_interval_px=interval,
+            perimeter_px=perimeter,
         )
 
 

@@ -9,6 +9,7 @@ from typing import TYPE_CHECKING
 from contactcal.infer.methods.registry import METHODS
 
 if TYPE_CHECKING:
+    from contactcal.infer.pipeline.boundary import BoundaryOffset
     from contactcal.infer.pipeline.measure import Measured
     from contactcal.infer.pipeline.scale import PixelScale
 
@@ -17,7 +18,12 @@ def scale_args(p: argparse.ArgumentParser) -> None:
     """``--mm-per-px`` | ``--rig``, and ``--bit-depth``."""
     g = p.add_mutually_exclusive_group()
     g.add_argument("--mm-per-px", type=float, help="pixel scale at the contact plane (mm/px)")
-    g.add_argument("--rig", type=Path, help="rig config JSON with mm_per_px and image_width_px")
+    g.add_argument(
+        "--rig",
+        type=Path,
+        help="rig config JSON with mm_per_px and image_width_px (and, optionally, the rig's "
+        "boundary offset for the U-Net model, as `contactcal evaluate` prints it)",
+    )
     bit_depth_arg(p)
 
 
@@ -91,6 +97,22 @@ def resolve_scale(args: argparse.Namespace, default_rig: Path | None = None) -> 
         return load_rig_config(args.rig)
     if default_rig is not None and default_rig.is_file():
         return load_rig_config(default_rig)
+    return None
+
+
+def resolve_boundary(
+    args: argparse.Namespace, default_rig: Path | None = None
+) -> BoundaryOffset | None:
+    """The boundary offset the rig config of :func:`resolve_scale` states; None: none (or the
+    scale came from ``--mm-per-px``)."""
+    from contactcal.infer.pipeline.boundary import load_boundary_offset
+
+    if args.mm_per_px is not None:
+        return None
+    if args.rig is not None:
+        return load_boundary_offset(args.rig)
+    if default_rig is not None and default_rig.is_file():
+        return load_boundary_offset(default_rig)
     return None
 
 

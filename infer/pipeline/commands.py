@@ -10,6 +10,7 @@ from contactcal.infer.pipeline.args import (
     check_change_gate,
     method_args,
     overlay_runs,
+    resolve_boundary,
     resolve_scale,
     run_inputs,
     scale_args,
@@ -60,7 +61,12 @@ def _cmd_measure(args: argparse.Namespace) -> int:
             change_gate=not args.no_change_gate,
         )
         measured = measure_files(
-            args.images, method, args.reference, resolve_scale(args), bit_depth=args.bit_depth
+            args.images,
+            method,
+            args.reference,
+            resolve_scale(args),
+            bit_depth=args.bit_depth,
+            boundary=resolve_boundary(args),
         )
         # device_id: the display measured, per object (the output stays a list of objects).
         rows = [{**m.to_json(method.name), "device_id": args.device_id} for m in measured]

@@ -21,6 +21,7 @@ from contactcal.infer.image.read import load_image
 from contactcal.infer.methods.base import AreaResult, Method
 from contactcal.infer.methods.unet.config import PreprocessConfig
 from contactcal.infer.methods.unet.ring import RingFit, locate_ring
+from contactcal.infer.pipeline.boundary import BoundaryOffset, BoundaryOffsetError, apply_offset
 from contactcal.infer.pipeline.scale import PixelScale
 
 #: A frame's ring centre may lie this far from the reference's, as a fraction of the reference
@@ -48,6 +49,7 @@ class Measured:
     result: AreaResult
     area_mm2: float | None
     reference: Path | None = None  # the session's reference frame (None: measured without one)
+    boundary_offset_mm: float | None = None  # the rig's boundary offset applied (None: none)
 
     def to_json(self, method: str) -> dict[str, Any]:
         """The CLI contract's per-image object (``area_interval_px``: ``[lower, upper]`` input
@@ -64,6 +66,7 @@ class Measured:
             "height": self.height,
             "note": self.result.note,
             "reference": None if self.reference is None else str(self.reference),
+            "boundary_offset_mm": self.boundary_offset_mm,
         }
 
 
@@ -139,6 +142,33 @@ def _start(
     return k, _Reference(reference, _file_size(img, k), _coarse_ring(img))
 
 
+def offset_for(
+    method: Method, boundary: BoundaryOffset | None, scale: PixelScale | None
+) -> BoundaryOffset | None:
+    """The rig's boundary offset if it applies to ``method``: it was measured for this very
+    model (None: no offset, or a method without a model, e.g. the classical routine).
+
+    Raises:
+        BoundaryOffsetError: the offset was measured for another model (stale), or no pixel
+            scale converts it to pixels.
+    """
+    sha = method.describe().get("model_sha256")
+    if boundary is None or sha is None:
+        return None
+    if sha != boundary.model_sha256:
+        raise BoundaryOffsetError(
+            f"{boundary.source}: its boundary offset was measured for the model with sha256 "
+            f"{boundary.model_sha256[:12]}…, this run's model has {sha[:12]}…; measure it again "
+            "for this model (`contactcal evaluate … --rig`) or remove the two boundary_offset keys"
+        )
+    if scale is None:
+        raise BoundaryOffsetError(
+            f"{boundary.source}: a boundary offset in mm needs the rig's pixel scale "
+            "(mm_per_px and image_width_px in the same file)"
+        )
+    return boundary
+
+
 def measure_files(
     files: Sequence[str | os.PathLike[str]],
     method: Method,
@@ -146,6 +176,7 @@ def measure_files(
     scale: PixelScale | None = None,
     progress: bool = False,
     bit_depth: int | None = None,
+    boundary: BoundaryOffset | None = None,
 ) -> list[Measured]:
     """Measure each image file with ``method``.
 
@@ -161,6 +192,9 @@ def measure_files(
         scale: pixel scale for mm² (None → ``area_mm2`` is None).
         progress: show a progress bar on stderr.
         bit_depth: significant bits of 16-bit files (:func:`load_image`); None → from the file.
+        boundary: the rig's boundary offset; applied to the areas of the model it was measured
+            for (:func:`offset_for`, :func:`~contactcal.infer.pipeline.boundary.apply_offset`),
+            not to another method's.
 
     Returns:
         One :class:`Measured` per file, in order.
@@ -168,7 +202,9 @@ def measure_files(
     Raises:
         ImageError: an unreadable file, or a frame that does not match the reference (naming
             both; nothing is measured after it).
+        BoundaryOffsetError: an offset measured for another model, or without a scale.
     """
+    active = offset_for(method, boundary, scale)
     images = [Path(f) for f in files]
     k, ref = _start(method, images, None if reference is None else Path(reference), bit_depth)
     out: list[Measured] = []
@@ -182,8 +218,11 @@ def measure_files(
         w, h = _file_size(img, k)
         note = method.NO_REFERENCE if ref is None else _check_frame(ref, path, img, (w, h))
         res = method.measure(img)  # in the file's pixels
+        if active is not None and scale is not None:
+            res = apply_offset(res, active.mm / scale.at_width(w), active.mm)
         if note:
             res = replace(res, note=f"{res.note}; {note}" if res.note else note)
         mm2 = None if scale is None else scale.area_mm2(res.area_px, w)
-        out.append(Measured(path, w, h, res, mm2, None if ref is None else ref.path))
+        applied = None if active is None else active.mm
+        out.append(Measured(path, w, h, res, mm2, None if ref is None else ref.path, applied))
     return out

@@ -19,6 +19,7 @@ from contactcal.infer.video.steps import StepConfig
 
 if TYPE_CHECKING:
     from contactcal.infer.files.atomic import OutputSet
+    from contactcal.infer.pipeline.boundary import BoundaryOffset
     from contactcal.infer.pipeline.scale import PixelScale
     from contactcal.infer.video.extract import Extractor
     from contactcal.infer.video.live import Preview
@@ -113,7 +114,9 @@ def _preview(
     return Preview(method, extractor, outs.stage(args.out / f"preview{suffix}"), fourcc, fps)
 
 
-def calibrate_video(args: argparse.Namespace, scale: PixelScale | None) -> int:
+def calibrate_video(
+    args: argparse.Namespace, scale: PixelScale | None, boundary: BoundaryOffset | None = None
+) -> int:
     """Extract the steady frames, then calibrate them (see the module docstring)."""
     import cv2
 
@@ -168,6 +171,7 @@ def calibrate_video(args: argparse.Namespace, scale: PixelScale | None) -> int:
             manifest_as=final_manifest,
             session_rule=not args.per_frame_contact,
             change_gate=not args.no_change_gate,
+            boundary=boundary,
         )
     print(rep.table)
     print(ex.summary())

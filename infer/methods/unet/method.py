@@ -161,7 +161,9 @@ class UnetMethod:
             contours, _ = cv2.findContours(mask, cv2.RETR_EXTERNAL, cv2.CHAIN_APPROX_SIMPLE)
             contour = max(contours, key=cv2.contourArea) if contours else None
         note = self._note(seg)
-        res = AreaResult(True, seg.area_px, note, contour, seg.soft_area_px, seg.interval_px)
+        res = AreaResult(
+            True, seg.area_px, note, contour, seg.soft_area_px, seg.interval_px, seg.perimeter_px
+        )
         return res.upscaled(k)
 
     def _note(self, seg: Segmentation) -> str:

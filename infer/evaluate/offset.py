@@ -1,0 +1,103 @@
+"""The rig's boundary offset measured against hand labels (``contactcal evaluate``).
+
+Per labelled frame in contact (by the label and by the U-Net), the outward move of the U-Net's
+boundary that would give the label's area (:func:`~contactcal.infer.pipeline.boundary.fit_offset`,
+from the region's area and perimeter); the session's offset is their median, with a 90 %
+bootstrap interval over the frames. The result names the rig config keys that apply it
+(:mod:`contactcal.infer.pipeline.boundary`).
+"""
+
+from __future__ import annotations
+
+import json
+from collections.abc import Sequence
+from typing import Any
+
+import numpy as np
+
+from contactcal.infer.pipeline.boundary import MODEL_KEY, OFFSET_KEY, fit_offset
+from contactcal.infer.pipeline.measure import Measured
+from contactcal.infer.pipeline.scale import PixelScale
+
+#: Fewest frames in contact (label and U-Net) that an offset is stated from: with fewer, one
+#: mislabelled frame moves the median by its whole error.
+MIN_FRAMES = 5
+#: Bootstrap resamples of the median, and the generator's seed (a fixed seed: one answer).
+RESAMPLES, SEED = 2000, 0
+
+
+def _interval(values: np.ndarray) -> tuple[float, float]:
+    """90 % bootstrap interval of the median of ``values`` (resampling frames)."""
+    rng = np.random.default_rng(SEED)
+    idx = rng.integers(0, values.size, size=(RESAMPLES, values.size))
+    lo, hi = np.percentile(np.median(values[idx], axis=1), (5, 95))
+    return float(lo), float(hi)
+
+
+def boundary_offset(
+    measured: Sequence[Measured],
+    label_areas: Sequence[float],
+    scale: PixelScale | None,
+    model_sha256: str,
+) -> dict[str, Any]:
+    """The U-Net's boundary offset against the labels (the ``boundary_offset`` of
+    ``evaluation.json``).
+
+    Args:
+        measured: the U-Net's measurements of the labelled frames (any offset already applied).
+        label_areas: each frame's label area, input pixels (0: no contact).
+        scale: the rig's pixel scale (None: the offset in pixels only).
+        model_sha256: the model measured, for the rig config keys.
+
+    Returns:
+        ``frames`` (used), ``median_px`` and ``interval_px`` (90 %, bootstrap over frames), the
+        same in mm (None without a scale), ``applied_mm`` (the offset the run already applied),
+        ``rig_config`` (the two keys with the total offset: applied + measured; None without a
+        scale or with fewer than :data:`MIN_FRAMES` frames) and a ``note``.
+    """
+    px, mm = [], []
+    for m, target in zip(measured, label_areas, strict=True):
+        r = m.result
+        if target <= 0.0 or not r.contact or r.perimeter_px is None:
+            continue
+        d = fit_offset(r.area_px, r.perimeter_px, float(target))
+        px.append(d)
+        mm.append(None if scale is None else d * scale.at_width(m.width))
+    applied = measured[0].boundary_offset_mm if measured else None
+    out: dict[str, Any] = {"frames": len(px), "applied_mm": applied, "rig_config": None}
+    out.update(median_px=None, interval_px=None, median_mm=None, interval_mm=None)
+    if len(px) < MIN_FRAMES:
+        out["note"] = (
+            f"not measured: {len(px)} frame(s) in contact by both the labels and the U-Net; "
+            f"label at least {MIN_FRAMES} frames in contact"
+        )
+        return out
+    out.update(median_px=float(np.median(px)), interval_px=_interval(np.asarray(px)))
+    if scale is None:
+        out["note"] = "in pixels only: give the rig's scale (--rig or --mm-per-px) for mm"
+        return out
+    arr = np.asarray(mm, dtype=float)
+    total = round(float(np.median(arr)) + (applied or 0.0), 3)
+    out.update(median_mm=float(np.median(arr)), interval_mm=_interval(arr))
+    out["rig_config"] = {OFFSET_KEY: total, MODEL_KEY: model_sha256}
+    out["note"] = (
+        "positive: the labelled edge lies outside the U-Net's; to apply it, put rig_config's "
+        "two keys in the rig config (rig.json) and check on frames not labelled here"
+    )
+    return out
+
+
+def offset_line(off: dict[str, Any]) -> str:
+    """One line for the printed table."""
+    if off["median_px"] is None:
+        return f"boundary offset (unet): {off['note']}"
+    lo, hi = off["interval_px"]
+    text = f"{off['median_px']:+.2f} px (90 % interval {lo:+.2f} … {hi:+.2f})"
+    if off["median_mm"] is not None:
+        lo, hi = off["interval_mm"]
+        text = f"{off['median_mm']:+.3f} mm (90 % interval {lo:+.3f} … {hi:+.3f}), " + text
+    line = f"boundary offset (unet) against the labels, {off['frames']} frames: {text}"
+    if off["rig_config"] is not None:
+        keys = ", ".join(f"{json.dumps(k)}: {json.dumps(v)}" for k, v in off["rig_config"].items())
+        line += f"\n  to apply it, add to the rig config: {keys}"
+    return line

@@ -1,0 +1,136 @@
+"""A rig's boundary offset: where its contact edge lies relative to the U-Net's region, in mm.
+
+Two generators of rig frames can agree on the contact region's shape and disagree on where its
+edge lies against the inner ring: on the procedural cross-check frames the shipped U-Net's region
+is a near-constant ~0.18 mm (equivalent radius) inside the drawn contact at every pressure, on
+our renders within ±0.02 mm (``docs/evaluate.md``, "Boundary offset"). Which holds on a real
+rig, only its own hand-labelled frames can tell. ``contactcal evaluate`` measures the offset
+against them (:func:`fit_offset`); stored in the rig config with the model it was measured for,
+``measure``, ``calibrate`` and ``evaluate`` apply it to that model's areas (:func:`apply_offset`).
+
+The area of a convex region grown outward by ``d`` is ``A + P·d + π·d²`` (Steiner's formula,
+``P`` its perimeter); shrunk inward by ``d`` (``d < 0``) the same formula holds while ``|d|`` is
+below the outline's smallest radius of curvature (a contact patch's is millimetres, an offset's
+tenths of one).
+"""
+
+from __future__ import annotations
+
+import json
+import math
+import numbers
+import os
+import re
+from dataclasses import dataclass, replace
+from pathlib import Path
+
+from contactcal.infer.methods.base import AreaResult
+
+#: Largest |offset| accepted, mm: ten times the generators' disagreement (~0.18 mm), and a
+#: tenth of a contact patch's radius; a larger value is a unit or sign slip.
+MAX_OFFSET_MM = 2.0
+#: The rig config's keys (both or neither).
+OFFSET_KEY, MODEL_KEY = "boundary_offset_mm", "boundary_offset_model_sha256"
+
+
+class BoundaryOffsetError(ValueError):
+    """A boundary offset that cannot be used; the message names the file and the fix."""
+
+
+@dataclass(frozen=True)
+class BoundaryOffset:
+    """A rig's measured boundary offset, for one model."""
+
+    mm: float  # signed, mm at the contact plane: > 0 moves the edge outward (larger areas)
+    model_sha256: str  # the model file it was measured for (64 hex digits)
+    source: str  # the rig config file it came from, for messages and records
+
+    def __post_init__(self) -> None:
+        m = self.mm
+        if isinstance(m, bool) or not isinstance(m, numbers.Real) or not math.isfinite(m):
+            raise BoundaryOffsetError(f"{self.source}: {OFFSET_KEY} must be a number, got {m!r}")
+        if abs(m) > MAX_OFFSET_MM:
+            raise BoundaryOffsetError(
+                f"{self.source}: {OFFSET_KEY} {m:g} mm is outside ±{MAX_OFFSET_MM:g} mm; "
+                "expected tenths of a mm (as `contactcal evaluate` prints it)"
+            )
+        if not re.fullmatch(r"[0-9a-f]{64}", str(self.model_sha256)):
+            raise BoundaryOffsetError(
+                f"{self.source}: {MODEL_KEY} must be the model's sha256 (64 lower-case hex "
+                f"digits, as `contactcal evaluate` prints it), got {self.model_sha256!r}"
+            )
+
+
+def load_boundary_offset(path: str | os.PathLike[str]) -> BoundaryOffset | None:
+    """The boundary offset a rig config states (None when it states none).
+
+    Raises:
+        BoundaryOffsetError: only one of the two keys, or an invalid value (the scale's own
+            errors are :func:`~contactcal.infer.pipeline.scale.load_rig_config`'s).
+    """
+    p = Path(path)
+    try:
+        data = json.loads(p.read_text(encoding="utf-8"))
+    except (OSError, UnicodeDecodeError, json.JSONDecodeError):
+        return None  # load_rig_config reports an unreadable file
+    if not isinstance(data, dict) or (OFFSET_KEY not in data and MODEL_KEY not in data):
+        return None
+    if OFFSET_KEY not in data or MODEL_KEY not in data:
+        raise BoundaryOffsetError(
+            f"{p}: {OFFSET_KEY} and {MODEL_KEY} go together (the offset holds for one model); "
+            "add the missing one as `contactcal evaluate` printed it, or remove both"
+        )
+    return BoundaryOffset(data[OFFSET_KEY], data[MODEL_KEY], str(p))
+
+
+def offset_area(area: float, perimeter: float, d: float) -> float:
+    """Area of a convex region of ``area`` and ``perimeter`` moved ``d`` outward (Steiner).
+
+    Units: any length unit ``u`` for ``perimeter`` and ``d``, ``u²`` for ``area``. An inward move
+    to the formula's vertex ``−P/2π`` (a circle's radius) or beyond leaves nothing: 0.
+    """
+    if d <= -perimeter / (2.0 * math.pi):
+        return 0.0
+    return max(0.0, area + perimeter * d + math.pi * d * d)
+
+
+def fit_offset(area: float, perimeter: float, target: float) -> float:
+    """The outward move ``d`` that gives a region of ``area`` and ``perimeter`` the ``target``
+    area (inverse of :func:`offset_area`; same units). A target below what the formula can reach
+    (``A − P²/4π``) gives its vertex, ``−P/2π``."""
+    disc = perimeter * perimeter + 4.0 * math.pi * (target - area)
+    return (-perimeter + math.sqrt(max(disc, 0.0))) / (2.0 * math.pi)
+
+
+def apply_offset(res: AreaResult, d_px: float, mm: float) -> AreaResult:
+    """A frame's result with its contact boundary moved ``d_px`` input pixels outward.
+
+    The area, the soft area and the interval's ends move by :func:`offset_area` (an end's
+    perimeter scaled as the square root of its area: a similar shape); the note says so. A
+    result without contact, or without a measured perimeter, is returned unchanged. The overlay
+    outline (``contour``) stays the region as segmented.
+
+    Args:
+        res: the method's result, input pixels.
+        d_px: the offset in input pixels (mm ÷ mm per px at the frame's width).
+        mm: the same offset in mm, for the note.
+    """
+    if not res.contact or res.perimeter_px is None or res.area_px <= 0.0:
+        return res
+    a, p = res.area_px, res.perimeter_px
+
+    def moved(x: float) -> float:
+        return offset_area(x, p * math.sqrt(max(x, 0.0) / a), d_px)
+
+    area = moved(a)
+    note = f"boundary moved {mm:+.3f} mm (rig's boundary offset): area {a:.0f} → {area:.0f} px"
+    iv = res.area_interval_px
+    return replace(
+        res,
+        contact=area > 0.0,
+        area_px=area,
+        note=f"{res.note}; {note}" if res.note else note,
+        soft_area_px=None if res.soft_area_px is None else moved(res.soft_area_px),
+        area_interval_px=None if iv is None else (moved(iv[0]), moved(iv[1])),
+        perimeter_px=p + 2.0 * math.pi * d_px if area > 0.0 else 0.0,
+    )

@@ -1,0 +1,162 @@
+"""The rig's boundary offset: Steiner's formula and its inverse, the region's perimeter, the rig
+config keys, and where it is applied (only to the model it was measured for)."""
+
+from __future__ import annotations
+
+import json
+import math
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from contactcal.infer.methods.base import AreaResult
+from contactcal.infer.pipeline.boundary import (
+    MODEL_KEY,
+    OFFSET_KEY,
+    BoundaryOffset,
+    BoundaryOffsetError,
+    apply_offset,
+    fit_offset,
+    load_boundary_offset,
+    offset_area,
+)
+
+EXAMPLE = Path(__file__).resolve().parents[1] / "examples" / "session"
+SHA = "ab" * 32
+
+
+def _disc(radius: float, size: int = 160) -> np.ndarray:
+    """``(size, size) bool``: the pixels whose centres lie within ``radius`` of the middle."""
+    yy, xx = np.mgrid[:size, :size] + 0.5 - size / 2
+    return np.hypot(xx, yy) <= radius
+
+
+def test_steiner_is_exact_for_a_circle_and_inverted_by_fit_offset() -> None:
+    a, p = math.pi * 100.0, 2 * math.pi * 10.0  # radius 10
+    assert offset_area(a, p, 1.0) == pytest.approx(math.pi * 121.0)
+    assert offset_area(a, p, -1.0) == pytest.approx(math.pi * 81.0)
+    assert offset_area(a, p, -10.0) == 0.0 and offset_area(a, p, -20.0) == 0.0  # past the middle
+    for d in (-2.5, 0.0, 0.7, 3.0):
+        assert fit_offset(a, p, offset_area(a, p, d)) == pytest.approx(d)
+    assert fit_offset(a, p, 0.0) == pytest.approx(-10.0)  # the vertex: the whole radius
+
+
+@pytest.mark.parametrize("convex", [True, False])
+def test_region_perimeter_of_a_pixel_disc(convex: bool) -> None:
+    from contactcal.infer.methods.unet.postprocess import region_perimeter
+
+    keep = _disc(40.0)
+    assert region_perimeter(keep, convex) == pytest.approx(2 * math.pi * 40.0, rel=0.02)
+    assert region_perimeter(np.zeros((8, 8), bool), convex) == 0.0
+
+
+def test_steiner_on_pixel_regions_predicts_the_grown_disc() -> None:
+    from contactcal.infer.methods.unet.postprocess import region_perimeter
+
+    keep = _disc(30.0)
+    a, p = float(keep.sum()), region_perimeter(keep, True)
+    for d in (-3.0, 2.0, 5.0):
+        assert offset_area(a, p, d) == pytest.approx(float(_disc(30.0 + d).sum()), rel=0.01)
+
+
+def test_apply_offset_moves_area_soft_area_and_interval_and_says_so() -> None:
+    res = AreaResult(True, 1000.0, "", None, 1010.0, (900.0, 1100.0), 120.0)
+    out = apply_offset(res, 2.0, 0.15)
+    assert out.area_px == pytest.approx(1000.0 + 240.0 + 4 * math.pi)
+    assert out.area_interval_px[0] < out.area_px < out.area_interval_px[1]
+    assert out.soft_area_px > res.soft_area_px
+    assert out.perimeter_px == pytest.approx(120.0 + 4 * math.pi)
+    assert "boundary moved +0.150 mm" in out.note and out.contact
+    none = AreaResult(False, 0.0, "no contact", None, None, (0.0, 50.0), None)
+    assert apply_offset(none, 2.0, 0.15) is none
+    no_perimeter = AreaResult(True, 500.0, "", None)  # the classical routine: none measured
+    assert apply_offset(no_perimeter, 2.0, 0.15) is no_perimeter
+    gone = apply_offset(AreaResult(True, 10.0, "", None, perimeter_px=12.0), -5.0, -0.4)
+    assert not gone.contact and gone.area_px == 0.0 and "boundary moved -0.400 mm" in gone.note
+
+
+def _rig(path: Path, **keys: object) -> Path:
+    path.write_text(json.dumps({"mm_per_px": 0.126454185, "image_width_px": 400, **keys}))
+    return path
+
+
+def test_rig_config_keys(tmp_path: Path) -> None:
+    assert load_boundary_offset(_rig(tmp_path / "a.json")) is None
+    b = load_boundary_offset(_rig(tmp_path / "b.json", **{OFFSET_KEY: 0.2, MODEL_KEY: SHA}))
+    assert b == BoundaryOffset(0.2, SHA, str(tmp_path / "b.json"))
+    with pytest.raises(BoundaryOffsetError, match=r"c\.json: .* go together"):
+        load_boundary_offset(_rig(tmp_path / "c.json", **{OFFSET_KEY: 0.2}))
+    bad = [{OFFSET_KEY: "0.2", MODEL_KEY: SHA}, {OFFSET_KEY: 3.0, MODEL_KEY: SHA}]
+    bad += [{OFFSET_KEY: float("nan"), MODEL_KEY: SHA}, {OFFSET_KEY: 0.1, MODEL_KEY: "abc"}]
+    for i, keys in enumerate(bad):
+        with pytest.raises(BoundaryOffsetError, match=rf"d{i}\.json: "):
+            load_boundary_offset(_rig(tmp_path / f"d{i}.json", **keys))
+
+
+def _shipped_sha() -> str:
+    from contactcal.infer.files.digest import sha256_file
+    from contactcal.infer.methods.unet.runner import DEFAULT_MODEL
+
+    return sha256_file(DEFAULT_MODEL)
+
+
+def test_measure_files_applies_it_to_its_model_only(tmp_path: Path) -> None:
+    pytest.importorskip("onnxruntime")
+    from contactcal.infer.methods.registry import make_method
+    from contactcal.infer.pipeline.measure import measure_files
+    from contactcal.infer.pipeline.scale import PixelScale
+
+    files = [EXAMPLE / "p00.0kpa.jpg", EXAMPLE / "p10.0kpa.jpg"]
+    scale = PixelScale(0.126454185, 400)
+    mine = BoundaryOffset(0.25, _shipped_sha(), "rig.json")
+    unet = make_method("unet")
+    plain = measure_files(files, unet, files[0], scale)
+    moved = measure_files(files, unet, files[0], scale, boundary=mine)
+    a, b = plain[1].result, moved[1].result
+    d_px = 0.25 / 0.126454185
+    assert b.area_px == pytest.approx(offset_area(a.area_px, a.perimeter_px, d_px))
+    assert moved[1].boundary_offset_mm == 0.25 and plain[1].boundary_offset_mm is None
+    assert moved[1].to_json("unet")["boundary_offset_mm"] == 0.25
+    assert moved[1].area_mm2 == pytest.approx(b.area_px * 0.126454185**2)
+    assert not moved[0].result.contact and moved[0].result.area_px == 0.0
+    with pytest.raises(BoundaryOffsetError, match=r"rig\.json: .*measured for the model"):
+        measure_files(files, unet, files[0], scale, boundary=BoundaryOffset(0.25, SHA, "rig.json"))
+    with pytest.raises(BoundaryOffsetError, match="pixel scale"):
+        measure_files(files, unet, files[0], None, boundary=mine)
+    classical = measure_files(files, make_method("classical"), files[0], scale, boundary=mine)
+    assert classical[1].boundary_offset_mm is None  # measured for the U-Net model
+
+
+def test_cli_evaluate_measures_it_and_calibrate_applies_it(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    pytest.importorskip("onnxruntime")
+    from contactcal.infer.cli import main
+
+    manifest = str(EXAMPLE / "manifest.csv")
+    ev = tmp_path / "ev"
+    assert main(["evaluate", manifest, "--labels", str(EXAMPLE / "masks"), "--out", str(ev)]) == 0
+    assert "boundary offset (unet) against the labels" in capsys.readouterr().out
+    off = json.loads((ev / "evaluation.json").read_text())["boundary_offset"]
+    assert off["frames"] >= 5 and off["applied_mm"] is None
+    lo, hi = off["interval_mm"]
+    assert lo <= off["median_mm"] <= hi
+    assert off["rig_config"] == {OFFSET_KEY: round(off["median_mm"], 3), MODEL_KEY: _shipped_sha()}
+    rig = _rig(tmp_path / "rig.json", **{OFFSET_KEY: 0.3, MODEL_KEY: _shipped_sha()})
+    cal = tmp_path / "cal"
+    assert main(["calibrate", manifest, "--rig", str(rig), "--out", str(cal)]) == 0
+    record = json.loads((cal / "calibration.json").read_text())
+    assert record["extra"]["boundary_offset_mm"] == 0.3
+    ev2 = tmp_path / "ev2"
+    args = ["evaluate", manifest, "--labels", str(EXAMPLE / "masks"), "--rig", str(rig)]
+    assert main([*args, "--out", str(ev2)]) == 0
+    off2 = json.loads((ev2 / "evaluation.json").read_text())["boundary_offset"]
+    assert off2["applied_mm"] == 0.3
+    assert off2["median_mm"] == pytest.approx(off["median_mm"] - 0.3, abs=0.03)  # what remains
+    stale = _rig(tmp_path / "stale.json", **{OFFSET_KEY: 0.3, MODEL_KEY: SHA})
+    out = tmp_path / "r.json"
+    frames = [str(EXAMPLE / "p00.0kpa.jpg"), str(EXAMPLE / "p10.0kpa.jpg")]
+    assert main(["measure", "--rig", str(stale), "--out", str(out), *frames]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "stale.json" in err[0] and not out.exists()
