@@ -100,6 +100,9 @@ def main(argv: Sequence[str] | None = None) -> int:
     except (ValueError, OSError) as exc:
         print(f"contactcal: error: {exc}", file=sys.stderr)
         return 2
+    except KeyboardInterrupt:  # the outputs' staging was discarded on the way out
+        print("contactcal: interrupted; no output of this run was written", file=sys.stderr)
+        return 130
 
 
 if __name__ == "__main__":

@@ -210,8 +210,11 @@ def test_bad_inputs_exit_2(
     (tmp_path / "nocol.csv").write_text("\n".join(["time_s,kpa", *lines[1:]]) + "\n")
     (tmp_path / "unsorted.csv").write_text("\n".join([*lines[:3], lines[2], *lines[3:]]) + "\n")
     make_log(tmp_path / "long.csv", [*kpas, 5], rng)  # a step after the video's end
+    ramp = [f"{t:.1f},{t:.1f},{t:.1f}" for t in range(6)]  # 1 Hz, never steady
+    (tmp_path / "sparse.csv").write_text("\n".join([lines[0], *ramp]) + "\n")
     out = tmp_path / "out"
     cases = {
+        ("v.avi", "sparse.csv"): "6 samples, 1.00 s apart (median)",
         ("bad.avi", "log.csv"): "bad.avi: cannot be read as a video",
         ("missing.avi", "log.csv"): "missing.avi: video not found",
         ("v.avi", "nocol.csv"): "lacks column(s) ['pressure_kpa']",

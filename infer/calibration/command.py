@@ -8,6 +8,7 @@ from pathlib import Path
 
 from contactcal.infer.pipeline.args import (
     check_change_gate,
+    check_out_folder,
     method_args,
     overlay_runs,
     resolve_boundary,
@@ -51,6 +52,7 @@ def _cmd_calibrate(args: argparse.Namespace) -> int:
 
     check_device_id(args.device_id)
     check_change_gate(args)
+    check_out_folder(args.out, "calibrate")
     if is_video_run(args):  # --video / --camera: contactcal.infer.video.command
         return calibrate_video(args, resolve_scale(args), resolve_boundary(args))
     rig = args.manifest.parent / "rig.json"

@@ -110,6 +110,7 @@ def _phase(ph: PhaseFit) -> dict[str, Any]:
         "model": ph.selection["model"],
         "selection": ph.selection,
         "onset_kpa": c.onset_kpa,
+        "resolution": ph.resolution(),
         "calibrated_range": {
             "pressure_kpa": [float(c.pressures_kpa[0]), float(c.pressures_kpa[-1])],
             "area": area_range,

@@ -27,6 +27,29 @@ class PhaseFit:
     curve: Curve
     selection: dict[str, Any]  # select.choose_model's record
 
+    def resolution(self) -> dict[str, Any] | None:
+        """Whether the curve can tell pressures apart: its rise from the first to the last step
+        in contact above its onset against its own cross-validated error (None without
+        contact).
+
+        Returns:
+            ``rise`` (curve unit), ``cv_rmse`` (the chosen model's, curve unit; None when not
+            measured) and ``resolves``: the rise exceeds the error (False for a single contact
+            step). A curve that fails this (e.g. the classical routine reporting the membrane's
+            glow as a constant "contact" from 0 kPa) has an inverse that cannot tell pressures
+            apart, whatever its band says.
+        """
+        c = self.curve
+        if not c.has_contact:
+            return None
+        onset = c.onset_kpa if c.onset_kpa is not None else -np.inf
+        touched = [s.pressure_kpa for s in self.steps if s.contact and s.pressure_kpa > onset]
+        if not touched:
+            return {"rise": 0.0, "cv_rmse": None, "resolves": False}
+        rise = float(c.area_at(max(touched)) - c.area_at(min(touched)))
+        cv = self.selection["cv_rmse"].get(self.selection["model"])
+        return {"rise": rise, "cv_rmse": cv, "resolves": bool(rise > (cv or 0.0))}
+
 
 @dataclass(frozen=True, eq=False)
 class SessionFit:

@@ -8,6 +8,8 @@ from pathlib import Path
 from contactcal.infer.methods.registry import METHODS
 from contactcal.infer.pipeline.args import (
     change_gate_arg,
+    check_change_gate,
+    check_out_folder,
     resolve_boundary,
     resolve_scale,
     scale_args,
@@ -38,6 +40,8 @@ def add_parsers(sub: argparse._SubParsersAction) -> None:
 def _cmd_evaluate(args: argparse.Namespace) -> int:
     from contactcal.infer.evaluate.run import evaluate_session
 
+    check_change_gate(args)
+    check_out_folder(args.out, "evaluate")
     rig = args.manifest.parent / "rig.json"
     rep = evaluate_session(
         args.manifest,

@@ -130,6 +130,11 @@ def evaluate_session(
     if method not in METHOD_CHOICES:
         raise ValueError(f"unknown method {method!r}; expected one of {', '.join(METHOD_CHOICES)}")
     manifest, labels, out = Path(manifest), Path(labels), Path(out_dir)
+    if labels.is_dir() and out.resolve().is_relative_to(labels.resolve()):
+        raise LabelError(
+            f"{out}: is inside the labels folder {labels}, whose PNGs are all read as labels "
+            "(the next evaluate would take the report's PNG for one); give another --out folder"
+        )
     names = list(METHODS) if method == "both" else [method]
     frames = read_manifest(manifest)
     labelled, labs = _labelled(frames, read_labels(labels, frames, manifest), labels)

@@ -142,10 +142,21 @@ class OutputSet:
             raise OutputError(f"{path}: written twice by one run; give each output its own name")
         stage = self._stages.get(final.parent)
         if stage is None:
+            if final.parent.is_symlink():
+                raise OutputError(
+                    f"{final.parent}: is a symbolic link to a folder; outputs never write "
+                    f"through a link into its target (give the folder itself: "
+                    f"{final.parent.resolve()})"
+                )
             self._make_folder(final.parent)
             remove_stale_temporaries(final.parent)
             name = f".{final.name}.{os.getpid()}."
-            stage = Path(tempfile.mkdtemp(prefix=name, suffix=".tmp", dir=final.parent))
+            try:
+                stage = Path(tempfile.mkdtemp(prefix=name, suffix=".tmp", dir=final.parent))
+            except OSError as exc:
+                raise OSError(
+                    f"{final}: cannot write into its folder {final.parent} ({exc.strerror})"
+                ) from exc
             self._stages[final.parent] = stage
         self._staged[final] = stage / final.name
         return self._staged[final]

@@ -61,6 +61,8 @@ def read_file_bytes(path: str | os.PathLike[str]) -> bytes:
         ImageError: missing, not a file, unreadable, empty, unsupported suffix, or truncated.
     """
     p = Path(path)
+    if p.is_dir():
+        raise ImageError(f"{p}: is a folder, not an image file; give the frames' file names")
     if p.suffix.lower() not in SUPPORTED_SUFFIXES:
         raise ImageError(
             f"{p}: unsupported image type {p.suffix!r}; expected one of "

@@ -67,7 +67,8 @@ def change_gate_arg(p: argparse.ArgumentParser) -> None:
     p.add_argument(
         "--no-change-gate",
         action="store_true",
-        help="--method unet: call a region contact even when it has not changed since the "
+        help="the U-Net (--method unet, or both): call a region contact even when it has not "
+        "changed since the "
         "reference frame (the model's min_change gate is off; recorded). For a rig whose "
         "contacts look almost like its 0 kPa frame, i.e. whose frames' notes say 'unchanged "
         "from the reference frame' without it",
@@ -80,7 +81,8 @@ def check_change_gate(args: argparse.Namespace) -> None:
     Raises:
         ValueError: ``--no-change-gate`` with ``--method classical`` and no ``--overlay``.
     """
-    if args.no_change_gate and args.method != "unet" and getattr(args, "overlay", None) is None:
+    runs_unet = args.method in ("unet", "both") or getattr(args, "overlay", None) is not None
+    if args.no_change_gate and not runs_unet:
         raise ValueError(
             f"--no-change-gate applies to the U-Net only, and --method {args.method} runs none; "
             "drop it, or use --method unet"
@@ -98,6 +100,19 @@ def resolve_scale(args: argparse.Namespace, default_rig: Path | None = None) -> 
     if default_rig is not None and default_rig.is_file():
         return load_rig_config(default_rig)
     return None
+
+
+def check_out_folder(out: Path, command: str) -> None:
+    """Refuse ``--out -`` for a command whose outputs are a folder of files.
+
+    Raises:
+        ValueError: ``out`` is ``-`` (standard output: ``measure``'s JSON only).
+    """
+    if str(out) == "-":
+        raise ValueError(
+            f"--out -: {command} writes a folder of files, not one stream; give a folder "
+            "(standard output is for `contactcal measure --out -` only)"
+        )
 
 
 def resolve_boundary(

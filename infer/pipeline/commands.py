@@ -8,6 +8,7 @@ from pathlib import Path
 
 from contactcal.infer.pipeline.args import (
     check_change_gate,
+    check_out_folder,
     method_args,
     overlay_runs,
     resolve_boundary,
@@ -89,5 +90,6 @@ def _cmd_measure(args: argparse.Namespace) -> int:
 def _cmd_demo(args: argparse.Namespace) -> int:
     from contactcal.infer.pipeline.demo import run_demo
 
+    check_out_folder(args.out, "demo")
     print(run_demo(args.out, args.manifest))
     return 0

@@ -277,7 +277,10 @@ def _check_files(where: str, frames: list[Frame], base: Path) -> None:
     """Reject missing image files and one image on two rows."""
     missing = [f for f in sorted(frames, key=lambda f: f.row) if not f.file.is_file()]
     if missing:
-        listed = "; ".join(f"row {f.row}: {f.file}" for f in missing[:_MAX_LISTED])
+        listed = "; ".join(
+            f"row {f.row}: {f.file}{' (a folder)' if f.file.is_dir() else ''}"
+            for f in missing[:_MAX_LISTED]
+        )
         more = f"; and {len(missing) - _MAX_LISTED} more" if len(missing) > _MAX_LISTED else ""
         raise ManifestError(
             f"{where}: {len(missing)} image file(s) not found: {listed}{more}; relative paths "

@@ -166,9 +166,18 @@ def check_coverage(extractor: Extractor, video: Path | None) -> None:
     log = extractor.log
     where = "the log" if log is None else str(log.path)
     if not extractor.steps:
+        density = ""
+        if log is not None and len(log.times_s) > 1:
+            dt = float(np.median(np.diff(log.times_s)))
+            density = (
+                f"; it has {len(log.times_s)} samples, {dt:.2f} s apart (median): a step needs "
+                f"samples within the tolerance over more than the settle time "
+                f"({extractor.cfg.settle_s:g} s), so log the pressure several times a second"
+            )
         raise ValueError(
             f"{where}: no steady pressure step found (each step must hold within the "
-            "tolerance for longer than the settle time); check the log or --tolerance-kpa"
+            f"tolerance for longer than the settle time){density}; check the log, "
+            "--tolerance-kpa or --settle-s"
         )
     source = "the capture" if video is None else f"the video {video}"
     if log is not None and extractor.last_time_s > float(log.times_s[-1]) + 1.0:

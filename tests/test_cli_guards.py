@@ -1,0 +1,106 @@
+"""Guards of the command line a newcomer hits: ``--out -`` where a folder is written, the change
+gate flag where no U-Net runs, a report into the labels folder, an interrupted run, an output
+folder that is a link, a folder given as a frame, and a curve that cannot tell pressures apart."""
+
+from __future__ import annotations
+
+import json
+import os
+from pathlib import Path
+
+import pytest
+
+from contactcal.infer.cli import main
+
+EXAMPLE = Path(__file__).resolve().parents[1] / "examples" / "session"
+MANIFEST = str(EXAMPLE / "manifest.csv")
+
+
+def _one_error(capsys: pytest.CaptureFixture[str]) -> str:
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1, err
+    return err[0]
+
+
+@pytest.mark.parametrize(
+    "argv",
+    [
+        ["calibrate", MANIFEST, "--method", "classical"],
+        ["evaluate", MANIFEST, "--labels", str(EXAMPLE / "masks"), "--method", "classical"],
+        ["demo"],
+    ],
+)
+def test_out_dash_is_refused_where_a_folder_is_written(
+    argv: list[str], tmp_path: Path, capsys: pytest.CaptureFixture[str], monkeypatch
+) -> None:
+    monkeypatch.chdir(tmp_path)
+    assert main([*argv, "--out", "-"]) == 2
+    assert "--out -:" in _one_error(capsys) and not (tmp_path / "-").exists()
+
+
+def test_evaluate_gate_flag_and_labels_folder(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    masks = tmp_path / "masks"
+    masks.mkdir()
+    for f in (EXAMPLE / "masks").iterdir():
+        (masks / f.name).write_bytes(f.read_bytes())
+    base = ["evaluate", MANIFEST, "--labels", str(masks)]
+    out = tmp_path / "ev"
+    assert main([*base, "--method", "classical", "--no-change-gate", "--out", str(out)]) == 2
+    assert "--no-change-gate applies to the U-Net only" in _one_error(capsys)
+    assert main([*base, "--method", "classical", "--out", str(masks)]) == 2
+    assert "inside the labels folder" in _one_error(capsys)
+    assert sorted(p.name for p in masks.iterdir()) == sorted(
+        p.name for p in (EXAMPLE / "masks").iterdir()
+    )
+    assert not out.exists()
+
+
+def test_interrupt_is_one_line_and_leaves_nothing(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str], monkeypatch
+) -> None:
+    from contactcal.infer.pipeline import measure
+
+    def stop(*args: object, **kwargs: object) -> None:
+        raise KeyboardInterrupt
+
+    monkeypatch.setattr(measure, "load_image", stop)
+    out = tmp_path / "cal"
+    assert main(["calibrate", MANIFEST, "--method", "classical", "--out", str(out)]) == 130
+    assert "interrupted" in _one_error(capsys)
+    assert not out.exists() or not any(out.iterdir())
+
+
+def test_output_folder_link_and_unwritable_folder(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    real = tmp_path / "real"
+    real.mkdir()
+    (real / "calibration.json").write_text("{}")
+    os.symlink(real, tmp_path / "link")
+    argv = ["calibrate", MANIFEST, "--method", "classical", "--out", str(tmp_path / "link")]
+    assert main(argv) == 2
+    assert "symbolic link to a folder" in _one_error(capsys)
+    assert (real / "calibration.json").read_text() == "{}"
+    frame = str(EXAMPLE / "p10.0kpa.jpg")
+    assert main(["measure", "--out", "/proc/x.json", frame]) == 2
+    msg = _one_error(capsys)
+    assert "/proc/x.json: cannot write into its folder /proc" in msg and ".tmp" not in msg
+
+
+def test_a_folder_given_as_a_frame(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    (tmp_path / "frames").mkdir()
+    assert main(["measure", "--out", str(tmp_path / "r.json"), str(tmp_path / "frames")]) == 2
+    assert "frames: is a folder, not an image file" in _one_error(capsys)
+
+
+def test_a_curve_that_cannot_tell_pressures_apart_is_said(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    for method, resolves in (("classical", False), ("unet", True)):
+        out = tmp_path / method
+        assert main(["calibrate", MANIFEST, "--method", method, "--out", str(out)]) == 0
+        said = "its inverse cannot tell pressures apart" in capsys.readouterr().out
+        res = json.loads((out / "calibration.json").read_text())["phases"]["loading"]
+        assert res["resolution"]["resolves"] is resolves and said is not resolves
