@@ -9,8 +9,9 @@ scale); per frame in contact the offset that would give the true area is
 contact are drawn (seeded) from the ``--fit`` datasets, their median offset is applied
 (:func:`~contactcal.infer.pipeline.boundary.apply_offset`) to every frame of each ``--apply``
 dataset, and its median |area error| at ≥ 5 kPa is taken. Printed per apply dataset: without
-offset, and with it (median and 5-95 % over the draws), plus the pooled-offset row (all fit
-frames). The fit and apply datasets must not share sessions.
+offset, with the pooled offset (all fit frames), and with the drawn ones (median and 5-95 % over
+the draws); and the share of its frames in contact whose stated 90 % interval holds the true
+area, without and with the pooled offset. The fit and apply datasets must not share sessions.
 
     .venv/bin/python docs/scripts/offset_transfer.py --fit data/cc7800_hr data/cc7900_hr \\
         --apply data/cc8000_hr data/cc8100_hr --labelled 10 --draws 200
@@ -24,17 +25,19 @@ from pathlib import Path
 import numpy as np
 
 from contactcal.infer.bench.dataset import read_index, sessions_of
+from contactcal.infer.methods.base import AreaResult
 from contactcal.infer.methods.registry import make_method
 from contactcal.infer.pipeline.boundary import apply_offset, fit_offset
 from contactcal.infer.pipeline.measure import measure_files
 from contactcal.infer.pipeline.scale import PixelScale
 
-#: Columns of a measured frame: pressure kPa, true area px, area px, perimeter px, mm/px.
-P, TRUE, AREA, PERIM, MMPX = range(5)
+#: Columns of a measured frame: pressure kPa, true area px, area px, perimeter px, mm/px, and
+#: the stated interval's ends px.
+P, TRUE, AREA, PERIM, MMPX, LO, HI = range(7)
 
 
 def measure_dataset(folder: Path, model: Path | None) -> np.ndarray:
-    """``(F, 5)`` per frame of ``folder`` (see the column constants); no contact: area 0."""
+    """``(F, 7)`` per frame of ``folder`` (see the column constants); no contact: area 0."""
     method = make_method("unet", model)
     out = []
     for rows in sessions_of(read_index(folder)).values():
@@ -46,7 +49,8 @@ def measure_dataset(folder: Path, model: Path | None) -> np.ndarray:
         ):
             r = m.result
             perim = r.perimeter_px if r.contact and r.perimeter_px else 0.0
-            out.append((row.pressure_kpa, row.area_px, r.area_px, perim, row.mm_per_px))
+            lo, hi = r.area_interval_px or (np.nan, np.nan)
+            out.append((row.pressure_kpa, row.area_px, r.area_px, perim, row.mm_per_px, lo, hi))
     return np.array(out, dtype=float)
 
 
@@ -57,17 +61,28 @@ def offsets_mm(f: np.ndarray) -> np.ndarray:
     return np.asarray(d) * f[ok][:, MMPX]
 
 
+def _moved(row: np.ndarray, d_mm: float) -> AreaResult:
+    """One measured frame as a result, its boundary moved ``d_mm`` (0: as measured)."""
+    res = AreaResult(
+        row[AREA] > 0, row[AREA], "", None, None, (row[LO], row[HI]), row[PERIM] or None
+    )
+    return apply_offset(res, d_mm / row[MMPX], d_mm) if d_mm else res
+
+
 def error_at(f: np.ndarray, d_mm: float) -> float:
     """Median |relative area error| (%) at ≥ 5 kPa with the boundary moved ``d_mm``."""
-    from contactcal.infer.methods.base import AreaResult
-
     sel = f[(f[:, P] >= 5) & (f[:, TRUE] > 0)]
-    errs = []
-    for row in sel:
-        res = AreaResult(row[AREA] > 0, row[AREA], "", None, perimeter_px=row[PERIM] or None)
-        area = apply_offset(res, d_mm / row[MMPX], d_mm).area_px if d_mm else row[AREA]
-        errs.append(abs(area - row[TRUE]) / row[TRUE])
+    errs = [abs(_moved(row, d_mm).area_px - row[TRUE]) / row[TRUE] for row in sel]
     return 100 * float(np.median(errs))
+
+
+def coverage_at(f: np.ndarray, d_mm: float) -> float:
+    """Share (%) of the frames in contact whose stated interval holds the true area."""
+    sel = f[f[:, TRUE] > 0]
+    ivs = [_moved(row, d_mm).area_interval_px for row in sel]
+    return 100 * float(
+        np.mean([lo <= t <= hi for (lo, hi), t in zip(ivs, sel[:, TRUE], strict=True)])
+    )
 
 
 def main() -> None:
@@ -93,16 +108,18 @@ def main() -> None:
     )
     print(
         "| dataset | ≥ 5 kPa without | with the pooled offset "
-        "| with N labelled frames: median (5-95 %) |"
+        "| with N labelled frames: median (5-95 %) | interval coverage without / with |"
     )
-    print("|---|---|---|---|")
+    print("|---|---|---|---|---|")
     for d in args.apply:
         f = measure_dataset(d, args.model)
         errs = [error_at(f, x) for x in picks]
         q = np.percentile(errs, (5, 50, 95))
+        pooled = float(np.median(pool))
+        cov = f"{coverage_at(f, 0.0):.1f} / {coverage_at(f, pooled):.1f} %"
         print(
-            f"| {d.name} | {error_at(f, 0.0):.2f} % | {error_at(f, float(np.median(pool))):.2f} % "
-            f"| {q[1]:.2f} % ({q[0]:.2f}-{q[2]:.2f}) |"
+            f"| {d.name} | {error_at(f, 0.0):.2f} % | {error_at(f, pooled):.2f} % "
+            f"| {q[1]:.2f} % ({q[0]:.2f}-{q[2]:.2f}) | {cov} |"
         )
 
 
