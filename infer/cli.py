@@ -70,6 +70,13 @@ def build_parser(command: str | None = None) -> argparse.ArgumentParser:
     return parser
 
 
+#: What an interrupted command leaves, where it is not "nothing" (commands that write as they go).
+INTERRUPTED = {
+    "synth": "the frames written so far stay; run it again with the same arguments to resume",
+    "train": "the last epoch's checkpoint stays; continue with --resume",
+}
+
+
 def add_plugin_commands(sub: argparse._SubParsersAction) -> None:
     """Subcommands registered by other roles (``synth``, ``train``) as entry points.
 
@@ -100,8 +107,9 @@ def main(argv: Sequence[str] | None = None) -> int:
     except (ValueError, OSError) as exc:
         print(f"contactcal: error: {exc}", file=sys.stderr)
         return 2
-    except KeyboardInterrupt:  # the outputs' staging was discarded on the way out
-        print("contactcal: interrupted; no output of this run was written", file=sys.stderr)
+    except KeyboardInterrupt:  # staged outputs were discarded on the way out
+        said = INTERRUPTED.get(args.command, "its outputs are all or nothing: none was written")
+        print(f"contactcal {args.command}: interrupted; {said}", file=sys.stderr)
         return 130
 
 

@@ -9,6 +9,7 @@ import pytest
 
 from contactcal.infer.bench.plots import (
     LINE_STYLES,
+    legend_label,
     line_style,
     plot_error_vs_pressure,
     same_as,
@@ -54,10 +55,34 @@ def test_same_as_finds_only_an_exact_twin() -> None:
     assert same_as(a, {}) is None
 
 
-def test_error_vs_pressure_with_identical_methods(tmp_path: Path) -> None:
+def test_legend_names_a_hidden_twin() -> None:
+    a = np.array([[5.0, 1.0], [6.0, 2.0]])
+    drawn = {"classical": a + 1.0, "unet": a.copy()}
+    assert legend_label("unet[v23]", a, drawn) == "unet[v23] (same as unet)"
+    assert legend_label("unet[int8]", a * 1.01, drawn) == "unet[int8]"
+
+
+def test_error_vs_pressure_with_identical_methods(tmp_path: Path, monkeypatch) -> None:
+    from contactcal.infer.bench import plots
+
+    labels: list[str] = []
+    styles: list[int] = []
+
+    def spy_label(method: str, curve: np.ndarray, drawn: dict) -> str:
+        labels.append(legend_label(method, curve, drawn))
+        return labels[-1]
+
+    def spy_style(i: int) -> dict:
+        styles.append(i)
+        return line_style(i)
+
+    monkeypatch.setattr(plots, "legend_label", spy_label)
+    monkeypatch.setattr(plots, "line_style", spy_style)
     errs = [0.01, -0.02, 0.03]
     frames = _frames("unet", errs) + _frames("unet[v23]", errs) + _frames("classical", [0.4] * 3)
     out = tmp_path / "evp.png"
     plot_error_vs_pressure(out, frames)
+    assert labels.count("unet[v23] (same as unet)") == 2  # both panels
+    assert sorted(set(styles)) == [0, 1, 2]
     assert out.read_bytes().startswith(b"\x89PNG")
     assert [p.name for p in tmp_path.iterdir()] == ["evp.png"]  # no temporary left

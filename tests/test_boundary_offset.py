@@ -12,6 +12,7 @@ import pytest
 
 from contactcal.infer.methods.base import AreaResult
 from contactcal.infer.pipeline.boundary import (
+    GONE_NOTE,
     MODEL_KEY,
     OFFSET_KEY,
     BoundaryOffset,
@@ -72,8 +73,12 @@ def test_apply_offset_moves_area_soft_area_and_interval_and_says_so() -> None:
     assert apply_offset(none, 2.0, 0.15) is none
     no_perimeter = AreaResult(True, 500.0, "", None)  # the classical routine: none measured
     assert apply_offset(no_perimeter, 2.0, 0.15) is no_perimeter
-    gone = apply_offset(AreaResult(True, 10.0, "", None, perimeter_px=12.0), -5.0, -0.4)
-    assert not gone.contact and gone.area_px == 0.0 and "boundary moved -0.400 mm" in gone.note
+    contour = np.zeros((4, 1, 2), np.int32)
+    small = AreaResult(True, 10.0, "", contour, 11.0, (5.0, 30.0), 12.0)
+    gone = apply_offset(small, -5.0, -0.4)
+    assert not gone.contact and gone.area_px == 0.0 and gone.soft_area_px == 0.0
+    assert gone.note.startswith(GONE_NOTE) and "-0.400 mm" in gone.note
+    assert gone.contour is None and gone.area_interval_px[0] == 0.0
 
 
 def _rig(path: Path, **keys: object) -> Path:
@@ -119,7 +124,8 @@ def test_measure_files_applies_it_to_its_model_only(tmp_path: Path) -> None:
     assert moved[1].boundary_offset_mm == 0.25 and plain[1].boundary_offset_mm is None
     assert moved[1].to_json("unet")["boundary_offset_mm"] == 0.25
     assert moved[1].area_mm2 == pytest.approx(b.area_px * 0.126454185**2)
-    assert not moved[0].result.contact and moved[0].result.area_px == 0.0
+    (lo, hi), (lo2, hi2) = a.area_interval_px, b.area_interval_px
+    assert lo < lo2 and hi < hi2 and lo2 <= b.area_px <= hi2
     with pytest.raises(BoundaryOffsetError, match=r"rig\.json: .*measured for the model"):
         measure_files(files, unet, files[0], scale, boundary=BoundaryOffset(0.25, SHA, "rig.json"))
     with pytest.raises(BoundaryOffsetError, match="pixel scale"):
@@ -155,8 +161,62 @@ def test_cli_evaluate_measures_it_and_calibrate_applies_it(
     assert off2["applied_mm"] == 0.3
     assert off2["median_mm"] == pytest.approx(off["median_mm"] - 0.3, abs=0.03)  # what remains
     stale = _rig(tmp_path / "stale.json", **{OFFSET_KEY: 0.3, MODEL_KEY: SHA})
+    ev3 = tmp_path / "ev3"
+    args = ["evaluate", manifest, "--labels", str(EXAMPLE / "masks"), "--rig", str(stale)]
+    assert main([*args, "--out", str(ev3)]) == 0  # evaluate is how to measure it again
+    assert "stale.json: its boundary offset (+0.300 mm)" in capsys.readouterr().out
+    off3 = json.loads((ev3 / "evaluation.json").read_text())["boundary_offset"]
+    assert off3["applied_mm"] is None and off3["rig_config"] == off["rig_config"]
     out = tmp_path / "r.json"
     frames = [str(EXAMPLE / "p00.0kpa.jpg"), str(EXAMPLE / "p10.0kpa.jpg")]
     assert main(["measure", "--rig", str(stale), "--out", str(out), *frames]) == 2
     err = capsys.readouterr().err.strip().splitlines()
     assert len(err) == 1 and "stale.json" in err[0] and not out.exists()
+
+
+def _measured(area: float, perimeter: float, width: int = 400) -> object:
+    from contactcal.infer.pipeline.measure import Measured
+
+    res = AreaResult(True, area, "", None, perimeter_px=perimeter)
+    return Measured(Path("f.png"), width, 300, res, None)
+
+
+def test_evaluate_offset_branches() -> None:
+    from contactcal.infer.evaluate.offset import boundary_offset, current_offset, offset_line
+    from contactcal.infer.pipeline.scale import PixelScale
+
+    disc = [_measured(math.pi * r * r, 2 * math.pi * r) for r in (20.0, 25.0, 30.0, 35.0, 40.0)]
+    grown = [math.pi * (r + 2.0) ** 2 for r in (20.0, 25.0, 30.0, 35.0, 40.0)]  # 2 px outward
+    px = boundary_offset(disc, grown, None, SHA)
+    assert px["median_px"] == pytest.approx(2.0) and px["median_mm"] is None
+    assert px["rig_config"] is None and "in pixels only" in offset_line(px)
+    mm = boundary_offset(disc, grown, PixelScale(0.1, 400), SHA)
+    assert mm["median_mm"] == pytest.approx(0.2) and mm["rig_config"][OFFSET_KEY] == 0.2
+    few = boundary_offset(disc[:4], grown[:4], PixelScale(0.1, 400), SHA)
+    assert few["median_px"] is None and "label at least 5" in few["note"]
+    far = boundary_offset(disc, grown, PixelScale(1.5, 400), SHA)  # 3 mm: no keys
+    assert far["rig_config"] is None and "beyond" in offset_line(far)
+    mine = BoundaryOffset(0.1, SHA, "rig.json")
+    assert current_offset(mine, SHA) == (mine, "")
+    kept, note = current_offset(mine, "cd" * 32)
+    assert kept is None and "rig.json" in note and "not applied" in note
+
+
+def test_calibrate_moves_the_areas_and_mm_per_px_keeps_the_offset(tmp_path: Path) -> None:
+    pytest.importorskip("onnxruntime")
+    from contactcal.infer.cli import main
+
+    session = tmp_path / "session"
+    session.mkdir()
+    for f in EXAMPLE.glob("p*.jpg"):
+        (session / f.name).write_bytes(f.read_bytes())
+    (session / "manifest.csv").write_text((EXAMPLE / "manifest.csv").read_text())
+    manifest = str(session / "manifest.csv")
+    argv = ["calibrate", manifest, "--mm-per-px", "0.126454185", "--out"]
+    assert main([*argv, str(tmp_path / "a")]) == 0
+    _rig(session / "rig.json", **{OFFSET_KEY: 0.2, MODEL_KEY: _shipped_sha()})
+    assert main([*argv, str(tmp_path / "b")]) == 0
+    a, b = (json.loads((tmp_path / x / "calibration.json").read_text()) for x in "ab")
+    assert a["extra"]["boundary_offset_mm"] is None and b["extra"]["boundary_offset_mm"] == 0.2
+    moved = [(p, q) for p, q in zip(a["points"], b["points"], strict=True) if p["area_px"] > 0]
+    assert moved and all(q["area_px"] > p["area_px"] for p, q in moved)

@@ -104,3 +104,41 @@ def test_a_curve_that_cannot_tell_pressures_apart_is_said(
         said = "its inverse cannot tell pressures apart" in capsys.readouterr().out
         res = json.loads((out / "calibration.json").read_text())["phases"]["loading"]
         assert res["resolution"]["resolves"] is resolves and said is not resolves
+
+
+@pytest.mark.parametrize(
+    ("pressures", "areas", "contacts", "resolves"),
+    [
+        ([0, 2, 4, 6, 8, 10], [0, 0, 50, 90, 120, 140], [0, 0, 1, 1, 1, 1], True),
+        ([0, 2, 4, 6, 8, 10], [100, 101, 99, 100, 101, 100], [1, 1, 1, 1, 1, 1], False),
+        ([0, 5], [100, 200], [1, 1], None),  # one step above the onset: not measured
+    ],
+)
+def test_curve_resolution(
+    pressures: list[float], areas: list[float], contacts: list[int], resolves: bool | None
+) -> None:
+    import numpy as np
+
+    from contactcal.infer.calibration.fit import CurveConfig
+    from contactcal.infer.calibration.session import fit_phase
+    from contactcal.infer.calibration.steps import Step
+
+    steps = [
+        Step("loading", i, float(p), np.array([float(a)]), np.array([bool(c)]), (None,))
+        for i, (p, a, c) in enumerate(zip(pressures, areas, contacts, strict=True))
+    ]
+    res = fit_phase(steps, CurveConfig(), "px").resolution()
+    assert res is not None and res["resolves"] is resolves
+
+
+def test_ctrl_c_waits_for_the_block_to_finish() -> None:
+    import signal
+
+    from contactcal.infer.files.interrupt import deferred_interrupt
+
+    done = []
+    with pytest.raises(KeyboardInterrupt):
+        with deferred_interrupt():
+            signal.raise_signal(signal.SIGINT)
+            done.append("renamed")  # still runs: the interrupt waits for the block
+    assert done == ["renamed"]

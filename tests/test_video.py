@@ -254,7 +254,13 @@ def test_video_areas_equal_stills(
     stills.write_text(
         "file,pressure_kpa\n" + "".join(f"{EXAMPLE}/p{p:04.1f}kpa.jpg,{p}\n" for p in kpas)
     )
-    rig = ["--rig", str(EXAMPLE / "rig.json")]
+    from contactcal.infer.files.digest import sha256_file
+    from contactcal.infer.methods.unet.runner import DEFAULT_MODEL
+
+    scale = json.loads((EXAMPLE / "rig.json").read_text())
+    offset = {"boundary_offset_mm": 0.1, "boundary_offset_model_sha256": sha256_file(DEFAULT_MODEL)}
+    (tmp_path / "rig.json").write_text(json.dumps({**scale, **offset}))  # the offset applies too
+    rig = ["--rig", str(tmp_path / "rig.json")]
     assert main(["calibrate", str(stills), "--out", str(tmp_path / "st"), *rig]) == 0
     argv = ["--video", str(tmp_path / "v.avi"), "--pressure-log", str(tmp_path / "log.csv")]
     out = tmp_path / "vid"
@@ -267,6 +273,7 @@ def test_video_areas_equal_stills(
         for p in json.loads((tmp_path / "st" / "calibration.json").read_text())["points"]
     }
     record = json.loads((out / "calibration.json").read_text())
+    assert record["extra"]["boundary_offset_mm"] == 0.1
     points = record["points"]
     final = (out / "frames" / "manifest.csv").resolve()  # recorded where it stays, not staged
     assert record["extra"]["manifest"] == str(final) == record["inputs"]["manifest"]["file"]

@@ -32,6 +32,13 @@ def line_style(i: int) -> dict[str, Any]:
     return dict(LINE_STYLES[i % len(LINE_STYLES)])
 
 
+def legend_label(method: str, curve: np.ndarray, drawn: Mapping[str, np.ndarray]) -> str:
+    """``method``, or ``"method (same as other)"`` when its curve equals an already drawn one's
+    (:func:`same_as`): a line hidden under another is named in the legend."""
+    twin = same_as(curve, drawn)
+    return method if twin is None else f"{method} (same as {twin})"
+
+
 def same_as(curve: np.ndarray, drawn: Mapping[str, np.ndarray]) -> str | None:
     """The first already drawn method whose curve equals ``curve`` exactly, or None.
 
@@ -114,9 +121,8 @@ def plot_error_vs_pressure(path: str | os.PathLike[str], frames: Sequence[Scored
                 continue
             q = np.maximum(q, floor)
             curve = np.column_stack([ps, q])
-            twin = same_as(curve, seen)
+            label = legend_label(method, curve, seen)
             seen[method] = curve
-            label = method if twin is None else f"{method} (same as {twin})"
             ax.fill_between(ps, q[:, 0], q[:, 2], color=colour, alpha=0.2, lw=0)
             ax.plot(ps, q[:, 1], color=colour, marker="o", ms=3, label=label, **line_style(i))
     for ax, (_, _, label) in zip(axes, panels, strict=True):

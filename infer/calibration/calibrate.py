@@ -21,7 +21,7 @@ from contactcal.infer.errors import RunError
 from contactcal.infer.files.atomic import OutputSet, run_outputs
 from contactcal.infer.methods.base import UNCHANGED_NOTE
 from contactcal.infer.methods.registry import make_method
-from contactcal.infer.pipeline.boundary import BoundaryOffset
+from contactcal.infer.pipeline.boundary import GONE_NOTE, BoundaryOffset
 from contactcal.infer.pipeline.manifest import Frame, read_session
 from contactcal.infer.pipeline.measure import Measured, measure_files
 from contactcal.infer.pipeline.scale import PixelScale
@@ -149,12 +149,18 @@ def _check_contact(
             "range, or keep the frames' own flags with --per-frame-contact"
         )
     gated = sum(r.note.startswith(UNCHANGED_NOTE) for r in measured)
+    gone = sum(r.note.startswith(GONE_NOTE) for r in measured)
     hint = (
         f"; the change gate called {gated} of them unchanged from the reference frame (their "
         "notes): if the contacts on this rig change the image that little, use --no-change-gate"
         if gated
         else ""
     )
+    if gone:
+        hint += (
+            f"; the rig config's boundary offset removed the region of {gone} of them: check "
+            "its boundary_offset_mm (measured with `contactcal evaluate`)"
+        )
     raise RunError(
         f"{manifest}: no contact detected in any of its {len(results)} frames "
         f"(method {name}); check the frames, the pressure range or the method{hint}"

@@ -28,27 +28,27 @@ class PhaseFit:
     selection: dict[str, Any]  # select.choose_model's record
 
     def resolution(self) -> dict[str, Any] | None:
-        """Whether the curve can tell pressures apart: its rise from the first to the last step
-        in contact above its onset against its own cross-validated error (None without
-        contact).
+        """Whether the curve can tell pressures apart: its rise over the steps in contact above
+        its onset against its own cross-validated error (None without contact).
+
+        The step at the onset is left out (the fit is 0 there by construction, so a constant
+        "contact" from the lowest step would seem to rise). A curve that fails (e.g. the
+        classical routine reporting the membrane's glow as a constant "contact" from 0 kPa) has
+        an inverse that cannot tell pressures apart, whatever its band says.
 
         Returns:
-            ``rise`` (curve unit), ``cv_rmse`` (the chosen model's, curve unit; None when not
-            measured) and ``resolves``: the rise exceeds the error (False for a single contact
-            step). A curve that fails this (e.g. the classical routine reporting the membrane's
-            glow as a constant "contact" from 0 kPa) has an inverse that cannot tell pressures
-            apart, whatever its band says.
+            ``rise`` (curve unit, from the first to the last such step), ``cv_rmse`` (the
+            chosen model's, curve unit) and ``resolves``: the rise exceeds the error; None
+            ("not measured") with fewer than two such steps or no cross-validated error.
         """
         c = self.curve
-        if not c.has_contact:
+        if not c.has_contact or c.onset_kpa is None:
             return None
-        onset = c.onset_kpa if c.onset_kpa is not None else -np.inf
-        touched = [s.pressure_kpa for s in self.steps if s.contact and s.pressure_kpa > onset]
-        if not touched:
-            return {"rise": 0.0, "cv_rmse": None, "resolves": False}
-        rise = float(c.area_at(max(touched)) - c.area_at(min(touched)))
+        above = [s.pressure_kpa for s in self.steps if s.contact and s.pressure_kpa > c.onset_kpa]
         cv = self.selection["cv_rmse"].get(self.selection["model"])
-        return {"rise": rise, "cv_rmse": cv, "resolves": bool(rise > (cv or 0.0))}
+        rise = float(c.area_at(max(above)) - c.area_at(min(above))) if above else 0.0
+        resolves = None if len(above) < 2 or cv is None else bool(rise > cv)
+        return {"rise": rise, "cv_rmse": cv, "resolves": resolves}
 
 
 @dataclass(frozen=True, eq=False)

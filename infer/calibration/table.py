@@ -45,8 +45,8 @@ def _summary(fit: SessionFit) -> list[str]:
         at = "no contact" if onset is None else f"onset {onset:.2f} kPa"
         lines.append(f"{name}: {ph.selection['model']} fit ({at}; CV RMSE {unit}: {shown})")
         res = ph.resolution()
-        if res is not None and not res["resolves"]:
-            cv = "–" if res["cv_rmse"] is None else f"{res['cv_rmse']:.1f}"
+        if res is not None and res["resolves"] is False:
+            cv = f"{res['cv_rmse']:.1f}"
             lines.append(
                 f"warning: the {name} curve rises {res['rise']:.1f} {unit} from its first to its "
                 f"last step in contact, no more than its cross-validated error ({cv} {unit}): "

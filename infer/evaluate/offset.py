@@ -15,7 +15,13 @@ from typing import Any
 
 import numpy as np
 
-from contactcal.infer.pipeline.boundary import MODEL_KEY, OFFSET_KEY, fit_offset
+from contactcal.infer.pipeline.boundary import (
+    MAX_OFFSET_MM,
+    MODEL_KEY,
+    OFFSET_KEY,
+    BoundaryOffset,
+    fit_offset,
+)
 from contactcal.infer.pipeline.measure import Measured
 from contactcal.infer.pipeline.scale import PixelScale
 
@@ -24,6 +30,16 @@ from contactcal.infer.pipeline.scale import PixelScale
 MIN_FRAMES = 5
 #: Bootstrap resamples of the median, and the generator's seed (a fixed seed: one answer).
 RESAMPLES, SEED = 2000, 0
+#: The notes of a measured offset: keys given, or too far to be a rig config's.
+APPLY_NOTE = (
+    "positive: the labelled edge lies outside the U-Net's; to apply it, put rig_config's two "
+    "keys in the rig config (rig.json) and check on frames not labelled here"
+)
+TOO_FAR = (
+    "the labels' edge lies {:+.3f} mm from the U-Net's, beyond the ±"
+    f"{MAX_OFFSET_MM:g} mm a rig config accepts: the model does not fit this rig (or the labels "
+    "or the scale are wrong); no keys given"
+)
 
 
 def _interval(values: np.ndarray) -> tuple[float, float]:
@@ -34,11 +50,31 @@ def _interval(values: np.ndarray) -> tuple[float, float]:
     return float(lo), float(hi)
 
 
+def current_offset(
+    boundary: BoundaryOffset | None, model_sha256: str | None
+) -> tuple[BoundaryOffset | None, str]:
+    """What ``evaluate`` applies of the rig config's offset: it unless it was measured for
+    another model (stale), which ``measure`` and ``calibrate`` refuse but ``evaluate`` is the
+    way to measure again: then none, and a note saying so.
+
+    Returns:
+        ``(offset or None, note)``; the note is "" unless the offset was stale.
+    """
+    if boundary is None or model_sha256 is None or boundary.model_sha256 == model_sha256:
+        return boundary, ""
+    return None, (
+        f"{boundary.source}: its boundary offset ({boundary.mm:+.3f} mm) was measured for the "
+        f"model {boundary.model_sha256[:12]}…, not this one ({model_sha256[:12]}…): not applied; "
+        "the keys below replace it"
+    )
+
+
 def boundary_offset(
     measured: Sequence[Measured],
     label_areas: Sequence[float],
     scale: PixelScale | None,
     model_sha256: str,
+    stale: str = "",
 ) -> dict[str, Any]:
     """The U-Net's boundary offset against the labels (the ``boundary_offset`` of
     ``evaluation.json``).
@@ -48,12 +84,14 @@ def boundary_offset(
         label_areas: each frame's label area, input pixels (0: no contact).
         scale: the rig's pixel scale (None: the offset in pixels only).
         model_sha256: the model measured, for the rig config keys.
+        stale: :func:`current_offset`'s note, kept as ``stale`` (None when "").
 
     Returns:
         ``frames`` (used), ``median_px`` and ``interval_px`` (90 %, bootstrap over frames), the
         same in mm (None without a scale), ``applied_mm`` (the offset the run already applied),
         ``rig_config`` (the two keys with the total offset: applied + measured; None without a
-        scale or with fewer than :data:`MIN_FRAMES` frames) and a ``note``.
+        scale, with fewer than :data:`MIN_FRAMES` frames or beyond ``MAX_OFFSET_MM``), ``stale``
+        and a ``note``.
     """
     px, mm = [], []
     for m, target in zip(measured, label_areas, strict=True):
@@ -65,6 +103,7 @@ def boundary_offset(
         mm.append(None if scale is None else d * scale.at_width(m.width))
     applied = measured[0].boundary_offset_mm if measured else None
     out: dict[str, Any] = {"frames": len(px), "applied_mm": applied, "rig_config": None}
+    out["stale"] = stale or None
     out.update(median_px=None, interval_px=None, median_mm=None, interval_mm=None)
     if len(px) < MIN_FRAMES:
         out["note"] = (
@@ -79,16 +118,33 @@ def boundary_offset(
     arr = np.asarray(mm, dtype=float)
     total = round(float(np.median(arr)) + (applied or 0.0), 3)
     out.update(median_mm=float(np.median(arr)), interval_mm=_interval(arr))
-    out["rig_config"] = {OFFSET_KEY: total, MODEL_KEY: model_sha256}
-    out["note"] = (
-        "positive: the labelled edge lies outside the U-Net's; to apply it, put rig_config's "
-        "two keys in the rig config (rig.json) and check on frames not labelled here"
-    )
+    if abs(total) <= MAX_OFFSET_MM:
+        out["rig_config"] = {OFFSET_KEY: total, MODEL_KEY: model_sha256}
+    out["note"] = TOO_FAR.format(total) if out["rig_config"] is None else APPLY_NOTE
     return out
 
 
+def unet_offset(
+    measured: Sequence[Measured],
+    label_areas: Sequence[float],
+    scale: PixelScale | None,
+    described: dict[str, Any],
+    stale: str,
+) -> dict[str, Any] | None:
+    """:func:`boundary_offset` of the U-Net's measurements (None when the U-Net did not run)."""
+    if "unet" not in described:
+        return None
+    return boundary_offset(measured, label_areas, scale, described["unet"]["model_sha256"], stale)
+
+
 def offset_line(off: dict[str, Any]) -> str:
-    """One line for the printed table."""
+    """The lines for the printed table (a stale offset's note first)."""
+    first = f"note: {off['stale']}\n" if off["stale"] else ""
+    return first + _offset_text(off)
+
+
+def _offset_text(off: dict[str, Any]) -> str:
+    """The offset's numbers and the keys that apply it, or why there are none."""
     if off["median_px"] is None:
         return f"boundary offset (unet): {off['note']}"
     lo, hi = off["interval_px"]
@@ -97,7 +153,7 @@ def offset_line(off: dict[str, Any]) -> str:
         lo, hi = off["interval_mm"]
         text = f"{off['median_mm']:+.3f} mm (90 % interval {lo:+.3f} … {hi:+.3f}), " + text
     line = f"boundary offset (unet) against the labels, {off['frames']} frames: {text}"
-    if off["rig_config"] is not None:
-        keys = ", ".join(f"{json.dumps(k)}: {json.dumps(v)}" for k, v in off["rig_config"].items())
-        line += f"\n  to apply it, add to the rig config: {keys}"
-    return line
+    if off["rig_config"] is None:
+        return f"{line}\n  {off['note']}"
+    keys = ", ".join(f"{json.dumps(k)}: {json.dumps(v)}" for k, v in off["rig_config"].items())
+    return f"{line}\n  to apply it, add to the rig config: {keys}"

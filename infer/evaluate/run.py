@@ -12,7 +12,7 @@ from typing import Any
 
 from contactcal.infer.bench.scoring import PRESSURE_BINS, bin_table
 from contactcal.infer.evaluate.labels import Label, LabelError, label_mask, read_labels
-from contactcal.infer.evaluate.offset import boundary_offset, offset_line
+from contactcal.infer.evaluate.offset import current_offset, offset_line, unet_offset
 from contactcal.infer.evaluate.plots import plot_evaluation
 from contactcal.infer.evaluate.report import format_table
 from contactcal.infer.evaluate.score import frame_records, onset_summary, score_frames
@@ -64,22 +64,32 @@ class _Setup:
 
 def _measure(
     names: list[str], frames: list[Frame], files: list[Path], setup: _Setup
-) -> tuple[dict[str, list[Measured]], dict[str, Any]]:
+) -> tuple[dict[str, list[Measured]], dict[str, Any], str]:
     """Each method's measurements of ``files`` (the manifest's first frame is the reference),
-    and its ``describe()``."""
-    out, described = {}, {}
+    its ``describe()``, and the note of a stale boundary offset left out
+    (:func:`~contactcal.infer.evaluate.offset.current_offset`; "" when none)."""
+    out, described, stale = {}, {}, ""
     for name in names:
         method = make_method(name, setup.model, outline=True, change_gate=setup.change_gate)
         described[name] = method.describe()
+        boundary, note = current_offset(setup.boundary, described[name].get("model_sha256"))
+        stale = stale or note
         out[name] = measure_files(
-            files,
-            method,
-            frames[0].file,
-            setup.scale,
-            bit_depth=setup.bit_depth,
-            boundary=setup.boundary,
+            files, method, frames[0].file, setup.scale, bit_depth=setup.bit_depth, boundary=boundary
         )
-    return out, described
+    return out, described, stale
+
+
+def _check_request(method: str, labels: Path, out: Path) -> None:
+    """Refuse an unknown method, and a report inside the labels folder (its PNG would be read
+    as a label by the next run)."""
+    if method not in METHOD_CHOICES:
+        raise ValueError(f"unknown method {method!r}; expected one of {', '.join(METHOD_CHOICES)}")
+    if labels.is_dir() and out.resolve().is_relative_to(labels.resolve()):
+        raise LabelError(
+            f"{out}: is inside the labels folder {labels}, whose PNGs are all read as labels "
+            "(the next evaluate would take the report's PNG for one); give another --out folder"
+        )
 
 
 def evaluate_session(
@@ -96,8 +106,9 @@ def evaluate_session(
 ) -> Evaluation:
     """Score ``method`` on the frames of ``manifest`` labelled in ``labels``.
 
-    (A little over 60 lines: one run's steps in order — read, stage, measure, score, record,
-    write — kept in one place so that the staging brackets all of them.)
+    (Over 60 lines by its arguments' documentation and one run's steps in order — read,
+    stage, measure, score, record, write — kept in one place so that the staging brackets all
+    of them.)
 
     Every labelled frame is measured (reference: the manifest's lowest-pressure frame) and
     compared with its label's rasterised mask: area (relative error against the rasterised
@@ -127,14 +138,8 @@ def evaluate_session(
         LabelError: bad labels (naming the file); ManifestError / ImageError: bad manifest or
             frame; ValueError: unknown method or an output that would replace an input.
     """
-    if method not in METHOD_CHOICES:
-        raise ValueError(f"unknown method {method!r}; expected one of {', '.join(METHOD_CHOICES)}")
     manifest, labels, out = Path(manifest), Path(labels), Path(out_dir)
-    if labels.is_dir() and out.resolve().is_relative_to(labels.resolve()):
-        raise LabelError(
-            f"{out}: is inside the labels folder {labels}, whose PNGs are all read as labels "
-            "(the next evaluate would take the report's PNG for one); give another --out folder"
-        )
+    _check_request(method, labels, out)
     names = list(METHODS) if method == "both" else [method]
     frames = read_manifest(manifest)
     labelled, labs = _labelled(frames, read_labels(labels, frames, manifest), labels)
@@ -147,14 +152,11 @@ def evaluate_session(
         staged = {k: outs.stage(p) for k, p in paths.items()}  # refused here, before work
         files = [f.file for f in labelled]
         setup = _Setup(model, bit_depth, change_gate, scale, boundary)
-        measured, described = _measure(names, frames, files, setup)
+        measured, described, stale = _measure(names, frames, files, setup)
         first = measured[names[0]]
         masks = [label_mask(lab, (m.width, m.height)) for lab, m in zip(labs, first, strict=True)]
-        offset = None
-        if "unet" in measured:
-            areas = [float(mask.area_px) for mask in masks]
-            sha = described["unet"]["model_sha256"]
-            offset = boundary_offset(measured["unet"], areas, scale, sha)
+        areas = [float(mask.area_px) for mask in masks]
+        offset = unet_offset(measured.get("unet", []), areas, scale, described, stale)
         scored = score_frames(str(manifest), [f.pressure_kpa for f in labelled], masks, measured)
         onset, bins = onset_summary(scored), bin_table(scored, PRESSURE_BINS)
         record = {
@@ -172,9 +174,7 @@ def evaluate_session(
         text = json_text(record)
         plot_evaluation(staged["png"], scored)
         write_synced(staged["json"], text)
-    table = format_table(bins, onset)
-    if offset is not None:
-        table += "\n" + offset_line(offset)
+    table = "\n".join([format_table(bins, onset), *([offset_line(offset)] if offset else [])])
     if unlabelled:
         table += f"\n{len(unlabelled)} frame(s) without a label, skipped: {', '.join(unlabelled)}"
     return Evaluation(record, table, paths)

@@ -27,6 +27,7 @@ from collections.abc import Iterable, Iterator
 from pathlib import Path
 from typing import IO, Any
 
+from contactcal.infer.files.interrupt import deferred_interrupt
 from contactcal.infer.files.jsonable import json_text
 
 #: Names of this module's temporaries: ``.<name>.<pid>.<random>.tmp``.
@@ -191,8 +192,9 @@ class OutputSet:
             with open(staged, "rb+") as fh:
                 os.fsync(fh.fileno())
             check_destination(final, self._protect)
-        for final, staged in self._staged.items():
-            os.replace(staged, final)
+        with deferred_interrupt():  # all renames or (on an error) the ones done so far
+            for final, staged in self._staged.items():
+                os.replace(staged, final)
         self._made.clear()  # the folders now hold outputs: keep them
         return list(self._staged)
 

@@ -118,12 +118,11 @@ def check_out_folder(out: Path, command: str) -> None:
 def resolve_boundary(
     args: argparse.Namespace, default_rig: Path | None = None
 ) -> BoundaryOffset | None:
-    """The boundary offset the rig config of :func:`resolve_scale` states; None: none (or the
-    scale came from ``--mm-per-px``)."""
+    """The boundary offset the rig config states: ``--rig``'s, else the ``rig.json`` at
+    ``default_rig``'s; None: none. Also with ``--mm-per-px``: the offset is in mm, so another
+    source of the scale does not change it (and dropping it silently would)."""
     from contactcal.infer.pipeline.boundary import load_boundary_offset
 
-    if args.mm_per_px is not None:
-        return None
     if args.rig is not None:
         return load_boundary_offset(args.rig)
     if default_rig is not None and default_rig.is_file():

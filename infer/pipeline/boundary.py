@@ -31,6 +31,9 @@ from contactcal.infer.methods.base import AreaResult
 MAX_OFFSET_MM = 2.0
 #: The rig config's keys (both or neither).
 OFFSET_KEY, MODEL_KEY = "boundary_offset_mm", "boundary_offset_model_sha256"
+#: The start of the note of a frame whose region an inward offset removed (``calibrate`` looks for
+#: it to name the offset when no contact is left).
+GONE_NOTE = "no contact: the rig's boundary offset leaves no area"
 
 
 class BoundaryOffsetError(ValueError):
@@ -110,6 +113,9 @@ def apply_offset(res: AreaResult, d_px: float, mm: float) -> AreaResult:
     result without contact, or without a measured perimeter, is returned unchanged. The overlay
     outline (``contour``) stays the region as segmented.
 
+    An inward move that leaves no area makes the frame "no contact" (:data:`GONE_NOTE`): area
+    and soft area 0, no outline, the interval ``(0, its moved upper end)``.
+
     Args:
         res: the method's result, input pixels.
         d_px: the offset in input pixels (mm ÷ mm per px at the frame's width).
@@ -122,15 +128,18 @@ def apply_offset(res: AreaResult, d_px: float, mm: float) -> AreaResult:
     def moved(x: float) -> float:
         return offset_area(x, p * math.sqrt(max(x, 0.0) / a), d_px)
 
-    area = moved(a)
+    area, iv = moved(a), res.area_interval_px
+    interval = None if iv is None else (moved(iv[0]), moved(iv[1]))
+    if area <= 0.0:
+        note = f"{GONE_NOTE} ({mm:+.3f} mm; the region had {a:.0f} px)"
+        upper = None if interval is None else (0.0, interval[1])
+        return AreaResult(False, 0.0, note, None, 0.0, upper, 0.0)
     note = f"boundary moved {mm:+.3f} mm (rig's boundary offset): area {a:.0f} → {area:.0f} px"
-    iv = res.area_interval_px
     return replace(
         res,
-        contact=area > 0.0,
         area_px=area,
         note=f"{res.note}; {note}" if res.note else note,
         soft_area_px=None if res.soft_area_px is None else moved(res.soft_area_px),
-        area_interval_px=None if iv is None else (moved(iv[0]), moved(iv[1])),
-        perimeter_px=p + 2.0 * math.pi * d_px if area > 0.0 else 0.0,
+        area_interval_px=interval,
+        perimeter_px=p + 2.0 * math.pi * d_px,
     )

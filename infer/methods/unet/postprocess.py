@@ -235,21 +235,10 @@ def postprocess(
         )
     near = cv2.dilate(keep.astype(np.uint8), np.ones((5, 5), np.uint8)).astype(bool)
     soft = float(np.where(keep & ~segmented, 1.0, prob)[near].sum())  # hull pixels count whole
-    area = float(keep.sum()) * px_per_net
-    perimeter = region_perimeter(keep, spec.region == "convex") * box.scale(prob.shape[0])
-    return Segmentation(
-        True,
-        area,
-        soft * px_per_net,
-        region_net,
-        prob,
-        keep,
-        box,
-        interval,
-        change,
-        False,
-        perimeter,
-    )
+    scale = box.scale(prob.shape[0])  # input pixels per network pixel, along a side
+    perimeter = region_perimeter(keep, spec.region == "convex") * scale
+    sizes = (float(keep.sum()) * px_per_net, soft * px_per_net, region_net)
+    return Segmentation(True, *sizes, prob, keep, box, interval, change, False, perimeter)
 
 
 def mask_in_input(seg: Segmentation, shape: tuple[int, int]) -> np.ndarray:
