@@ -142,3 +142,22 @@ def test_ctrl_c_waits_for_the_block_to_finish() -> None:
             signal.raise_signal(signal.SIGINT)
             done.append("renamed")  # still runs: the interrupt waits for the block
     assert done == ["renamed"]
+
+
+def test_a_frame_without_a_ring_says_so(tmp_path: Path) -> None:
+    pytest.importorskip("onnxruntime")
+    import cv2
+    import numpy as np
+
+    from contactcal.infer.methods.registry import make_method
+    from contactcal.infer.methods.unet.method import NO_RING_NOTE
+    from contactcal.infer.pipeline.measure import measure_files
+
+    black = tmp_path / "black.png"
+    cv2.imwrite(str(black), np.zeros((300, 400), np.uint8))
+    unet = make_method("unet")
+    (m,) = measure_files([black], unet)
+    assert NO_RING_NOTE in m.result.note and not m.result.contact
+    ref = EXAMPLE / "p00.0kpa.jpg"
+    (m,) = measure_files([EXAMPLE / "p10.0kpa.jpg"], unet, ref)
+    assert NO_RING_NOTE not in m.result.note and m.result.contact

@@ -37,9 +37,16 @@ NO_REFERENCE_NOTES = MappingProxyType(
         "self": "no reference frame: the frame served as its own reference (the model expects "
         "the session's 0 kPa frame; expect larger errors)",
         "blank": "no reference frame: the blank placeholder stood in for it (the model was "
-        "trained for this with reference dropout); crop from the frame's own ring",
-        "none": "no reference frame: crop from the frame's own ring (a single-frame model)",
+        "trained for this with reference dropout); crop around the frame's own ring",
+        "none": "no reference frame: crop around the frame's own ring (a single-frame model)",
     }
+)
+
+
+#: Said of a frame cropped without any window ring found (the image centre's fallback box).
+NO_RING_NOTE = (
+    "no window ring found in this frame or its reference: cropped around the image centre "
+    "instead (is this a rig frame?)"
 )
 
 
@@ -170,13 +177,14 @@ class UnetMethod:
         """Why a frame has no contact ("no contact", or the change gate's numbers); for a contact
         that only ``--no-change-gate`` kept, that it did (otherwise a contact's note is "")."""
         limit = f"{self.model_min_change:.3f}"
+        ring = "" if seg.ring_found else f"; {NO_RING_NOTE}"
         if seg.unchanged:
-            return f"{UNCHANGED_NOTE} (change {seg.change:.3f} < {limit})"
+            return f"{UNCHANGED_NOTE} (change {seg.change:.3f} < {limit}){ring}"
         if not seg.contact:
-            return "no contact"
+            return f"no contact{ring}"
         if seg.change is not None and seg.change < self.model_min_change:  # the gate is off
-            return f"kept by --no-change-gate: change {seg.change:.3f} < {limit}"
-        return ""
+            return f"kept by --no-change-gate: change {seg.change:.3f} < {limit}{ring}"
+        return ring[2:]
 
     def describe(self) -> dict[str, Any]:
         """The model file, its sha256, its training ``data_digest``, its deployment spec (as the

@@ -149,6 +149,9 @@ class Segmentation:
     #: The contact region's outline length, input pixels (:func:`region_perimeter`; 0.0
     #: without contact): what a boundary offset changes the area by, per pixel of offset.
     perimeter_px: float = 0.0
+    #: False when the crop came from no window ring (neither the reference's nor the frame's:
+    #: the image centre's fallback box); set by the runner, which knows the crop's source.
+    ring_found: bool = True
 
 
 def region_change(difference: np.ndarray, keep: np.ndarray) -> float:

@@ -9,6 +9,7 @@ selection). Everything about the model's input and output comes from its metadat
 
 from __future__ import annotations
 
+import dataclasses
 import os
 from importlib import resources
 from pathlib import Path
@@ -169,4 +170,5 @@ class OnnxSegmenter:
         prep = prepare(gray, reference, cfg, self.spec.channels)
         prob = self.probabilities(prep.x)
         diff = reference_difference(prep.x, reference, self.spec.uses_reference)
-        return postprocess(prob, prep.box, gray.shape[:2], self.spec, diff)
+        seg = postprocess(prob, prep.box, gray.shape[:2], self.spec, diff)
+        return seg if prep.ring.found else dataclasses.replace(seg, ring_found=False)
