@@ -194,6 +194,13 @@ def test_evaluate_offset_branches() -> None:
     assert mm["median_mm"] == pytest.approx(0.2) and mm["rig_config"][OFFSET_KEY] == 0.2
     few = boundary_offset(disc[:4], grown[:4], PixelScale(0.1, 400), SHA)
     assert few["median_px"] is None and "label at least 5" in few["note"]
+    mixed = [
+        math.pi * (r + d) ** 2
+        for r, d in zip((20, 25, 30, 35, 40), (1, -1, 1, -1, 0.5), strict=True)
+    ]
+    none = boundary_offset(disc, mixed, PixelScale(0.1, 400), SHA)  # interval holds 0
+    assert none["interval_mm"][0] < 0 < none["interval_mm"][1] and none["rig_config"] is None
+    assert "includes 0" in offset_line(none)
     far = boundary_offset(disc, grown, PixelScale(1.5, 400), SHA)  # 3 mm: no keys
     assert far["rig_config"] is None and "beyond" in offset_line(far)
     mine = BoundaryOffset(0.1, SHA, "rig.json")

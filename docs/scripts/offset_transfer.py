@@ -6,7 +6,9 @@ calibrate other sessions. Every frame of every dataset is measured once through
 ``measure_files`` (the session's lowest-pressure frame as reference, the dataset's own pixel
 scale); per frame in contact the offset that would give the true area is
 :func:`~contactcal.infer.pipeline.boundary.fit_offset`'s. Then, ``--draws`` times, N frames in
-contact are drawn (seeded) from the ``--fit`` datasets, their median offset is applied
+contact are drawn (seeded) from the ``--fit`` datasets, and the offset ``contactcal evaluate``
+would give from them (their median, or none when its 90 % interval includes 0:
+:func:`~contactcal.infer.evaluate.offset.resolved_offset`) is applied
 (:func:`~contactcal.infer.pipeline.boundary.apply_offset`) to every frame of each ``--apply``
 dataset, and its median |area error| at ≥ 5 kPa is taken. Printed per apply dataset: without
 offset, with the pooled offset (all fit frames), and with the drawn ones (median and 5-95 % over
@@ -25,6 +27,7 @@ from pathlib import Path
 import numpy as np
 
 from contactcal.infer.bench.dataset import read_index, sessions_of
+from contactcal.infer.evaluate.offset import resolved_offset
 from contactcal.infer.methods.base import AreaResult
 from contactcal.infer.methods.registry import make_method
 from contactcal.infer.pipeline.boundary import apply_offset, fit_offset
@@ -98,13 +101,14 @@ def main() -> None:
     pool = offsets_mm(fit)
     rng = np.random.default_rng(args.seed)
     picks = [
-        float(np.median(rng.choice(pool, args.labelled, replace=False))) for _ in range(args.draws)
+        resolved_offset(rng.choice(pool, args.labelled, replace=False)) for _ in range(args.draws)
     ]
     lo, hi = np.percentile(picks, (5, 95))
     print(
         f"fit: {', '.join(d.name for d in args.fit)}: {pool.size} frames in contact; offset "
         f"pooled {np.median(pool):+.3f} mm; from {args.labelled} frames {np.median(picks):+.3f} "
-        f"mm (5-95 %: {lo:+.3f} … {hi:+.3f}, {args.draws} draws)"
+        f"mm (5-95 %: {lo:+.3f} … {hi:+.3f}, {args.draws} draws; resolved, i.e. its interval "
+        f"excludes 0, in {sum(x != 0.0 for x in picks)})"
     )
     print(
         "| dataset | ≥ 5 kPa without | with the pooled offset "

@@ -35,6 +35,18 @@ def add_parsers(sub: argparse._SubParsersAction) -> None:
     change_gate_arg(e)
     scale_args(e)
     e.set_defaults(func=_cmd_evaluate)
+    b = sub.add_parser(
+        "boundary-offset",
+        help="pool the U-Net's boundary offset over several sessions' evaluations",
+    )
+    b.add_argument(
+        "evaluations",
+        nargs="+",
+        type=Path,
+        metavar="EVAL_DIR",
+        help="`contactcal evaluate` output folders (or their evaluation.json), one per session",
+    )
+    b.set_defaults(func=_cmd_boundary_offset)
 
 
 def _cmd_evaluate(args: argparse.Namespace) -> int:
@@ -56,4 +68,11 @@ def _cmd_evaluate(args: argparse.Namespace) -> int:
     )
     print(rep.table)
     print(f"evaluation: {rep.files['json']}, {rep.files['png']}")
+    return 0
+
+
+def _cmd_boundary_offset(args: argparse.Namespace) -> int:
+    from contactcal.infer.evaluate.pool import pool_offsets, pooled_text
+
+    print(pooled_text(pool_offsets(args.evaluations)))
     return 0

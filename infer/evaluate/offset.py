@@ -35,6 +35,10 @@ APPLY_NOTE = (
     "positive: the labelled edge lies outside the U-Net's; to apply it, put rig_config's two "
     "keys in the rig config (rig.json) and check on frames not labelled here"
 )
+UNRESOLVED = (
+    "its 90 % interval includes 0: no offset is resolved on these frames, nothing to change in "
+    "the rig config (label more frames, from several sessions, to resolve a small one)"
+)
 TOO_FAR = (
     "the labels' edge lies {:+.3f} mm from the U-Net's, beyond the ±"
     f"{MAX_OFFSET_MM:g} mm a rig config accepts: the model does not fit this rig (or the labels "
@@ -42,12 +46,20 @@ TOO_FAR = (
 )
 
 
-def _interval(values: np.ndarray) -> tuple[float, float]:
-    """90 % bootstrap interval of the median of ``values`` (resampling frames)."""
+def median_interval(values: np.ndarray) -> tuple[float, float]:
+    """90 % bootstrap interval of the median of ``values`` (resampling frames; seeded)."""
     rng = np.random.default_rng(SEED)
     idx = rng.integers(0, values.size, size=(RESAMPLES, values.size))
     lo, hi = np.percentile(np.median(values[idx], axis=1), (5, 95))
     return float(lo), float(hi)
+
+
+def resolved_offset(values_mm: np.ndarray) -> float:
+    """The offset to apply from per-frame offsets: their median when its 90 % interval
+    (:func:`median_interval`) excludes 0, else 0 (none resolved: a noisy estimate of a small
+    shift would add error where the edge already matches)."""
+    lo, hi = median_interval(values_mm)
+    return float(np.median(values_mm)) if lo > 0.0 or hi < 0.0 else 0.0
 
 
 def current_offset(
@@ -87,11 +99,12 @@ def boundary_offset(
         stale: :func:`current_offset`'s note, kept as ``stale`` (None when "").
 
     Returns:
-        ``frames`` (used), ``median_px`` and ``interval_px`` (90 %, bootstrap over frames), the
-        same in mm (None without a scale), ``applied_mm`` (the offset the run already applied),
+        ``frames`` (used), ``frame_offsets_px`` / ``_mm`` (each used frame's), ``model_sha256``,
+        ``median_px`` and ``interval_px`` (90 %, bootstrap over frames), the same in mm (None
+        without a scale), ``applied_mm`` (the offset the run already applied),
         ``rig_config`` (the two keys with the total offset: applied + measured; None without a
-        scale, with fewer than :data:`MIN_FRAMES` frames or beyond ``MAX_OFFSET_MM``), ``stale``
-        and a ``note``.
+        scale, with fewer than :data:`MIN_FRAMES` frames, when the interval includes 0
+        (:func:`resolved_offset`) or beyond ``MAX_OFFSET_MM``), ``stale`` and a ``note``.
     """
     px, mm = [], []
     for m, target in zip(measured, label_areas, strict=True):
@@ -104,6 +117,9 @@ def boundary_offset(
     applied = measured[0].boundary_offset_mm if measured else None
     out: dict[str, Any] = {"frames": len(px), "applied_mm": applied, "rig_config": None}
     out["stale"] = stale or None
+    out["model_sha256"] = model_sha256
+    out["frame_offsets_px"] = px  # per frame used, for `contactcal boundary-offset` (pooling)
+    out["frame_offsets_mm"] = None if scale is None else mm
     out.update(median_px=None, interval_px=None, median_mm=None, interval_mm=None)
     if len(px) < MIN_FRAMES:
         out["note"] = (
@@ -111,13 +127,16 @@ def boundary_offset(
             f"label at least {MIN_FRAMES} frames in contact"
         )
         return out
-    out.update(median_px=float(np.median(px)), interval_px=_interval(np.asarray(px)))
+    out.update(median_px=float(np.median(px)), interval_px=median_interval(np.asarray(px)))
     if scale is None:
         out["note"] = "in pixels only: give the rig's scale (--rig or --mm-per-px) for mm"
         return out
     arr = np.asarray(mm, dtype=float)
     total = round(float(np.median(arr)) + (applied or 0.0), 3)
-    out.update(median_mm=float(np.median(arr)), interval_mm=_interval(arr))
+    out.update(median_mm=float(np.median(arr)), interval_mm=median_interval(arr))
+    if resolved_offset(arr) == 0.0:
+        out["note"] = UNRESOLVED
+        return out
     if abs(total) <= MAX_OFFSET_MM:
         out["rig_config"] = {OFFSET_KEY: total, MODEL_KEY: model_sha256}
     out["note"] = TOO_FAR.format(total) if out["rig_config"] is None else APPLY_NOTE
