@@ -146,6 +146,7 @@ def test_cli_evaluate_measures_it_and_calibrate_applies_it(
     assert "boundary offset (unet) against the labels" in capsys.readouterr().out
     off = json.loads((ev / "evaluation.json").read_text())["boundary_offset"]
     assert off["frames"] >= 5 and off["applied_mm"] is None
+    assert len(off["frame_offsets_mm"]) == off["frames"] == len(off["frame_offsets_px"])
     lo, hi = off["interval_mm"]
     assert lo <= off["median_mm"] <= hi
     assert off["rig_config"] == {OFFSET_KEY: round(off["median_mm"], 3), MODEL_KEY: _shipped_sha()}

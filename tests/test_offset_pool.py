@@ -1,13 +1,17 @@
-"""``contactcal boundary-offset``: one rig's offset pooled over several sessions' evaluations."""
+"""``contactcal boundary-offset``: one rig's offset pooled over several sessions' evaluations,
+and the distribution-free interval of a median it shares with ``evaluate``."""
 
 from __future__ import annotations
 
 import json
+import math
 from pathlib import Path
 
+import numpy as np
 import pytest
 
 from contactcal.infer.cli import main
+from contactcal.infer.evaluate.offset import median_interval, resolved_offset
 from contactcal.infer.evaluate.pool import pool_offsets, pooled_text
 from contactcal.infer.pipeline.boundary import MODEL_KEY, OFFSET_KEY
 
@@ -15,7 +19,7 @@ SHA = "ab" * 32
 
 
 def _evaluation(
-    folder: Path, offsets: list[float] | None, sha: str = SHA, applied: float | None = None
+    folder: Path, offsets: object, sha: str = SHA, applied: float | None = None
 ) -> Path:
     folder.mkdir(parents=True)
     off = {"model_sha256": sha, "applied_mm": applied, "frame_offsets_mm": offsets}
@@ -23,61 +27,92 @@ def _evaluation(
     return folder
 
 
-def test_sessions_agreeing_on_an_offset_give_the_keys(tmp_path: Path) -> None:
-    runs = [
-        _evaluation(tmp_path / f"s{i}", [c - 0.02, c, c + 0.03])
-        for i, c in enumerate((0.15, 0.2, 0.18, 0.22))
+def _five(tmp_path: Path, centres: tuple[float, ...], **kw: object) -> list[Path]:
+    return [
+        _evaluation(tmp_path / f"s{i}", [c - 0.02, c - 0.01, c, c + 0.01, c + 0.03], **kw)
+        for i, c in enumerate(centres)
     ]
+
+
+def test_median_interval_is_the_sign_tests() -> None:
+    assert median_interval([3, 1, 2, 5, 4]) == (1.0, 5.0)  # n = 5: [min, max], 93.75 %
+    assert median_interval(range(1, 11)) == (2.0, 9.0)  # n = 10: k = 2, 97.9 %; k = 3: 89 %
+    lo, hi = median_interval(np.arange(100.0))
+    assert (lo, hi) == (41.0, 58.0)  # ≈ 50 ± 1.645·√100/2
+    with pytest.raises(ValueError, match="at least 5 values, got 4"):
+        median_interval([1, 2, 3, 4])
+    assert resolved_offset([0.1, 0.2, 0.15, 0.12, 0.3]) == pytest.approx(0.15)
+    assert resolved_offset([0.1, -0.2, 0.15, 0.12, 0.3]) == 0.0  # one sign differs: [min, max]
+    assert resolved_offset([0.1, 0.2, 0.15, 0.12]) == 0.0  # too few to resolve
+
+
+def test_false_resolves_stay_near_the_level() -> None:
+    """A zero offset resolved in at most ~10 % of noise draws, for any count from 5 up (the
+    frame bootstrap it replaces resolved one in 2 with 2 values, 1 in 7 with 5)."""
+    rng = np.random.default_rng(0)
+    for n in (5, 6, 8, 12, 30):
+        hits = [resolved_offset(rng.normal(0.0, 0.1, n)) != 0.0 for _ in range(2000)]
+        assert np.mean(hits) <= 0.10 + 3 * math.sqrt(0.1 * 0.9 / 2000), n
+
+
+def test_sessions_agreeing_on_an_offset_give_the_keys(tmp_path: Path) -> None:
+    runs = _five(tmp_path, (0.15, 0.2, 0.18, 0.22, 0.17))
     pooled = pool_offsets(runs)
-    assert pooled["median_mm"] == pytest.approx(0.19)
-    lo, hi = pooled["interval_mm"]
-    assert 0.15 <= lo <= 0.19 <= hi <= 0.22
-    assert pooled["rig_config"] == {OFFSET_KEY: 0.19, MODEL_KEY: SHA}
-    assert [s["frames"] for s in pooled["sessions"]] == [3, 3, 3, 3]
-    again = pool_offsets(
-        [r / "evaluation.json" for r in runs],
-    )
-    assert again == {**pooled, "sessions": again["sessions"]}
-    applied = [_evaluation(tmp_path / f"a{i}", [0.05, 0.06], applied=0.1) for i in range(2)]
-    assert pool_offsets(applied)["rig_config"][OFFSET_KEY] == pytest.approx(0.155)
+    assert pooled["median_mm"] == pytest.approx(0.18)
+    assert pooled["interval_mm"] == pytest.approx((0.15, 0.22))
+    assert pooled["rig_config"] == {OFFSET_KEY: 0.18, MODEL_KEY: SHA}
+    again = pool_offsets([r / "evaluation.json" for r in runs])
+    assert again["rig_config"] == pooled["rig_config"]
+    applied = _five(tmp_path / "a", (0.05, 0.06, 0.04, 0.07, 0.05), applied=0.1)
+    assert pool_offsets(applied)["rig_config"][OFFSET_KEY] == pytest.approx(0.15)
+    far = _five(tmp_path / "far", (2.1, 2.2, 2.3, 2.2, 2.4))
+    out = pool_offsets(far)
+    assert out["rig_config"] is None and "beyond" in pooled_text(out)
 
 
 def test_sessions_that_disagree_about_the_sign_give_none(tmp_path: Path) -> None:
-    runs = [_evaluation(tmp_path / f"s{i}", [c]) for i, c in enumerate((-0.1, 0.12, -0.05, 0.08))]
-    pooled = pool_offsets(runs)
-    assert pooled["rig_config"] is None and "nothing to change" in pooled_text(pooled)
+    pooled = pool_offsets(_five(tmp_path, (-0.1, 0.12, -0.05, 0.08, 0.2)))
+    assert pooled["rig_config"] is None and "includes 0" in pooled_text(pooled)
 
 
 def test_bad_sets_of_evaluations(tmp_path: Path) -> None:
-    a = _evaluation(tmp_path / "a", [0.1, 0.2])
-    with pytest.raises(ValueError, match="2 or more"):
-        pool_offsets([a])
-    b = _evaluation(tmp_path / "b", [0.1], sha="cd" * 32)
+    good = _five(tmp_path, (0.1, 0.2, 0.15, 0.12, 0.3))
+    with pytest.raises(ValueError, match="given twice"):
+        pool_offsets([*good[:4], good[0] / "evaluation.json"])
+    with pytest.raises(ValueError, match="pooling needs 5"):
+        pool_offsets(good[:4])
+    short = _evaluation(tmp_path / "short", [0.1, 0.2])
+    assert pool_offsets([*good, short])["left_out"] == [str(short / "evaluation.json")]
     with pytest.raises(ValueError, match="differ in model"):
-        pool_offsets([a, b])
-    c = _evaluation(tmp_path / "c", [0.1], applied=0.2)
+        pool_offsets([*good[:4], _evaluation(tmp_path / "b", [0.1] * 5, sha="cd" * 32)])
     with pytest.raises(ValueError, match="differ in the boundary offset already applied"):
-        pool_offsets([a, c])
-    d = _evaluation(tmp_path / "d", None)
-    with pytest.raises(ValueError, match=r"d/evaluation\.json: has no U-Net boundary offsets"):
-        pool_offsets([a, d])
-    e = _evaluation(tmp_path / "e", [])
-    with pytest.raises(ValueError, match="only 1 of the 2 evaluations"):
-        pool_offsets([a, e])
-    (tmp_path / "f").mkdir()
+        pool_offsets([*good[:4], _evaluation(tmp_path / "c", [0.1] * 5, applied=0.2)])
+    bad = {
+        "px": (None, "in pixels only"),
+        "nan": ([0.1, float("nan"), 0.1, 0.1, 0.1], "not finite numbers"),
+        "str": (["0.1"] * 5, "not finite numbers"),
+        "num": (0.1, "not finite numbers"),
+    }
+    for name, (offsets, said) in bad.items():
+        with pytest.raises(ValueError, match=rf"{name}/evaluation\.json: .*{said}"):
+            pool_offsets([*good[:4], _evaluation(tmp_path / name, offsets)])
+    (tmp_path / "old").mkdir()
+    (tmp_path / "old" / "evaluation.json").write_text(json.dumps({"boundary_offset": None}))
+    (tmp_path / "list").mkdir()
+    (tmp_path / "list" / "evaluation.json").write_text("[1, 2]")
+    for name in ("old", "list"):
+        with pytest.raises(ValueError, match=rf"{name}/evaluation\.json: has no U-Net"):
+            pool_offsets([*good[:4], tmp_path / name])
+    (tmp_path / "empty").mkdir()
     with pytest.raises(ValueError, match="not a readable evaluation.json"):
-        pool_offsets([a, tmp_path / "f"])
+        pool_offsets([*good[:4], tmp_path / "empty"])
 
 
-def test_cli_pools_two_evaluations(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
-    pytest.importorskip("onnxruntime")
-    example = Path(__file__).resolve().parents[1] / "examples" / "session"
-    base = ["evaluate", str(example / "manifest.csv"), "--labels", str(example / "masks")]
-    for name in ("e1", "e2"):
-        assert main([*base, "--out", str(tmp_path / name)]) == 0
-    capsys.readouterr()
-    assert main(["boundary-offset", str(tmp_path / "e1"), str(tmp_path / "e2")]) == 0
+def test_cli(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    runs = [str(p) for p in _five(tmp_path, (0.15, 0.2, 0.18, 0.22, 0.17))]
+    assert main(["boundary-offset", *runs]) == 0
     out = capsys.readouterr().out
-    assert "pooled over 2 sessions" in out and "boundary_offset_model_sha256" in out
-    assert main(["boundary-offset", str(tmp_path / "e1")]) == 2
-    assert "2 or more" in capsys.readouterr().err
+    assert "pooled over 5 sessions: +0.180 mm" in out and '"boundary_offset_mm": 0.18' in out
+    assert main(["boundary-offset", *runs[:2]]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "pooling needs 5" in err[0]

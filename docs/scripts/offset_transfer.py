@@ -34,16 +34,16 @@ from contactcal.infer.pipeline.boundary import apply_offset, fit_offset
 from contactcal.infer.pipeline.measure import measure_files
 from contactcal.infer.pipeline.scale import PixelScale
 
-#: Columns of a measured frame: pressure kPa, true area px, area px, perimeter px, mm/px, and
-#: the stated interval's ends px.
-P, TRUE, AREA, PERIM, MMPX, LO, HI = range(7)
+#: Columns of a measured frame: pressure kPa, true area px, area px, perimeter px, mm/px, the
+#: stated interval's ends px, and the session's index in its dataset.
+P, TRUE, AREA, PERIM, MMPX, LO, HI, SESSION = range(8)
 
 
 def measure_dataset(folder: Path, model: Path | None) -> np.ndarray:
-    """``(F, 7)`` per frame of ``folder`` (see the column constants); no contact: area 0."""
+    """``(F, 8)`` per frame of ``folder`` (see the column constants); no contact: area 0."""
     method = make_method("unet", model)
     out = []
-    for rows in sessions_of(read_index(folder)).values():
+    for k, rows in enumerate(sessions_of(read_index(folder)).values()):
         scale = PixelScale(rows[0].mm_per_px, None)
         for row, m in zip(
             rows,
@@ -53,8 +53,21 @@ def measure_dataset(folder: Path, model: Path | None) -> np.ndarray:
             r = m.result
             perim = r.perimeter_px if r.contact and r.perimeter_px else 0.0
             lo, hi = r.area_interval_px or (np.nan, np.nan)
-            out.append((row.pressure_kpa, row.area_px, r.area_px, perim, row.mm_per_px, lo, hi))
+            out.append((row.pressure_kpa, row.area_px, r.area_px, perim, row.mm_per_px, lo, hi, k))
     return np.array(out, dtype=float)
+
+
+def session_spread(f: np.ndarray) -> str:
+    """The sessions' own median offsets (sessions with >= 5 frames in contact): range and SD."""
+    meds = [
+        np.median(d)
+        for k in np.unique(f[:, SESSION])
+        if (d := offsets_mm(f[f[:, SESSION] == k])).size >= 5
+    ]
+    return (
+        f"{len(meds)} sessions' medians {min(meds):+.3f} … {max(meds):+.3f} mm, "
+        f"SD {np.std(meds):.3f} mm"
+    )
 
 
 def offsets_mm(f: np.ndarray) -> np.ndarray:
@@ -97,7 +110,10 @@ def main() -> None:
     ap.add_argument("--draws", type=int, default=200, help="draws of those frames (default 200)")
     ap.add_argument("--seed", type=int, default=0)
     args = ap.parse_args()
-    fit = np.concatenate([measure_dataset(d, args.model) for d in args.fit])
+    fits = [measure_dataset(d, args.model) for d in args.fit]
+    for d, f in zip(args.fit, fits, strict=True):
+        print(f"{d.name}: {session_spread(f)}")
+    fit = np.concatenate(fits)
     pool = offsets_mm(fit)
     rng = np.random.default_rng(args.seed)
     picks = [

@@ -4,13 +4,15 @@
 over those frames only. Sessions of one rig differ more than frames of one session do (on the
 procedural cross-check sets the per-session medians spread by ~0.09 mm, on our renders by
 ~0.05 mm: ``docs/training.md``, "Boundary offset"), so the offset to put in the rig config is
-pooled here over sessions: the median of the sessions' medians, with a 90 % interval from
-resampling whole sessions, applied only when that interval excludes 0.
+pooled here over sessions: the median of the sessions' medians with the same distribution-free
+90 % interval (:func:`~contactcal.infer.evaluate.offset.median_interval`, now over sessions),
+applied only when that interval excludes 0. That interval needs five sessions.
 """
 
 from __future__ import annotations
 
 import json
+import math
 import os
 from collections.abc import Sequence
 from pathlib import Path
@@ -18,84 +20,113 @@ from typing import Any
 
 import numpy as np
 
-from contactcal.infer.evaluate.offset import RESAMPLES, SEED
+from contactcal.infer.evaluate.offset import (
+    MIN_FRAMES,
+    TOO_FAR,
+    UNRESOLVED,
+    excludes_zero,
+    median_interval,
+)
 from contactcal.infer.pipeline.boundary import MAX_OFFSET_MM, MODEL_KEY, OFFSET_KEY
 
-#: Fewest sessions pooled: with one, `evaluate`'s own figure is all there is.
-MIN_SESSIONS = 2
+#: Fewest sessions pooled: the median's 90 % interval needs five values.
+MIN_SESSIONS = 5
+
+
+def _finite_list(value: object) -> bool:
+    return isinstance(value, list) and all(
+        isinstance(v, int | float) and not isinstance(v, bool) and math.isfinite(v) for v in value
+    )
 
 
 def _load(path: Path) -> dict[str, Any]:
-    """An evaluation's ``boundary_offset``, checked to carry per-frame offsets in mm."""
+    """An evaluation's ``boundary_offset``, checked; ValueError naming the file otherwise."""
     file = path / "evaluation.json" if path.is_dir() else path
     try:
-        off = json.loads(file.read_text(encoding="utf-8")).get("boundary_offset")
-    except (OSError, UnicodeDecodeError, json.JSONDecodeError, AttributeError) as exc:
+        record = json.loads(file.read_text(encoding="utf-8"))
+    except (OSError, UnicodeDecodeError, json.JSONDecodeError) as exc:
         raise ValueError(
             f"{file}: not a readable evaluation.json of `contactcal evaluate`"
         ) from exc
-    if not off or off.get("frame_offsets_mm") is None:
+    off = record.get("boundary_offset") if isinstance(record, dict) else None
+    keys = ("model_sha256", "applied_mm", "frame_offsets_mm")
+    if not isinstance(off, dict) or any(k not in off for k in keys):
         raise ValueError(
-            f"{file}: has no U-Net boundary offsets in mm; run `contactcal evaluate` with the "
-            "U-Net and the rig's scale (--rig, --mm-per-px or a rig.json beside the manifest)"
+            f"{file}: has no U-Net boundary offsets per frame; run `contactcal evaluate` (this "
+            "version) with the U-Net"
         )
+    if off["frame_offsets_mm"] is None:
+        raise ValueError(
+            f"{file}: its offsets are in pixels only; run `contactcal evaluate` with the rig's "
+            "scale (--rig, --mm-per-px or a rig.json beside the manifest)"
+        )
+    applied = off["applied_mm"]
+    if not _finite_list(off["frame_offsets_mm"]) or not (
+        applied is None or _finite_list([applied])
+    ):
+        raise ValueError(f"{file}: boundary_offset holds values that are not finite numbers")
     return {**off, "file": str(file)}
 
 
 def _same(runs: Sequence[dict[str, Any]], key: str, what: str) -> Any:
     """The one value of ``key`` in every run; ValueError naming the runs otherwise."""
-    values = {json.dumps(r[key]) for r in runs}
-    if len(values) > 1:
+    if len({json.dumps(r[key]) for r in runs}) > 1:
         listed = ", ".join(f"{r['file']}: {r[key]}" for r in runs)
         raise ValueError(f"the evaluations differ in {what} ({listed}); pool runs of one setting")
     return runs[0][key]
+
+
+def _sessions(paths: Sequence[str | os.PathLike[str]]) -> tuple[list[dict], list[str]]:
+    """The evaluations with at least ``MIN_FRAMES`` frames, and the files of those left out."""
+    files = [Path(p) / "evaluation.json" if Path(p).is_dir() else Path(p) for p in paths]
+    twice = {f for f in files if sum(g.resolve() == f.resolve() for g in files) > 1}
+    if twice:
+        raise ValueError(f"{sorted(map(str, twice))[0]}: given twice; each session counts once")
+    runs = [_load(f) for f in files]
+    kept = [r for r in runs if len(r["frame_offsets_mm"]) >= MIN_FRAMES]
+    return kept, [r["file"] for r in runs if r not in kept]
 
 
 def pool_offsets(paths: Sequence[str | os.PathLike[str]]) -> dict[str, Any]:
     """The pooled offset of several sessions' evaluations (folders or ``evaluation.json``).
 
     Returns:
-        ``sessions`` (file, frames, median mm each), ``median_mm`` (of the sessions' medians),
-        ``interval_mm`` (90 %, bootstrap over sessions; seeded), ``applied_mm``,
-        ``rig_config`` (the two keys with applied + pooled, or None when the interval includes
-        0 or the total is beyond ``MAX_OFFSET_MM``) and a ``note``.
+        ``sessions`` (file, frames, median mm each), ``left_out`` (files with fewer than
+        ``MIN_FRAMES`` frames), ``median_mm`` (of the sessions' medians), ``interval_mm``
+        (``median_interval`` over sessions), ``applied_mm``, ``rig_config`` (the two keys with
+        applied + pooled; None when the interval includes 0 or the total is beyond
+        ``MAX_OFFSET_MM``) and a ``note``.
 
     Raises:
-        ValueError: fewer than :data:`MIN_SESSIONS` evaluations, one without offsets in mm, or
-            evaluations of different models or applied offsets.
+        ValueError: a file given twice, an unusable evaluation, evaluations of different models
+            or applied offsets, or fewer than :data:`MIN_SESSIONS` usable sessions.
     """
-    if len(paths) < MIN_SESSIONS:
-        raise ValueError(
-            f"boundary-offset pools {MIN_SESSIONS} or more sessions' evaluations, got "
-            f"{len(paths)}; for one session `contactcal evaluate` prints its offset"
-        )
-    runs = [_load(Path(p)) for p in paths]
-    sha = _same(runs, "model_sha256", "model")
-    applied = _same(runs, "applied_mm", "the boundary offset already applied")
-    runs = [r for r in runs if r["frame_offsets_mm"]]
+    runs, left_out = _sessions(paths)
     if len(runs) < MIN_SESSIONS:
         raise ValueError(
-            f"only {len(runs)} of the {len(paths)} evaluations have frames in contact by both "
-            "the labels and the U-Net; label frames in contact in each session"
+            f"{len(runs)} of the {len(paths)} evaluations have >= {MIN_FRAMES} frames in contact "
+            f"by both the labels and the U-Net; pooling needs {MIN_SESSIONS} such sessions (a "
+            "90 % interval of a median needs five values)"
         )
-    meds = np.array([np.median(r["frame_offsets_mm"]) for r in runs])
-    idx = np.random.default_rng(SEED).integers(0, meds.size, size=(RESAMPLES, meds.size))
-    lo, hi = (float(x) for x in np.percentile(np.median(meds[idx], axis=1), (5, 95)))
+    sha = _same(runs, "model_sha256", "model")
+    applied = _same(runs, "applied_mm", "the boundary offset already applied")
+    meds = [float(np.median(r["frame_offsets_mm"])) for r in runs]
+    interval = median_interval(meds)
     median = float(np.median(meds))
     total = round(median + (applied or 0.0), 3)
-    ok = (lo > 0.0 or hi < 0.0) and abs(total) <= MAX_OFFSET_MM
+    resolved, near = excludes_zero(interval), abs(total) <= MAX_OFFSET_MM
+    note = UNRESOLVED if not resolved else ("" if near else TOO_FAR.format(total))
     return {
         "sessions": [
-            {"file": r["file"], "frames": len(r["frame_offsets_mm"]), "median_mm": float(m)}
+            {"file": r["file"], "frames": len(r["frame_offsets_mm"]), "median_mm": m}
             for r, m in zip(runs, meds, strict=True)
         ],
+        "left_out": left_out,
         "median_mm": median,
-        "interval_mm": (lo, hi),
+        "interval_mm": interval,
         "applied_mm": applied,
-        "rig_config": {OFFSET_KEY: total, MODEL_KEY: sha} if ok else None,
-        "note": ""
-        if ok
-        else f"no offset resolved (interval includes 0) or beyond ±{MAX_OFFSET_MM:g} mm",
+        "rig_config": {OFFSET_KEY: total, MODEL_KEY: sha} if resolved and near else None,
+        "note": note,
     }
 
 
@@ -104,13 +135,16 @@ def pooled_text(pooled: dict[str, Any]) -> str:
     lines = [
         f"{s['file']}: {s['frames']} frames, {s['median_mm']:+.3f} mm" for s in pooled["sessions"]
     ]
+    lines += [
+        f"{f}: left out (fewer than {MIN_FRAMES} frames in contact)" for f in pooled["left_out"]
+    ]
     lo, hi = pooled["interval_mm"]
     lines.append(
         f"pooled over {len(pooled['sessions'])} sessions: {pooled['median_mm']:+.3f} mm "
-        f"(90 % interval {lo:+.3f} … {hi:+.3f}, resampling sessions)"
+        f"(90 % interval {lo:+.3f} … {hi:+.3f}, over sessions)"
     )
     if pooled["rig_config"] is None:
-        lines.append(f"  {pooled['note']}: nothing to change in the rig config")
+        lines.append(f"  {pooled['note']}")
     else:
         keys = ", ".join(
             f"{json.dumps(k)}: {json.dumps(v)}" for k, v in pooled["rig_config"].items()

@@ -37,16 +37,17 @@ NO_REFERENCE_NOTES = MappingProxyType(
         "self": "no reference frame: the frame served as its own reference (the model expects "
         "the session's 0 kPa frame; expect larger errors)",
         "blank": "no reference frame: the blank placeholder stood in for it (the model was "
-        "trained for this with reference dropout); crop around the frame's own ring",
-        "none": "no reference frame: crop around the frame's own ring (a single-frame model)",
+        "trained for this with reference dropout); crop around the frame's own ring if found",
+        "none": "no reference frame: crop around the frame's own ring if found (a single-frame "
+        "model)",
     }
 )
 
 
 #: Said of a frame cropped without any window ring found (the image centre's fallback box).
 NO_RING_NOTE = (
-    "no window ring found in this frame or its reference: cropped around the image centre "
-    "instead (is this a rig frame?)"
+    "no window ring found in this frame (nor in its reference, if any): cropped around the "
+    "image centre instead (is this a rig frame?)"
 )
 
 
