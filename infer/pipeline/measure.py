@@ -152,8 +152,10 @@ def offset_for(
         BoundaryOffsetError: the offset was measured for another model (stale), or no pixel
             scale converts it to pixels.
     """
-    sha = method.describe().get("model_sha256")
-    if boundary is None or sha is None:
+    if boundary is None:
+        return None
+    sha = method.describe().get("model_sha256")  # hashes the model file: only when needed
+    if sha is None:
         return None
     if sha != boundary.model_sha256:
         raise BoundaryOffsetError(
