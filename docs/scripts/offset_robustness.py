@@ -22,21 +22,18 @@ import argparse
 from pathlib import Path
 
 import numpy as np
+from offset_transfer import AREA, MMPX, PERIM, SESSION, TRUE, P, error_at, offsets_mm
 
 from contactcal.infer.bench import perturb
 from contactcal.infer.bench.dataset import read_index, sessions_of
 from contactcal.infer.evaluate.offset import resolved_offset
 from contactcal.infer.image.read import load_image
-from contactcal.infer.methods.base import AreaResult
 from contactcal.infer.methods.registry import make_method
-from contactcal.infer.pipeline.boundary import apply_offset, fit_offset
-
-#: Columns: session index, pressure kPa, true area px, area px, perimeter px, mm/px.
-SESSION, P, TRUE, AREA, PERIM, MMPX = range(6)
 
 
 def measure(folder: Path, name: str | None, level: float, seed: int) -> np.ndarray:
-    """``(F, 6)`` per frame of ``folder``, each frame and its reference perturbed alike."""
+    """``(F, 8)`` per frame of ``folder`` in ``offset_transfer``'s columns (interval ends not
+    kept: NaN), each frame and its reference perturbed alike."""
     method = make_method("unet")
     fn = getattr(perturb, name) if name else None
 
@@ -50,25 +47,17 @@ def measure(folder: Path, name: str | None, level: float, seed: int) -> np.ndarr
         method.set_reference(look(rows[0].frame, k))
         for row in rows:
             r = method.measure(look(row.frame, k))
-            perim = r.perimeter_px if r.contact and r.perimeter_px else 0.0
-            out.append((k, row.pressure_kpa, row.area_px, r.area_px, perim, row.mm_per_px))
+            frame = np.full(8, np.nan)
+            frame[[P, TRUE, AREA, MMPX, SESSION]] = (
+                row.pressure_kpa,
+                row.area_px,
+                r.area_px,
+                row.mm_per_px,
+                k,
+            )
+            frame[PERIM] = r.perimeter_px if r.contact and r.perimeter_px else 0.0
+            out.append(frame)
     return np.array(out, dtype=float)
-
-
-def offsets_mm(f: np.ndarray) -> np.ndarray:
-    """Per frame in contact (truth and U-Net), the offset that gives the true area, mm."""
-    ok = (f[:, TRUE] > 0) & (f[:, AREA] > 0) & (f[:, PERIM] > 0)
-    return np.array([fit_offset(r[AREA], r[PERIM], r[TRUE]) * r[MMPX] for r in f[ok]])
-
-
-def error_at(f: np.ndarray, d_mm: float) -> float:
-    """Median |relative area error| (%) at ≥ 5 kPa, the boundary moved ``d_mm``."""
-    errs = []
-    for r in f[(f[:, P] >= 5) & (f[:, TRUE] > 0)]:
-        res = AreaResult(r[AREA] > 0, r[AREA], "", None, perimeter_px=r[PERIM] or None)
-        area = apply_offset(res, d_mm / r[MMPX], d_mm).area_px if d_mm else r[AREA]
-        errs.append(abs(area - r[TRUE]) / r[TRUE])
-    return 100 * float(np.median(errs))
 
 
 def transfer(f: np.ndarray, half: int, labelled: int, draws: int, seed: int) -> np.ndarray:
