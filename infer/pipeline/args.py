@@ -89,17 +89,24 @@ def check_change_gate(args: argparse.Namespace) -> None:
         )
 
 
+def rig_file(args: argparse.Namespace, default_rig: Path | None = None) -> Path | None:
+    """The rig config a run reads: ``--rig``, else the ``rig.json`` at ``default_rig`` if it
+    exists; None: none."""
+    if args.rig is not None:
+        return args.rig
+    if default_rig is not None and default_rig.is_file():
+        return default_rig
+    return None
+
+
 def resolve_scale(args: argparse.Namespace, default_rig: Path | None = None) -> PixelScale | None:
-    """The pixel scale the options (or a ``rig.json`` at ``default_rig``) give; None: none."""
+    """The pixel scale ``--mm-per-px`` or the rig config (:func:`rig_file`) gives; None: none."""
     from contactcal.infer.pipeline.scale import PixelScale, load_rig_config
 
     if args.mm_per_px is not None:
         return PixelScale(args.mm_per_px, None)
-    if args.rig is not None:
-        return load_rig_config(args.rig)
-    if default_rig is not None and default_rig.is_file():
-        return load_rig_config(default_rig)
-    return None
+    rig = rig_file(args, default_rig)
+    return None if rig is None else load_rig_config(rig)
 
 
 def check_out_folder(out: Path, command: str) -> None:
@@ -118,16 +125,13 @@ def check_out_folder(out: Path, command: str) -> None:
 def resolve_boundary(
     args: argparse.Namespace, default_rig: Path | None = None
 ) -> BoundaryOffset | None:
-    """The boundary offset the rig config states: ``--rig``'s, else the ``rig.json`` at
-    ``default_rig``'s; None: none. Also with ``--mm-per-px``: the offset is in mm, so another
-    source of the scale does not change it (and dropping it silently would)."""
+    """The boundary offset the rig config (:func:`rig_file`) states; None: none. Also with
+    ``--mm-per-px``: the offset is in mm, so another source of the scale does not change it (and
+    dropping it silently would)."""
     from contactcal.infer.pipeline.boundary import load_boundary_offset
 
-    if args.rig is not None:
-        return load_boundary_offset(args.rig)
-    if default_rig is not None and default_rig.is_file():
-        return load_boundary_offset(default_rig)
-    return None
+    rig = rig_file(args, default_rig)
+    return None if rig is None else load_boundary_offset(rig)
 
 
 def run_inputs(args: argparse.Namespace) -> list[Path]:
