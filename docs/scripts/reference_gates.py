@@ -30,6 +30,12 @@ only: a veto's threshold read on a test set would be tuned on it.
 ``--similarity T`` (repeatable) also prints what a similarity veto at T would remove. The
 frames above 0 kPa without contact are counted once per draw (53 frames × 3 draws = 159 on
 ``data/val_r3``).
+
+``--no-reference`` asks the same of a session measured without its zero-pressure frame, where
+the change gate cannot act: is the frame's own ridge evidence a veto? Two statistics of each
+kept region (the model given its blank placeholder): **ridge level**, the ridge channel's mean
+inside the region (~1 on ridges, ~0 on a smooth membrane), and **ridge contrast**, that mean
+over the mean in the 4-network-pixel band just outside the region.
 """
 
 from __future__ import annotations
@@ -37,6 +43,7 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
+import cv2
 import numpy as np
 
 from contactcal.infer.bench.dataset import read_index, sessions_of
@@ -47,6 +54,8 @@ from contactcal.infer.methods.unet.postprocess import postprocess
 from contactcal.infer.methods.unet.prepare import _to_network, crop_resize, prepare
 from contactcal.infer.methods.unet.ridge import ridge_energy
 from contactcal.infer.methods.unet.ring import locate_ring
+
+NAMES = ("ridge gain", "similarity", "change")
 
 
 def region_stats(
@@ -87,6 +96,33 @@ def region_stats(
     return out
 
 
+def own_stats(m: UnetMethod, frames: list[np.ndarray]) -> list[tuple[float, float] | None]:
+    """Per frame ``(ridge level, ridge contrast)`` of the kept region without a reference.
+
+    Args:
+        m: the U-Net method (a model with a ridge channel, last).
+        frames: one session's ``(H, W) uint8`` frames (no reference is given to the method).
+
+    Returns:
+        Per frame the two statistics (dimensionless), or None without a kept region.
+    """
+    spec = m.segmenter.spec
+    m.set_reference(None)
+    out: list[tuple[float, float] | None] = []
+    for gray in frames:
+        img, _ = m._shrunk(gray)
+        prep = prepare(img, m.reference, spec.preprocess, spec.channels)
+        seg = postprocess(m.segmenter.probabilities(prep.x), prep.box, img.shape, spec)
+        keep = seg.mask_net
+        if not seg.contact or keep.sum() < 3:
+            out.append(None)
+            continue
+        near = cv2.dilate(keep.astype(np.uint8), np.ones((9, 9), np.uint8)).astype(bool)
+        level = float(prep.x[-1][keep].mean())
+        out.append((level, level / max(float(prep.x[-1][near & ~keep].mean()), 1e-6)))
+    return out
+
+
 def main() -> None:
     """Measure the dataset's kept regions and print each statistic's ranges and vetoes."""
     ap = argparse.ArgumentParser()
@@ -94,6 +130,7 @@ def main() -> None:
     ap.add_argument("--speck", type=float, default=0.0, help="window speck level (0: none)")
     ap.add_argument("--draws", type=int, default=1, help="specks drawn per session")
     ap.add_argument("--seed", type=int, default=0)
+    ap.add_argument("--no-reference", action="store_true", help="the frames' own ridge evidence")
     ap.add_argument(
         "--similarity", type=float, action="append", default=[], help="also try this veto"
     )
@@ -107,7 +144,8 @@ def main() -> None:
         for d in range(args.draws if args.speck > 0 else 1):
             seed = [args.seed, s, d]
             frames = [speck(g, args.speck, np.random.default_rng(seed), ring=ring) for g in grays]
-            for r, st in zip(rows, region_stats(m, frames), strict=True):
+            stats = own_stats(m, frames) if args.no_reference else region_stats(m, frames)
+            for r, st in zip(rows, stats, strict=True):
                 frames_below += not r.contact and r.pressure_kpa > 0
                 if st is not None and r.contact:
                     true_regions.append(st)
@@ -117,7 +155,8 @@ def main() -> None:
         f"{len(true_regions)} regions in contact frames; {len(false_regions)} regions in the "
         f"{frames_below} frames above 0 kPa without contact (false contacts)"
     )
-    for k, name in enumerate(("ridge gain", "similarity", "change")):
+    names = ("ridge level", "ridge contrast") if args.no_reference else NAMES
+    for k, name in enumerate(names):
         t = np.array([x[k] for x in true_regions])
         f = np.array([x[k] for x in false_regions])
         span = {
@@ -128,7 +167,7 @@ def main() -> None:
         if name == "similarity":
             tries += args.similarity
         for q in tries:
-            veto = (lambda x, q=q: x >= q) if k == 1 else (lambda x, q=q: x <= q)
+            veto = (lambda x, q=q: x >= q) if name == "similarity" else (lambda x, q=q: x <= q)
             print(
                 f"  veto at {q:.3f}: removes {int(veto(f).sum())} false, "
                 f"{int(veto(t).sum())} true regions"
