@@ -15,13 +15,15 @@ from test_change_gate import _gated
 def test_calibrate_says_when_the_gate_removed_every_contact(tmp_path: Path) -> None:
     from contactcal.infer.calibration.calibrate import calibrate_session
     from contactcal.infer.errors import RunError
+    from contactcal.infer.pipeline.options import MeasureOptions
 
     manifest = Path(__file__).resolve().parents[1] / "examples" / "session" / "manifest.csv"
     strict = _gated(tmp_path / "strict.onnx", 100.0)
     with pytest.raises(RunError, match=r"change gate called \d+ of them.*--no-change-gate"):
-        calibrate_session(manifest, tmp_path / "a", "unet", strict)
+        calibrate_session(manifest, tmp_path / "a", "unet", MeasureOptions(model=strict))
     assert not (tmp_path / "a").exists()
-    rep = calibrate_session(manifest, tmp_path / "b", "unet", strict, change_gate=False)
+    off = MeasureOptions(model=strict, change_gate=False)
+    rep = calibrate_session(manifest, tmp_path / "b", "unet", off)
     assert any(m.result.contact for m in rep.measured)
     record = json.loads((tmp_path / "b" / "calibration.json").read_text())
     assert record["method_config"]["change_gate"] == "off (--no-change-gate)"
@@ -85,6 +87,7 @@ def test_calibrate_records_gated_frames_above_contact(
 ) -> None:
     from contactcal.infer.calibration import calibrate as calibrate_module
     from contactcal.infer.image.read import load_image
+    from contactcal.infer.methods import registry
     from contactcal.infer.methods.base import UNCHANGED_NOTE, AreaResult, Started
 
     manifest = Path(__file__).resolve().parents[1] / "examples" / "session" / "manifest.csv"
@@ -113,7 +116,7 @@ def test_calibrate_records_gated_frames_above_contact(
         def describe(self) -> dict[str, str]:
             return {"name": self.name}
 
-    monkeypatch.setattr(calibrate_module, "make_method", lambda *a, **k: Scripted())
+    monkeypatch.setattr(registry, "make_method", lambda *a, **k: Scripted())
     rep = calibrate_module.calibrate_session(manifest, tmp_path / "cal", "unet")
     record = json.loads((tmp_path / "cal" / "calibration.json").read_text())
     assert record["extra"]["gated_above_contact"] == 1

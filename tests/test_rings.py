@@ -12,8 +12,7 @@ import pytest
 
 from contactcal.infer.bench.accuracy import session_ruled
 from contactcal.infer.bench.scoring import SESSION_SUFFIX, ScoredFrame
-from contactcal.infer.calibration import calibrate as calibrate_module
-from contactcal.infer.calibration.calibrate import calibrate_session
+from contactcal.infer.calibration.calibrate import SessionOptions, calibrate_session
 from contactcal.infer.calibration.points import CalibrationPoint
 from contactcal.infer.calibration.rings import (
     BELOW_NOTE,
@@ -25,6 +24,7 @@ from contactcal.infer.calibration.rings import (
 )
 from contactcal.infer.errors import RunError
 from contactcal.infer.image.read import load_image
+from contactcal.infer.methods import registry
 from contactcal.infer.methods.base import AreaResult, Started
 
 EXAMPLE = Path(__file__).resolve().parents[1] / "examples" / "session"
@@ -215,8 +215,9 @@ def test_calibrate_applies_the_rule(
     tmp_path: Path, monkeypatch: pytest.MonkeyPatch, rule: bool
 ) -> None:
     areas = [0.0, 9e4, 6e4, 1e4, *(2e4 + 1e4 * i for i in range(17))]  # 21 frames, 0-20 kPa
-    monkeypatch.setattr(calibrate_module, "make_method", lambda *a, **k: _Scripted(areas.copy()))
-    rep = calibrate_session(EXAMPLE / "manifest.csv", tmp_path / "cal", "unet", session_rule=rule)
+    monkeypatch.setattr(registry, "make_method", lambda *a, **k: _Scripted(areas.copy()))
+    options = SessionOptions(session_rule=rule)
+    rep = calibrate_session(EXAMPLE / "manifest.csv", tmp_path / "cal", "unet", None, options)
     rec = json.loads(rep.files["json"].read_text())
     notes = [r["note"] for r in rec["points"]]
     assert rec["extra"]["session_rule"] is rule
@@ -245,7 +246,7 @@ def test_calibrate_says_when_the_rule_removed_every_contact(
     tmp_path: Path, monkeypatch: pytest.MonkeyPatch
 ) -> None:
     areas = [0.0, 9e4, *([0.0] * 19)]  # one lone contact at 1 kPa
-    monkeypatch.setattr(calibrate_module, "make_method", lambda *a, **k: _Scripted(areas.copy()))
+    monkeypatch.setattr(registry, "make_method", lambda *a, **k: _Scripted(areas.copy()))
     with pytest.raises(RunError, match="session rule set every one.*--per-frame-contact"):
         calibrate_session(EXAMPLE / "manifest.csv", tmp_path / "cal", "unet")
     assert not (tmp_path / "cal").exists()
@@ -255,7 +256,7 @@ def test_cli_per_frame_contact(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) 
     from contactcal.infer.cli import main
 
     areas = [0.0, 9e4, 6e4, 1e4, *(2e4 + 1e4 * i for i in range(17))]
-    monkeypatch.setattr(calibrate_module, "make_method", lambda *a, **k: _Scripted(areas.copy()))
+    monkeypatch.setattr(registry, "make_method", lambda *a, **k: _Scripted(areas.copy()))
     out = tmp_path / "cal"
     args = ["calibrate", str(EXAMPLE / "manifest.csv"), "--out", str(out)]
     assert main([*args, "--per-frame-contact"]) == 0

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import os
 from collections.abc import Sequence
-from dataclasses import dataclass, replace
+from dataclasses import dataclass, field, replace
 from pathlib import Path
 
 from contactcal.infer.calibration.curve import MM2, PX, Curve
@@ -20,10 +20,10 @@ from contactcal.infer.calibration.table import format_table
 from contactcal.infer.errors import RunError
 from contactcal.infer.files.atomic import OutputSet, run_outputs
 from contactcal.infer.methods.base import UNCHANGED_NOTE
-from contactcal.infer.methods.registry import make_method
-from contactcal.infer.pipeline.boundary import GONE_NOTE, BoundaryOffset
+from contactcal.infer.pipeline.boundary import GONE_NOTE
 from contactcal.infer.pipeline.manifest import Frame, read_session
-from contactcal.infer.pipeline.measure import Measured, measure_files
+from contactcal.infer.pipeline.measure import Measured
+from contactcal.infer.pipeline.options import MeasureOptions
 from contactcal.infer.pipeline.scale import PixelScale
 
 
@@ -39,98 +39,102 @@ class CalibrationReport:
     fit: SessionFit  # every phase's steps, curve and band; hysteresis
 
 
+@dataclass(frozen=True)
+class SessionOptions:
+    """How a session's measurements become its curves (passed whole; command-line defaults)."""
+
+    #: The fit's settings (running median, curve model, bootstrap band, inverse-table step).
+    curve: CurveConfig = field(default_factory=CurveConfig)
+    #: The phase whose curve is inverted (``--inverse-phase``); a session without that phase
+    #: is refused.
+    inverse_phase: str = LOADING
+    #: Apply the session rule (:mod:`~contactcal.infer.calibration.rings`): the steps whose
+    #: region shrinks at the next pressure beyond both stated intervals (with the
+    #: non-increasing run of steps before them) and the contacts left below the contact range
+    #: become "no contact", each with a note saying so. False: ``--per-frame-contact`` keeps
+    #: each frame's own contact flag. Recorded in ``extra``.
+    session_rule: bool = True
+
+
 def calibrate_session(
     manifest: str | os.PathLike[str],
     out_dir: str | os.PathLike[str],
     method_name: str,
-    model: str | os.PathLike[str] | None = None,
-    scale: PixelScale | None = None,
-    curve_config: CurveConfig | None = None,
-    outline: bool = False,
-    argv: Sequence[str] | None = None,
-    device_id: str | None = None,
+    measure: MeasureOptions | None = None,
+    options: SessionOptions | None = None,
+    provenance: Provenance | None = None,
     outputs: OutputSet | None = None,
-    bit_depth: int | None = None,
-    inverse_phase: str = LOADING,
     manifest_as: str | os.PathLike[str] | None = None,
-    session_rule: bool = True,
-    change_gate: bool = True,
-    boundary: BoundaryOffset | None = None,
 ) -> CalibrationReport:
     """Calibrate the session listed in ``manifest`` and write its outputs into ``out_dir``.
 
-    (Over 60 lines only by its arguments and their documentation: the body is ~25 lines.)
-
-    The lowest-pressure frame of the loading pass is the session's reference (ROI for the
-    classical method). Repeated frames of a pressure step are aggregated by their median area;
-    each phase (loading, unloading) gets its own curve and band (`fit_session`). Before the
-    fit, the session rule (:mod:`~contactcal.infer.calibration.rings`) revises to "no contact"
-    the steps whose region shrinks at the next pressure beyond both stated intervals (with the
-    non-increasing run of steps before them) and the contacts left below the contact range,
-    each with a note saying so.
+    The lowest-pressure frame of the loading pass is the session's reference. Repeated frames
+    of a pressure step are aggregated by their median area; each phase (loading, unloading)
+    gets its own curve and band (:func:`fit_session`), after the session rule
+    (:attr:`SessionOptions.session_rule`) where it applies.
 
     Args:
         manifest: CSV with columns ``file,pressure_kpa`` and optionally ``phase`` and others
             (:mod:`contactcal.infer.pipeline.manifest`; paths relative to the manifest).
         out_dir: folder for ``calibration.json``, ``calibration.csv`` and ``curve.png``.
-        method_name: ``"classical"`` (or ``"unet"`` where available).
-        model: ONNX model path for learned methods (None → the shipped one).
-        scale: pixel scale; None → the curve is in px (``area_mm2`` null).
-        curve_config: fit settings (None → defaults).
-        outline: keep each frame's outline in input pixels (for overlays).
-        argv: the command line's arguments, recorded (None: not run from the command line).
-        device_id: identifier of the calibrated display, recorded (1-100 printable characters).
+        method_name: ``"unet"`` or ``"classical"``.
+        measure: how the frames are measured (model, scale in mm/px, boundary offset, bit
+            depth, change gate, threads, outlines); None: the defaults (areas in px).
+        options: how the measurements become curves; None: the defaults.
+        provenance: the command line and the display's id to record (its ``method_config``
+            and ``inputs`` are filled in here); None: neither.
         outputs: the enclosing run's outputs to stage into (None: this call is the run). The
             manifest and its frames are protected: no output may replace them.
-        bit_depth: significant bits of 16-bit frames (``--bit-depth``); None → from the files.
-        inverse_phase: the phase whose curve is inverted (``--inverse-phase``).
         manifest_as: the path recorded for the manifest: its final place when the manifest
             itself is an output staged in this run (video input); None → ``manifest``.
-        session_rule: apply the session rule (``--per-frame-contact`` turns it off); recorded
-            in the record's ``extra``.
-        change_gate: apply the U-Net model's change gate (``--no-change-gate`` turns it off);
-            recorded in the method's configuration (``describe()``).
-        boundary: the rig's boundary offset (from the rig config), applied to the areas of the
-            model it was measured for (:func:`~contactcal.infer.pipeline.measure.measure_files`);
-            the one applied is recorded in ``extra.boundary_offset_mm`` (null: none).
 
     Returns:
         The :class:`CalibrationReport` (table, measurements, curve, written files).
 
     Raises:
         ManifestError / ImageError: bad manifest or frame (nothing written).
-        ValueError: an invalid ``device_id``, an output that would replace an input, or an
-            ``inverse_phase`` the session does not have.
+        ValueError: an output that would replace an input, or an ``inverse_phase`` the session
+            does not have.
         RunError: no contact in any frame (nothing written).
     """
     manifest = Path(manifest)
-    provenance = Provenance(argv=None if argv is None else list(argv), device_id=device_id)
+    measure = measure if measure is not None else MeasureOptions()
+    options = options if options is not None else SessionOptions()
     session = read_session(manifest)
     frames, files = session.frames, [f.file for f in session.frames]
-    model = None if model is None else str(model)
-    method = make_method(method_name, model, outline=outline, change_gate=change_gate)
-    measured = measure_files(
-        files, method, frames[0].file, scale, bit_depth=bit_depth, boundary=boundary
-    )
-    measured_points = _points(manifest, frames, measured, scale)
-    results = revise_points(measured_points) if session_rule else measured_points
-    _check_contact(manifest, measured_points, results, method.name)
-    results, gated_above = flag_gated_above_contact(results)
-    unit = PX if scale is None else MM2
-    fit = fit_session(results, unit, curve_config, inverse_phase, session.phase_source)
+    method = measure.method(method_name)
+    measured = measure.measure(files, method, frames[0].file)
+    points = _points(manifest, frames, measured, measure.scale)
+    results, gated_above = _session_points(manifest, points, options.session_rule, method.name)
+    unit = PX if measure.scale is None else MM2
+    fit = fit_session(results, unit, options.curve, options.inverse_phase, session.phase_source)
     recorded = Path(manifest_as if manifest_as is not None else manifest).resolve()
     extra = {
-        **_extra(recorded, scale, measured),
-        "session_rule": session_rule,
+        **_extra(recorded, measure.scale, measured),
+        "session_rule": options.session_rule,
         "gated_above_contact": gated_above,
     }
     provenance = replace(
-        provenance, method_config=method.describe(), inputs=input_digests(manifest, files, recorded)
+        provenance if provenance is not None else Provenance(),
+        method_config=method.describe(),
+        inputs=input_digests(manifest, files, recorded),
     )
+    model = None if measure.model is None else str(measure.model)
     with run_outputs([manifest, model, *files], join=outputs) as outs:
         paths = write_calibration(out_dir, results, fit, method.name, extra, provenance, outs)
     table = format_table(results, fit)
     return CalibrationReport(table, frames, measured, fit.curve, paths, fit)
+
+
+def _session_points(
+    manifest: Path, points: list[CalibrationPoint], session_rule: bool, name: str
+) -> tuple[list[CalibrationPoint], int]:
+    """The points as the calibration reports them: revised by the session rule (when on),
+    checked to keep a contact (:func:`_check_contact`), a gated frame above a contact noted
+    (:func:`flag_gated_above_contact`); and the number of such notes."""
+    results = revise_points(points) if session_rule else points
+    _check_contact(manifest, points, results, name)
+    return flag_gated_above_contact(results)
 
 
 def _check_contact(

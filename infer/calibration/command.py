@@ -5,17 +5,20 @@ from __future__ import annotations
 
 import argparse
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 from contactcal.infer.pipeline.args import (
     check_change_gate,
     check_out_folder,
+    measure_options,
     method_args,
     overlay_runs,
-    resolve_boundary,
-    resolve_scale,
     run_inputs,
     scale_args,
 )
+
+if TYPE_CHECKING:
+    from contactcal.infer.calibration.calibrate import SessionOptions
 
 
 def add_parsers(sub: argparse._SubParsersAction) -> None:
@@ -43,40 +46,40 @@ def add_parsers(sub: argparse._SubParsersAction) -> None:
     c.set_defaults(func=_cmd_calibrate)
 
 
+def session_options(args: argparse.Namespace) -> SessionOptions:
+    """The calibration's :class:`~contactcal.infer.calibration.calibrate.SessionOptions` from
+    ``--inverse-phase`` and ``--per-frame-contact`` (the fit's settings: their defaults)."""
+    from contactcal.infer.calibration.calibrate import SessionOptions
+
+    return SessionOptions(inverse_phase=args.inverse_phase, session_rule=not args.per_frame_contact)
+
+
 def _cmd_calibrate(args: argparse.Namespace) -> int:
     from contactcal.infer.calibration.calibrate import calibrate_session
-    from contactcal.infer.calibration.provenance import check_device_id
+    from contactcal.infer.calibration.provenance import Provenance
     from contactcal.infer.files.atomic import run_outputs
     from contactcal.infer.pipeline.overlay import write_overlays
     from contactcal.infer.video.command import calibrate_video, is_video_run
 
-    check_device_id(args.device_id)
     check_change_gate(args)
     check_out_folder(args.out, "calibrate")
+    provenance = Provenance(argv=args.argv, device_id=args.device_id)  # refuses a bad id
     if is_video_run(args):  # --video / --camera: contactcal.infer.video.command
-        return calibrate_video(args, resolve_scale(args), resolve_boundary(args))
-    rig = args.manifest.parent / "rig.json"
-    scale, boundary = resolve_scale(args, rig), resolve_boundary(args, rig)
+        return calibrate_video(args, measure_options(args), provenance)
+    measure = measure_options(args, args.manifest.parent / "rig.json")
     with run_outputs(run_inputs(args)) as outs:
         rep = calibrate_session(
             args.manifest,
             args.out,
             args.method,
-            args.model,
-            scale,
-            outline=args.overlay is not None,
-            argv=args.argv,
-            device_id=args.device_id,
+            measure,
+            session_options(args),
+            provenance,
             outputs=outs,
-            bit_depth=args.bit_depth,
-            inverse_phase=args.inverse_phase,
-            session_rule=not args.per_frame_contact,
-            change_gate=not args.no_change_gate,
-            boundary=boundary,
         )
         if args.overlay is not None:
             files = [f.file for f in rep.frames]
-            runs = overlay_runs(args, rep.measured, files, files[0])
+            runs = overlay_runs(args, measure, rep.measured, files, files[0])
             titles = [f"{f.pressure_kpa:g} kPa, {f.phase}" for f in rep.frames]
             write_overlays(runs, args.overlay, titles, outputs=outs, bit_depth=args.bit_depth)
     print(rep.table)

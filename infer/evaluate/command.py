@@ -10,8 +10,7 @@ from contactcal.infer.pipeline.args import (
     change_gate_arg,
     check_change_gate,
     check_out_folder,
-    resolve_boundary,
-    resolve_scale,
+    measure_options,
     scale_args,
 )
 
@@ -54,18 +53,8 @@ def _cmd_evaluate(args: argparse.Namespace) -> int:
 
     check_change_gate(args)
     check_out_folder(args.out, "evaluate")
-    rig = args.manifest.parent / "rig.json"
-    rep = evaluate_session(
-        args.manifest,
-        args.labels,
-        args.out,
-        args.method,
-        args.model,
-        args.bit_depth,
-        change_gate=not args.no_change_gate,
-        scale=resolve_scale(args, rig),
-        boundary=resolve_boundary(args, rig),
-    )
+    measure = measure_options(args, args.manifest.parent / "rig.json")
+    rep = evaluate_session(args.manifest, args.labels, args.out, args.method, measure)
     print(rep.table)
     print(f"evaluation: {rep.files['json']}, {rep.files['png']}")
     return 0

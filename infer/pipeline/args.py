@@ -11,6 +11,7 @@ from contactcal.infer.methods.registry import METHODS
 if TYPE_CHECKING:
     from contactcal.infer.pipeline.boundary import BoundaryOffset
     from contactcal.infer.pipeline.measure import Measured
+    from contactcal.infer.pipeline.options import MeasureOptions
     from contactcal.infer.pipeline.scale import PixelScale
 
 
@@ -134,6 +135,24 @@ def resolve_boundary(
     return None if rig is None else load_boundary_offset(rig)
 
 
+def measure_options(args: argparse.Namespace, default_rig: Path | None = None) -> MeasureOptions:
+    """The run's :class:`~contactcal.infer.pipeline.options.MeasureOptions` from its command
+    line: ``--model``, the scale and boundary offset (:func:`resolve_scale`,
+    :func:`resolve_boundary`; ``default_rig``: the ``rig.json`` read when no option names one),
+    ``--bit-depth``, ``--no-change-gate``, ``--threads`` and ``--overlay`` (outlines)."""
+    from contactcal.infer.pipeline.options import MeasureOptions
+
+    return MeasureOptions(
+        model=args.model,
+        scale=resolve_scale(args, default_rig),
+        boundary=resolve_boundary(args, default_rig),
+        bit_depth=args.bit_depth,
+        change_gate=not args.no_change_gate,
+        threads=getattr(args, "threads", 1),
+        outline=getattr(args, "overlay", None) is not None,
+    )
+
+
 def run_inputs(args: argparse.Namespace) -> list[Path]:
     """The files a run reads besides its images: no output may replace them."""
     names = ("reference", "model", "rig", "manifest")
@@ -141,17 +160,19 @@ def run_inputs(args: argparse.Namespace) -> list[Path]:
 
 
 def overlay_runs(
-    args: argparse.Namespace, primary: list[Measured], files: list[Path], reference: Path | None
+    args: argparse.Namespace,
+    options: MeasureOptions,
+    primary: list[Measured],
+    files: list[Path],
+    reference: Path | None,
 ) -> dict[str, list[Measured]]:
-    """Measurements of every method for the overlays (the primary run is reused)."""
-    from contactcal.infer.methods.registry import make_method
-    from contactcal.infer.pipeline.measure import measure_files
+    """Measurements of every method for the overlays (the primary run is reused; the others
+    only draw outlines, so they get no scale or boundary offset)."""
+    from dataclasses import replace
 
+    outlines = replace(options, scale=None, boundary=None)
     runs = {args.method: primary}
     for name in METHODS:
         if name not in runs:
-            method = make_method(
-                name, args.model, args.threads, outline=True, change_gate=not args.no_change_gate
-            )
-            runs[name] = measure_files(files, method, reference, bit_depth=args.bit_depth)
+            runs[name] = outlines.measure(files, outlines.method(name, outline=True), reference)
     return runs

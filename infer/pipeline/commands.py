@@ -9,10 +9,9 @@ from pathlib import Path
 from contactcal.infer.pipeline.args import (
     check_change_gate,
     check_out_folder,
+    measure_options,
     method_args,
     overlay_runs,
-    resolve_boundary,
-    resolve_scale,
     run_inputs,
     scale_args,
 )
@@ -40,8 +39,6 @@ def _cmd_measure(args: argparse.Namespace) -> int:
     from contactcal.infer.files.atomic import run_outputs, write_synced
     from contactcal.infer.files.jsonable import json_text
     from contactcal.infer.image.read import SUPPORTED_SUFFIXES
-    from contactcal.infer.methods.registry import make_method
-    from contactcal.infer.pipeline.measure import measure_files
     from contactcal.infer.pipeline.overlay import write_overlays
 
     check_device_id(args.device_id)
@@ -54,28 +51,16 @@ def _cmd_measure(args: argparse.Namespace) -> int:
         )
     with run_outputs([*args.images, *run_inputs(args)]) as outs:
         json_path = None if to_stdout else outs.stage(args.out)  # refused here, before work
-        method = make_method(
-            args.method,
-            args.model,
-            args.threads,
-            args.overlay is not None,
-            change_gate=not args.no_change_gate,
-        )
-        measured = measure_files(
-            args.images,
-            method,
-            args.reference,
-            resolve_scale(args),
-            bit_depth=args.bit_depth,
-            boundary=resolve_boundary(args),
-        )
+        options = measure_options(args)
+        method = options.method(args.method)
+        measured = options.measure(args.images, method, args.reference)
         # device_id: the display measured, per object (the output stays a list of objects).
         rows = [{**m.to_json(method.name), "device_id": args.device_id} for m in measured]
         text = json_text(rows)
         if json_path is not None:
             write_synced(json_path, text)
         if args.overlay is not None:
-            runs = overlay_runs(args, measured, args.images, args.reference)
+            runs = overlay_runs(args, options, measured, args.images, args.reference)
             write_overlays(runs, args.overlay, outputs=outs, bit_depth=args.bit_depth)
     if to_stdout:
         sys.stdout.write(text)

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import os
+from dataclasses import replace
 from pathlib import Path
 
 import numpy as np
@@ -12,7 +13,9 @@ from contactcal.infer.files.atomic import run_outputs, write_synced
 from contactcal.infer.image.read import load_image
 from contactcal.infer.image.write import write_image
 from contactcal.infer.methods.registry import METHODS
+from contactcal.infer.pipeline.boundary import load_boundary_offset
 from contactcal.infer.pipeline.examples import example_manifest
+from contactcal.infer.pipeline.options import MeasureOptions
 from contactcal.infer.pipeline.overlay import draw_overlay, montage
 from contactcal.infer.pipeline.scale import load_rig_config
 
@@ -34,14 +37,14 @@ def run_demo(
     out = Path(out_dir)
     manifest = Path(manifest) if manifest is not None else example_manifest()
     rig = manifest.parent / "rig.json"
-    scale = load_rig_config(rig) if rig.is_file() else None
+    measure = MeasureOptions(outline=True)
+    if rig.is_file():  # as `calibrate` reads the rig.json beside a manifest
+        measure = replace(measure, scale=load_rig_config(rig), boundary=load_boundary_offset(rig))
     reports: dict[str, CalibrationReport] = {}
     lines = [f"session: {manifest}"]
     with run_outputs() as outs:
         for method in METHODS:
-            rep = calibrate_session(
-                manifest, out / method, method, None, scale, outline=True, outputs=outs
-            )
+            rep = calibrate_session(manifest, out / method, method, measure, outputs=outs)
             reports[method] = rep
             lines += [f"\n== {method} → {out / method}", rep.table]
         frames = next(iter(reports.values())).frames

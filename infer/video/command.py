@@ -12,17 +12,22 @@ from __future__ import annotations
 import argparse
 import os
 import sys
+from collections.abc import Callable, Iterator
+from dataclasses import replace
 from pathlib import Path
 from typing import TYPE_CHECKING
 
 from contactcal.infer.video.steps import StepConfig
 
 if TYPE_CHECKING:
+    import numpy as np
+
+    from contactcal.infer.calibration.provenance import Provenance
     from contactcal.infer.files.atomic import OutputSet
-    from contactcal.infer.pipeline.boundary import BoundaryOffset
-    from contactcal.infer.pipeline.scale import PixelScale
+    from contactcal.infer.pipeline.options import MeasureOptions
     from contactcal.infer.video.extract import Extractor
     from contactcal.infer.video.live import Preview
+    from contactcal.infer.video.log import PressureLog
 
 #: Preview frame rate when the camera states none, frames/s.
 DEFAULT_CAMERA_FPS = 30.0
@@ -98,54 +103,80 @@ def is_video_run(args: argparse.Namespace) -> bool:
 
 
 def _preview(
-    args: argparse.Namespace, outs: OutputSet, extractor: Extractor, fps: float
+    args: argparse.Namespace,
+    measure: MeasureOptions,
+    outs: OutputSet,
+    extractor: Extractor,
+    fps: float,
 ) -> Preview | None:
-    from contactcal.infer.methods.registry import make_method
     from contactcal.infer.video.live import Preview, preview_format
 
     if not (args.show or args.preview or args.camera is not None):
         return None
-    method = make_method(
-        "unet", args.model, args.threads, outline=True, change_gate=not args.no_change_gate
-    )
+    method = measure.method("unet", outline=True)
     if args.show:
         return Preview(method, extractor, None, "", fps)
     suffix, fourcc = preview_format()
     return Preview(method, extractor, outs.stage(args.out / f"preview{suffix}"), fourcc, fps)
 
 
-def calibrate_video(
-    args: argparse.Namespace, scale: PixelScale | None, boundary: BoundaryOffset | None = None
-) -> int:
-    """Extract the steady frames, then calibrate them (see the module docstring)."""
+def _source(
+    args: argparse.Namespace,
+) -> tuple[
+    Iterator[tuple[float, np.ndarray]],
+    Callable[[], PressureLog | None],
+    Callable[[Extractor, float], bool],
+    float,
+]:
+    """``(frames, feed, stop, fps)`` of the recording (``--video`` with its whole pressure
+    log) or the camera (``--camera``, the log polled as it grows; stops back at 0 kPa or at
+    ``--duration-s``), for :func:`~contactcal.infer.video.extract.extract_frames`."""
     import cv2
 
-    from contactcal.infer.calibration.calibrate import calibrate_session
-    from contactcal.infer.files.atomic import run_outputs, write_synced
     from contactcal.infer.video import extract, live
     from contactcal.infer.video.log import read_pressure_log
+
+    if args.video is not None:
+        logs = iter([read_pressure_log(args.pressure_log)])
+        cap, fps = extract.open_video(args.video)
+        return (
+            extract.video_frames(cap, fps, args.video),
+            lambda: next(logs, None),
+            lambda e, t: False,
+            fps,
+        )
+    feed = live.LogPoller(args.pressure_log)
+    cap = live.open_camera(args.camera)
+    fps = cap.get(cv2.CAP_PROP_FPS) or DEFAULT_CAMERA_FPS
+    limit = args.duration_s
+
+    def stop(e: extract.Extractor, t: float) -> bool:
+        return live.returned_to_zero(e, t) or (limit is not None and t >= limit)
+
+    return live.capture_frames(cap), feed, stop, fps
+
+
+def calibrate_video(
+    args: argparse.Namespace, measure: MeasureOptions, provenance: Provenance
+) -> int:
+    """Extract the steady frames, then calibrate them (see the module docstring).
+
+    Args:
+        args: the ``calibrate --video | --camera`` command line.
+        measure: how the extracted frames are measured (no outlines: no overlays here).
+        provenance: the command line and the display's id, recorded.
+    """
+    from contactcal.infer.calibration.calibrate import calibrate_session
+    from contactcal.infer.calibration.command import session_options
+    from contactcal.infer.files.atomic import run_outputs, write_synced
+    from contactcal.infer.video import extract, live
 
     cfg = StepConfig(args.tolerance_kpa, args.settle_s)
     protect = [args.video, args.pressure_log, args.model, args.rig]
     with run_outputs(protect) as outs:
         ex = extract.Extractor(cfg, args.out / "frames", outs.stage)
-        if args.video is not None:
-            log = read_pressure_log(args.pressure_log)
-            cap, fps = extract.open_video(args.video)
-            frames = extract.video_frames(cap, fps, args.video)
-            logs = iter([log])
-            feed, stop = (lambda: next(logs, None)), (lambda e, t: False)
-        else:
-            feed = live.LogPoller(args.pressure_log)
-            cap = live.open_camera(args.camera)
-            fps = cap.get(cv2.CAP_PROP_FPS) or DEFAULT_CAMERA_FPS
-            frames = live.capture_frames(cap)
-            limit = args.duration_s
-
-            def stop(e: extract.Extractor, t: float) -> bool:
-                return live.returned_to_zero(e, t) or (limit is not None and t >= limit)
-
-        preview = _preview(args, outs, ex, fps)
+        frames, feed, stop, fps = _source(args)
+        preview = _preview(args, measure, outs, ex, fps)
         progress = live.Progress(ex) if args.camera is not None else None
         observers = [o for o in (preview, progress) if o is not None]
         try:
@@ -161,17 +192,11 @@ def calibrate_video(
             manifest,
             args.out,
             args.method,
-            args.model,
-            scale,
-            argv=args.argv,
-            device_id=args.device_id,
+            replace(measure, outline=False),
+            session_options(args),
+            provenance,
             outputs=outs,
-            bit_depth=args.bit_depth,
-            inverse_phase=args.inverse_phase,
             manifest_as=final_manifest,
-            session_rule=not args.per_frame_contact,
-            change_gate=not args.no_change_gate,
-            boundary=boundary,
         )
     print(rep.table)
     print(ex.summary())

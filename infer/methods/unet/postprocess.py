@@ -176,6 +176,22 @@ def _gate(
     return change, change is not None and change < min_change
 
 
+def _largest_region(
+    prob: np.ndarray, box: CropBox, shape: tuple[int, int], threshold: float
+) -> tuple[np.ndarray, np.ndarray]:
+    """``(prob, keep)``: the ``(S, S) float32`` probabilities with the network pixels outside
+    the image set to 0, and the ``(S, S) bool`` largest 8-connected region at or above
+    ``threshold`` (all False when there is none)."""
+    inside = np.zeros(prob.shape, bool)
+    inside[valid_window(box, shape, prob.shape[0])] = True
+    prob = np.where(inside, prob, 0.0).astype(np.float32)
+    binary = (prob >= threshold).astype(np.uint8)
+    n, labels, stats, _ = cv2.connectedComponentsWithStats(binary, connectivity=8)
+    if n <= 1:
+        return prob, np.zeros_like(binary, dtype=bool)
+    return prob, labels == 1 + int(np.argmax(stats[1:, cv2.CC_STAT_AREA]))
+
+
 def postprocess(
     prob: np.ndarray,
     box: CropBox,
@@ -208,16 +224,8 @@ def postprocess(
         The segmentation; areas and interval in input pixels (network pixels × the crop's
         scale²).
     """
-    inside = np.zeros(prob.shape, bool)
-    inside[valid_window(box, shape, prob.shape[0])] = True
-    prob = np.where(inside, prob, 0.0).astype(np.float32)
-    binary = (prob >= spec.threshold).astype(np.uint8)
-    n, labels, stats, _ = cv2.connectedComponentsWithStats(binary, connectivity=8)
+    prob, keep = _largest_region(prob, box, shape, spec.threshold)
     px_per_net = box.scale(prob.shape[0]) ** 2  # input pixels per network pixel
-    if n <= 1:
-        keep = np.zeros_like(binary, dtype=bool)
-    else:
-        keep = labels == 1 + int(np.argmax(stats[1:, cv2.CC_STAT_AREA]))
     region_net = float(keep.sum())
     if region_net < spec.min_contact_area_px or region_net == 0.0:
         keep = np.zeros_like(keep)

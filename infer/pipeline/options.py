@@ -1,0 +1,80 @@
+"""How a run measures its frames: one frozen config, built once per run and passed whole.
+
+``measure``, ``calibrate`` (frames and video), ``evaluate`` and the overlays all measure frames
+the same way: a method by name, and what it is given (the model, the rig's scale and boundary
+offset, the frames' bit depth, the change gate, threads, outlines). The command line builds it
+in one place (:func:`~contactcal.infer.pipeline.args.measure_options`).
+"""
+
+from __future__ import annotations
+
+import os
+from collections.abc import Sequence
+from dataclasses import dataclass
+from typing import TYPE_CHECKING
+
+if TYPE_CHECKING:
+    from contactcal.infer.methods.base import Method
+    from contactcal.infer.pipeline.boundary import BoundaryOffset
+    from contactcal.infer.pipeline.measure import Measured
+    from contactcal.infer.pipeline.scale import PixelScale
+
+
+@dataclass(frozen=True)
+class MeasureOptions:
+    """What a run's methods are given (every field has the command line's default).
+
+    The method's name is not part of it: ``evaluate`` and the overlays measure with several.
+    """
+
+    #: ONNX file of the U-Net (``--model``); None: the shipped one. Ignored by the classical
+    #: routine.
+    model: str | os.PathLike[str] | None = None
+    #: The rig's pixel scale (``--mm-per-px`` / ``--rig`` / ``rig.json``); None: areas in px
+    #: only (``area_mm2`` null).
+    scale: PixelScale | None = None
+    #: The rig's boundary offset (rig config), applied to the U-Net model it was measured for;
+    #: None: none.
+    boundary: BoundaryOffset | None = None
+    #: Significant bits of 16-bit frames (``--bit-depth``); None: read from each file.
+    bit_depth: int | None = None
+    #: Apply the U-Net model's change gate; False: ``--no-change-gate`` (recorded).
+    change_gate: bool = True
+    #: onnxruntime intra-op threads (``--threads``): 1 is the benchmarked default.
+    threads: int = 1
+    #: Keep each frame's outline in input pixels (overlays; costs a full-size warp per frame).
+    outline: bool = False
+
+    def method(self, name: str, outline: bool | None = None) -> Method:
+        """The method ``name`` (``"unet"`` / ``"classical"``) as these options configure it.
+
+        Args:
+            name: method name (:data:`~contactcal.infer.methods.registry.METHODS`).
+            outline: overrides :attr:`outline` (None: keep it).
+
+        Raises:
+            ValueError: unknown method; ``ModelError``: an unusable model file.
+        """
+        from contactcal.infer.methods.registry import make_method
+
+        keep = self.outline if outline is None else outline
+        return make_method(name, self.model, self.threads, keep, change_gate=self.change_gate)
+
+    def measure(
+        self,
+        files: Sequence[str | os.PathLike[str]],
+        method: Method,
+        reference: str | os.PathLike[str] | None,
+    ) -> list[Measured]:
+        """``files`` measured with ``method`` against ``reference``, with this run's scale, bit
+        depth and boundary offset (:func:`~contactcal.infer.pipeline.measure.measure_files`)."""
+        from contactcal.infer.pipeline.measure import measure_files
+
+        return measure_files(
+            files,
+            method,
+            reference,
+            self.scale,
+            bit_depth=self.bit_depth,
+            boundary=self.boundary,
+        )
