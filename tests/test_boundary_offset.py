@@ -228,3 +228,22 @@ def test_calibrate_moves_the_areas_and_mm_per_px_keeps_the_offset(tmp_path: Path
     assert a["extra"]["boundary_offset_mm"] is None and b["extra"]["boundary_offset_mm"] == 0.2
     moved = [(p, q) for p, q in zip(a["points"], b["points"], strict=True) if p["area_px"] > 0]
     assert moved and all(q["area_px"] > p["area_px"] for p, q in moved)
+
+
+def test_demo_applies_the_offset_of_the_rig_json_beside_its_manifest(tmp_path: Path) -> None:
+    """As ``calibrate`` does; the classical routine is never moved."""
+    pytest.importorskip("onnxruntime")
+    import shutil
+
+    from contactcal.infer.pipeline.demo import run_demo
+
+    session = tmp_path / "session"
+    shutil.copytree(EXAMPLE, session, ignore=shutil.ignore_patterns("masks"))
+    _rig(session / "rig.json", **{OFFSET_KEY: 0.2, MODEL_KEY: _shipped_sha()})
+    run_demo(tmp_path / "demo", session / "manifest.csv")
+    records = {
+        m: json.loads((tmp_path / "demo" / m / "calibration.json").read_text())
+        for m in ("unet", "classical")
+    }
+    assert records["unet"]["extra"]["boundary_offset_mm"] == 0.2
+    assert records["classical"]["extra"]["boundary_offset_mm"] is None

@@ -61,9 +61,9 @@ def _cmd_calibrate(args: argparse.Namespace) -> int:
     from contactcal.infer.pipeline.overlay import write_overlays
     from contactcal.infer.video.command import calibrate_video, is_video_run
 
+    provenance = Provenance(argv=args.argv, device_id=args.device_id)  # refuses a bad id
     check_change_gate(args)
     check_out_folder(args.out, "calibrate")
-    provenance = Provenance(argv=args.argv, device_id=args.device_id)  # refuses a bad id
     if is_video_run(args):  # --video / --camera: contactcal.infer.video.command
         return calibrate_video(args, measure_options(args), provenance)
     measure = measure_options(args, args.manifest.parent / "rig.json")
