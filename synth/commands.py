@@ -29,6 +29,13 @@ def add_parsers(sub: argparse._SubParsersAction) -> None:
         default=0.0,
         help="share of the sessions with a bright dust speck near the centre of the window",
     )
+    s.add_argument(
+        "--departure-fraction",
+        type=float,
+        default=0.0,
+        help="share of the sessions whose membrane leaves the contact edge at a drawn slope "
+        "(the inner ring then closes on the contact edge, or leaves it; docs/synth.md)",
+    )
     s.add_argument("--out", type=Path, required=True, help="dataset folder")
     s.add_argument("--workers", type=int, default=1, help="worker processes (default 1)")
     s.add_argument("--shard", default="0/1", help="render only shard i of n (i/n)")
@@ -61,6 +68,7 @@ def _cmd_synth(args: argparse.Namespace) -> int:
         hard_fraction=args.hard_fraction,
         smooth_fraction=args.smooth_fraction,
         speck_fraction=args.speck_fraction,
+        departure_fraction=args.departure_fraction,
         render=RenderConfig(width=width, height=height, spp=args.spp, variant=args.variant),
     )
     shard = parse_shard(args.shard)

@@ -56,6 +56,9 @@ class DatasetConfig:
     # share of all sessions with a bright dust speck on the window near the centre (where the
     # shipped model calls contact before contact); 0 keeps the shipped model's world
     speck_fraction: float = 0.0
+    # share of all sessions whose membrane leaves the contact edge at a drawn slope, bringing the
+    # inner ring onto the edge or beyond it (docs/synth.md); 0 keeps the shipped model's world
+    departure_fraction: float = 0.0
     render: RenderConfig = field(default_factory=RenderConfig)  # size, spp, mesh, variant
 
     def __post_init__(self) -> None:
@@ -66,6 +69,10 @@ class DatasetConfig:
             raise ValueError(f"--smooth-fraction must be in [0, 1], got {self.smooth_fraction}")
         if not 0.0 <= self.speck_fraction <= 1.0:
             raise ValueError(f"--speck-fraction must be in [0, 1], got {self.speck_fraction}")
+        if not 0.0 <= self.departure_fraction <= 1.0:
+            raise ValueError(
+                f"--departure-fraction must be in [0, 1], got {self.departure_fraction}"
+            )
 
 
 def session_params(config: DatasetConfig, finger: int) -> SessionParams:
@@ -73,7 +80,11 @@ def session_params(config: DatasetConfig, finger: int) -> SessionParams:
     rng = np.random.default_rng([config.seed, finger])
     hard = bool(rng.random() < config.hard_fraction)
     return sample_session(
-        rng, hard=hard, smooth_fraction=config.smooth_fraction, speck_fraction=config.speck_fraction
+        rng,
+        hard=hard,
+        smooth_fraction=config.smooth_fraction,
+        speck_fraction=config.speck_fraction,
+        departure_fraction=config.departure_fraction,
     )
 
 
@@ -216,6 +227,7 @@ def _check_config_matches(root: Path, config: DatasetConfig) -> None:
         new = json.loads(json.dumps(data))
         old.setdefault("smooth_fraction", 0.0)  # folders rendered before the options existed
         old.setdefault("speck_fraction", 0.0)
+        old.setdefault("departure_fraction", 0.0)
         old.setdefault("synth_revision", 1)
         if old["synth_revision"] != SYNTH_REVISION:
             raise ValueError(

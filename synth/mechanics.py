@@ -266,6 +266,7 @@ def solve_contact(
         indentation_mm=0.0,
         clamp_radius_mm=float(a),
         harmonics=harm,
+        departure_slope=float(membrane.departure_slope),
     )
     area_b = polygon_area_mm2(patch.boundary_polygon(AREA_POLYGON_POINTS))
     z_top = _plateau_height(pressure_kpa, area_b, membrane)

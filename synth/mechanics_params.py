@@ -79,6 +79,11 @@ class FingerParams:
         _require(total < 0.5, "FingerParams.harmonics", "sum |eps_n| (+ tilt egg) < 0.5", total)
 
 
+#: Steepest departure of the membrane from the contact edge (dz/dr): a fingertip's surface slope
+#: at the edge of a large patch (r_b ≈ 7 mm on a 9 mm sphere) is ~1.
+MAX_DEPARTURE_SLOPE = 1.0
+
+
 @dataclass(frozen=True)
 class MembraneParams:
     """Clamped membrane, its gap to the finger and its slack at rest."""
@@ -90,6 +95,11 @@ class MembraneParams:
     slack_mm: float = 0.0  # mm, wrinkle amplitude of the slack membrane at 0 kPa (gone by
     #   SLACK_TAUT_KPA); scatters the flat membrane's LGP reflex, absent at 0 kPa in the paper
     slack_seed: int = 0  # seed of the wrinkle pattern (one membrane = one pattern)
+    # dz/dr (≥ 0, ≤ MAX_DEPARTURE_SLOPE) at which the free annulus leaves the contact edge: 0 is
+    # the clamped annulus's zero slope (the v2 world: the inner ring ~0.6 mm outside the edge);
+    # > 0, a membrane leaving a curved fingertip at its slope: the ring closes on the edge (~0.3),
+    # then leaves no ring near it at all (~0.5). Shape only: the area-pressure law is unchanged.
+    departure_slope: float = 0.0
 
     def __post_init__(self) -> None:
         _positive("MembraneParams.clamp_radius_mm", self.clamp_radius_mm)
@@ -99,3 +109,10 @@ class MembraneParams:
         _require(_finite(g) and g >= 0.0, "MembraneParams.gap_mm", "finite >= 0 (mm)", g)
         w = self.slack_mm
         _require(_finite(w) and w >= 0.0, "MembraneParams.slack_mm", "finite >= 0 (mm)", w)
+        d = self.departure_slope
+        _require(
+            _finite(d) and 0.0 <= d <= MAX_DEPARTURE_SLOPE,
+            "MembraneParams.departure_slope",
+            f"finite in [0, {MAX_DEPARTURE_SLOPE}] (dz/dr)",
+            d,
+        )

@@ -73,6 +73,7 @@ class ContactState:
     harmonics: tuple[tuple[int, float, float], ...] = ()  # (n, eps_n, phase_n rad) incl. n=1 tilt
     slack_mm: float = 0.0  # mm, wrinkle amplitude of the (not yet taut) membrane; 0 in contact
     slack_seed: int = 0  # seed of the wrinkle pattern
+    departure_slope: float = 0.0  # dz/dr leaving the contact edge (MembraneParams); v2 world: 0
 
     def _patch_polar(
         self, x_mm: np.ndarray, y_mm: np.ndarray
@@ -111,7 +112,10 @@ class ContactState:
         Without contact: paraboloid cap ``h (1 - r²/a²)``, plus the slack wrinkles
         ``slack_mm · wrinkles(x, y)`` under the same envelope. In contact: plateau ``plateau_z_mm``
         inside the patch and, along each ray from the patch centre, the clamped-annulus profile
-        ``z_top f(r)`` from the boundary r_b to the clamp circle R_c (zero slope at r_b, 0 at R_c).
+        ``z_top f(r)`` from the boundary r_b to the clamp circle R_c (zero slope at r_b, 0 at R_c),
+        lowered by ``s (r − r_b)(1 − t)²`` (``t = (r − r_b)/(R_c − r_b)``, ``s`` =
+        ``departure_slope``) so that it leaves the edge at slope ``s`` and still ends at 0 at
+        R_c (and never below 0).
 
         Args:
             x_mm: world x (mm), any shape broadcastable with `y_mm`.
@@ -140,6 +144,10 @@ class ContactState:
             num = 0.25 * (cc * cc - rr * rr) - 0.5 * b2 * np.log(cc / rr)
             den = 0.25 * (cc * cc - b2) - 0.5 * b2 * np.log(cc / rb[ann])
             z[ann] = self.plateau_z_mm * num / den
+            if self.departure_slope > 0.0:
+                t = (rr - rb[ann]) / (cc - rb[ann])
+                drop = self.departure_slope * (rr - rb[ann]) * (1.0 - t) ** 2
+                z[ann] = np.maximum(z[ann] - drop, 0.0)
         return z
 
     def boundary_polygon(self, n: int = 512) -> np.ndarray:

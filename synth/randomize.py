@@ -23,6 +23,7 @@ from contactcal.synth.mechanics_params import FingerParams, MembraneParams
 from contactcal.synth.ranges import (
     BODY_DRAWS,
     CAMERA2_DRAWS,
+    DEPARTURE_DRAWS,
     DIM_SECTOR_PROBABILITY,
     EXPOSURE_DRAWS,
     JPEG_PROBABILITY,
@@ -88,8 +89,11 @@ def _finger(v: dict[str, Any]) -> FingerParams:
     )
 
 
-def _membrane_and_rig(v: dict[str, Any]) -> tuple[MembraneParams, RigGeometry]:
+def _membrane_and_rig(
+    v: dict[str, Any], departure_fraction: float
+) -> tuple[MembraneParams, RigGeometry]:
     a, gap = v["clamp_radius_mm"], v["gap_mm"]
+    departs = v["departure_draw"] < departure_fraction
     membrane = MembraneParams(
         clamp_radius_mm=a,
         tension_n_per_mm=tension_for_onset(v["onset_kpa"], gap, a),
@@ -97,6 +101,7 @@ def _membrane_and_rig(v: dict[str, Any]) -> tuple[MembraneParams, RigGeometry]:
         onset_ramp_kpa=v["onset_ramp_kpa"],
         slack_mm=float(v["slack_mm"]),
         slack_seed=int(v["slack_seed"]),
+        departure_slope=float(v["departure_slope"]) if departs else 0.0,
     )
     rig = RigGeometry(
         chamber_depth_mm=float(v["chamber_depth_mm"]),
@@ -165,6 +170,7 @@ def sample_session(
     hard: bool = False,
     smooth_fraction: float = 0.0,
     speck_fraction: float = 0.0,
+    departure_fraction: float = 0.0,
 ) -> SessionParams:
     """Draw one session's parameters (``ranges``' tables, in order, plus conditional draws).
 
@@ -176,6 +182,9 @@ def sample_session(
         speck_fraction: share of all sessions with a bright dust speck near the image centre
             (``SPECK_DRAWS``, ``LookEffects.centre_speck``); 0 = none, as in the shipped
             model's data.
+        departure_fraction: share of all sessions whose membrane leaves the contact edge at a
+            drawn slope (``DEPARTURE_DRAWS``, ``MembraneParams.departure_slope``); 0 = none
+            (the clamped annulus's zero slope), as in the shipped model's data.
 
     Returns:
         The session parameters.
@@ -190,8 +199,9 @@ def sample_session(
     v |= _draw(rng, SKIN_DRAWS, hard)
     v |= _draw(rng, CAMERA2_DRAWS, hard)  # v2 appearance, last: earlier draws keep their values
     v |= _draw(rng, SMOOTH_DRAWS, hard)  # smooth coating, after v2: earlier draws keep theirs
-    v |= _draw(rng, SPECK_DRAWS, hard)  # centre speck, last: every earlier draw keeps its value
-    membrane, rig = _membrane_and_rig(v)
+    v |= _draw(rng, SPECK_DRAWS, hard)  # centre speck: every earlier draw keeps its value
+    v |= _draw(rng, DEPARTURE_DRAWS, hard)  # membrane departure, last: the same
+    membrane, rig = _membrane_and_rig(v, departure_fraction)
     return SessionParams(
         finger=_finger(v),
         membrane=membrane,

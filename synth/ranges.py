@@ -181,6 +181,16 @@ SPECK_DRAWS = (
     _uniform("speck_place_deg", 0.0, 360.0),
 )
 SPECK_DISC_HEIGHTS = 0.12
+# Membrane departure (opt-in: ``DatasetConfig.departure_fraction``; drawn after the speck, so every
+# earlier draw keeps its value): the slope at which the free membrane leaves the contact edge
+# (``MembraneParams.departure_slope``). 0 puts the inner ring ~0.6 mm outside the edge (our v2
+# optics); ~0.3 closes it on the edge, as the rig paper sees it ("the growing fingerprint region
+# was delimited by an inner ring"); ~0.5 leaves no ring near the edge at all (measured on
+# validation sessions re-rendered, docs/synth.md "Membrane departure").
+DEPARTURE_DRAWS = (
+    _uniform("departure_draw", 0.0, 1.0),  # < departure_fraction → the slope below, else 0
+    _uniform("departure_slope", 0.0, 0.5),
+)
 STRAY_PROBABILITY = 0.3  # hard only: share of sessions with a stray reflection
 DIM_SECTOR_PROBABILITY = 0.3  # hard only: share of sessions with a dim LED sector
 JPEG_PROBABILITY = 0.5  # share of sessions saved as JPEG (else lossless)

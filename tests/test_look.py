@@ -252,3 +252,22 @@ def test_camera_blur_means_the_same_optics_at_every_width() -> None:
         kept.append(float(centre.std() / row[w // 4 : 3 * w // 4].std()))
     assert 0.1 < kept[0] < 0.9  # the blur is visible ...
     assert kept[1] == pytest.approx(kept[0], abs=0.05)  # ... and the same at both widths
+
+
+def test_membrane_departure_in_the_chosen_share_of_sessions_other_draws_unchanged() -> None:
+    """Like the speck: drawn last, so every other parameter is what the seed gave before."""
+    departs = 0
+    for seed in range(60):
+        for hard in (False, True):
+            plain = sample_session(np.random.default_rng([seed, 2]), hard=hard)
+            with_d = sample_session(
+                np.random.default_rng([seed, 2]), hard=hard, departure_fraction=0.5
+            )
+            assert plain.membrane.departure_slope == 0.0
+            slope = with_d.membrane.departure_slope
+            membrane = dataclasses.replace(with_d.membrane, departure_slope=0.0)
+            assert dataclasses.replace(with_d, membrane=membrane) == plain
+            if slope > 0:
+                departs += 1
+                assert slope <= 0.5
+    assert 40 <= departs <= 80  # departure_fraction 0.5 of 120

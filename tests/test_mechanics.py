@@ -206,3 +206,37 @@ def test_patch_is_kept_inside_the_clamp() -> None:
 def test_bad_inputs_raise(call: object, match: str) -> None:
     with pytest.raises(ValueError, match=match):
         call()  # type: ignore[operator]
+
+
+@pytest.mark.parametrize("slope", [0.15, 0.5])
+def test_departure_slope_leaves_the_edge_at_that_slope(slope: float) -> None:
+    """The membrane keeps the plateau and the clamp, and leaves the edge at ``slope``."""
+    import dataclasses
+
+    plain = solve_contact(12.0, finger(**PERTURBED), membrane())
+    m = dataclasses.replace(membrane(), departure_slope=slope)
+    s = solve_contact(12.0, finger(**PERTURBED), m)
+    assert s.departure_slope == slope and s.area_mm2 == plain.area_mm2  # shape only
+    assert s.plateau_z_mm == plain.plateau_z_mm
+    x, y = np.meshgrid(GRID[::8], GRID[::8])
+    z, z0 = s.membrane_z(x, y), plain.membrane_z(x, y)
+    assert z.min() >= 0.0 and np.all(z <= z0) and np.all(z[s.inside(x, y)] == s.plateau_z_mm)
+    assert np.all(z[x**2 + y**2 >= s.clamp_radius_mm**2] == 0.0)
+    # along the long axis (yaw 0.4) from the patch centre, just outside the boundary
+    c, u = np.array(s.centre_mm), np.array([math.cos(0.4), math.sin(0.4)])
+    rb = float(np.hypot(*(s.boundary_polygon(4096)[0] - c)))
+    h = 1e-4
+    z_at = [float(s.membrane_z(*(c + (rb + d) * u))) for d in (h, 2 * h)]
+    plain_at = [float(plain.membrane_z(*(c + (rb + d) * u))) for d in (h, 2 * h)]
+    assert z_at[0] == pytest.approx(s.plateau_z_mm, abs=1e-3)  # continuous at the edge
+    dz, dz0 = (z_at[1] - z_at[0]) / h, (plain_at[1] - plain_at[0]) / h
+    assert dz - dz0 == pytest.approx(-slope, rel=0.01)
+    assert abs(dz0) < 0.01  # the clamped annulus alone leaves with zero slope
+
+
+@pytest.mark.parametrize("bad", [-0.1, 1.5, float("nan")])
+def test_departure_slope_is_checked(bad: float) -> None:
+    import dataclasses
+
+    with pytest.raises(ValueError, match="departure_slope"):
+        dataclasses.replace(membrane(), departure_slope=bad)

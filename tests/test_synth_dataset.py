@@ -131,6 +131,8 @@ def test_bad_arguments(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> No
         dataclasses.replace(CONFIG, smooth_fraction=1.5)
     with pytest.raises(ValueError, match="speck-fraction"):
         dataclasses.replace(CONFIG, speck_fraction=-0.1)
+    with pytest.raises(ValueError, match="departure-fraction"):
+        dataclasses.replace(CONFIG, departure_fraction=1.1)
     specky = dataclasses.replace(CONFIG, fingers=1, speck_fraction=1.0)
     with pytest.raises(ValueError, match="different config"):
         build_dataset(tmp_path / "a", specky, progress=False)
@@ -143,7 +145,7 @@ def test_bad_arguments(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> No
         build_dataset(tmp_path / "a", smooth, progress=False)
     cfg = tmp_path / "a" / "config.json"  # a folder rendered before the option existed
     old = json.loads(cfg.read_text())
-    del old["smooth_fraction"], old["speck_fraction"]
+    del old["smooth_fraction"], old["speck_fraction"], old["departure_fraction"]
     cfg.write_text(json.dumps(old))
     build_dataset(tmp_path / "a", dataclasses.replace(CONFIG, fingers=1), progress=False)
     del old["synth_revision"]  # a folder of the first v2 revision: its frames would differ
