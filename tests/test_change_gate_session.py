@@ -121,3 +121,21 @@ def test_calibrate_records_gated_frames_above_contact(
     record = json.loads((tmp_path / "cal" / "calibration.json").read_text())
     assert record["extra"]["gated_above_contact"] == 1
     assert "which is in contact" in rep.table and "--no-change-gate" in rep.table
+
+
+def test_a_session_starting_in_contact_is_said(tmp_path: Path) -> None:
+    """A manifest starting at 5 kPa: its reference frame is compared with itself, so the gate
+    removes its contact; the table and the record say so (the calibration still runs)."""
+    from contactcal.infer.calibration.calibrate import calibrate_session
+
+    example = Path(__file__).resolve().parents[1] / "examples" / "session"
+    rows = [f"{example}/p{p:04.1f}kpa.jpg,{p}" for p in range(5, 21)]
+    manifest = tmp_path / "from5.csv"
+    manifest.write_text("file,pressure_kpa\n" + "\n".join(rows) + "\n")
+    rep = calibrate_session(manifest, tmp_path / "cal", "unet")
+    assert "warning: this is the session's reference frame, compared with itself" in rep.table
+    record = json.loads((tmp_path / "cal" / "calibration.json").read_text())
+    assert record["extra"]["reference_gated_above_zero"] is True
+    assert "record a 0 kPa frame first" in record["points"][0]["note"]
+    full = calibrate_session(example / "manifest.csv", tmp_path / "full", "unet")
+    assert "compared with itself" not in full.table  # 0 kPa reference: nothing to say

@@ -283,3 +283,32 @@ def test_video_areas_equal_stills(
         assert p["area_px"] == still_area[round(p["pressure_kpa"])]
     cap = cv2.VideoCapture(str(next(out.glob("preview.*"))))
     assert cap.isOpened() and cap.read()[0]
+
+
+def test_a_vent_to_zero_is_left_out_and_a_rerun_is_refused(
+    tmp_path: Path, rng: np.random.Generator, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """Up in steps, then straight back to 0 kPa: the one-pressure unloading pass is no curve, so
+    it is left out (said), not a failed run; a second recording into the same --out is refused."""
+    kpas = [0, 6, 12, 0]
+    make_video(tmp_path / "v.avi", kpas, hold_s=0.8)
+    make_log(tmp_path / "log.csv", kpas, rng, hold_s=0.8)
+    out = tmp_path / "out"
+    argv = ["calibrate", "--video", str(tmp_path / "v.avi"), "--pressure-log"]
+    code, err = _run([*argv, str(tmp_path / "log.csv"), "--out", str(out)], capsys)
+    assert code == 0, err
+    assert "left out: a one-pressure unloading pass is no curve" in err
+    rows = (out / "frames" / "manifest.csv").read_text().splitlines()[1:]
+    assert {r.split(",")[2] for r in rows} == {"loading"}
+    record = json.loads((out / "calibration.json").read_text())
+    steps = sorted({round(p["pressure_kpa"]) for p in record["points"]})
+    assert steps == [0, 6, 12]  # the logged pressures (noise ±0.02 kPa)
+    code, err = _run([*argv, str(tmp_path / "log.csv"), "--out", str(out)], capsys)
+    assert code == 2 and "holds the frames of an earlier recording" in err, err
+    flat = [0, 0]  # one steady step only (e.g. a log in bar read as kPa)
+    make_log(tmp_path / "flat.csv", flat, rng, hold_s=0.8)
+    make_video(tmp_path / "flat.avi", flat, hold_s=0.8)
+    argv = ["calibrate", "--video", str(tmp_path / "flat.avi"), "--pressure-log"]
+    code, err = _run([*argv, str(tmp_path / "flat.csv"), "--out", str(tmp_path / "f")], capsys)
+    assert code == 2 and "flat.csv: the steady steps found hold 1 loading pressure" in err, err
+    assert not (tmp_path / "f").exists()

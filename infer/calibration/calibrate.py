@@ -9,7 +9,11 @@ from pathlib import Path
 
 from contactcal.infer.calibration.curve import MM2, PX, Curve
 from contactcal.infer.calibration.fit import CurveConfig
-from contactcal.infer.calibration.gate_check import flag_gated_above_contact
+from contactcal.infer.calibration.gate_check import (
+    REFERENCE_NOTE,
+    flag_gated_above_contact,
+    flag_gated_reference,
+)
 from contactcal.infer.calibration.phases import LOADING
 from contactcal.infer.calibration.points import CalibrationPoint
 from contactcal.infer.calibration.provenance import Provenance, input_digests
@@ -106,6 +110,7 @@ def calibrate_session(
     measured = measure.measure(files, method, frames[0].file)
     points = _points(manifest, frames, measured, measure.scale)
     results, gated_above = _session_points(manifest, points, options.session_rule, method.name)
+    results, reference_gated = flag_gated_reference(results)
     unit = PX if measure.scale is None else MM2
     fit = fit_session(results, unit, options.curve, options.inverse_phase, session.phase_source)
     recorded = Path(manifest_as if manifest_as is not None else manifest).resolve()
@@ -113,6 +118,7 @@ def calibrate_session(
         **_extra(recorded, measure.scale, measured),
         "session_rule": options.session_rule,
         "gated_above_contact": gated_above,
+        "reference_gated_above_zero": reference_gated,
     }
     provenance = replace(
         provenance if provenance is not None else Provenance(),
@@ -123,6 +129,8 @@ def calibrate_session(
     with run_outputs([manifest, model, *files], join=outputs) as outs:
         paths = write_calibration(out_dir, results, fit, method.name, extra, provenance, outs)
     table = format_table(results, fit)
+    if reference_gated:
+        table += "\nwarning: " + REFERENCE_NOTE.format(p=results[0].pressure_kpa)
     return CalibrationReport(table, frames, measured, fit.curve, paths, fit)
 
 

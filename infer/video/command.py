@@ -156,6 +156,20 @@ def _source(
     return live.capture_frames(cap), feed, stop, fps
 
 
+def check_fresh_frames(frames_dir: Path) -> None:
+    """Refuse a ``frames/`` folder that already holds files: an earlier recording's frames would
+    stay beside this one's, outside its manifest (and its ``preview`` beside this calibration).
+
+    Raises:
+        ValueError: naming the folder and what to do.
+    """
+    if frames_dir.is_dir() and any(frames_dir.iterdir()):
+        raise ValueError(
+            f"{frames_dir}: holds the frames of an earlier recording; expected a new --out "
+            "folder for each recording (or remove that folder first)"
+        )
+
+
 def calibrate_video(
     args: argparse.Namespace, measure: MeasureOptions, provenance: Provenance
 ) -> int:
@@ -172,6 +186,7 @@ def calibrate_video(
     from contactcal.infer.video import extract, live
 
     cfg = StepConfig(args.tolerance_kpa, args.settle_s)
+    check_fresh_frames(args.out / "frames")
     protect = [args.video, args.pressure_log, args.model, args.rig]
     with run_outputs(protect) as outs:
         ex = extract.Extractor(cfg, args.out / "frames", outs.stage)
@@ -185,6 +200,12 @@ def calibrate_video(
             for o in observers:
                 o.close()
         extract.check_coverage(ex, args.video if args.video is not None else None)
+        for step in ex.left_out():
+            print(
+                f"note: step {step.label()} left out: a one-pressure unloading pass is no "
+                "curve (its frames stay in frames/, outside the manifest)",
+                file=sys.stderr,
+            )
         final_manifest = args.out / "frames" / "manifest.csv"
         manifest = outs.stage(final_manifest)
         write_synced(manifest, ex.manifest_text())

@@ -20,6 +20,7 @@ from pathlib import Path
 import cv2
 import numpy as np
 
+from contactcal.infer.calibration.phases import LOADING, UNLOADING
 from contactcal.infer.image.write import write_image
 from contactcal.infer.video.log import PressureLog
 from contactcal.infer.video.steps import Step, StepConfig, detect_steps, reference_step, step_at
@@ -131,10 +132,25 @@ class Extractor:
             out.append(Decision(index, t, frame, step))
         return out
 
+    def used_steps(self) -> list[Step]:
+        """The steps with kept frames that the calibration uses, in time order: all of them,
+        except an unloading pass at fewer than two pressures (e.g. a vent straight back to
+        0 kPa after the top step), which is no curve (:meth:`left_out`)."""
+        kept = [s for s in self.steps if s.index in self.kept]
+        unloading = {f"{s.pressure_kpa:g}" for s in kept if s.phase == UNLOADING}
+        return kept if len(unloading) >= 2 else [s for s in kept if s.phase != UNLOADING]
+
+    def left_out(self) -> list[Step]:
+        """Steps with kept frames that :meth:`used_steps` leaves out (their frames stay in
+        ``frames/``, outside the manifest)."""
+        used = {s.index for s in self.used_steps()}
+        return [s for s in self.steps if s.index in self.kept and s.index not in used]
+
     def manifest_text(self) -> str:
-        """``frames/manifest.csv``: the reference step first, then the steps in time order."""
-        ref = reference_step([s for s in self.steps if s.index in self.kept])
-        order = [ref, *(s for s in self.steps if s.index in self.kept and s is not ref)]
+        """``frames/manifest.csv``: the reference step first, then the used steps in time order."""
+        used = self.used_steps()
+        ref = reference_step(used)
+        order = [ref, *(s for s in used if s is not ref)]
         lines = [",".join(MANIFEST_COLUMNS)]
         for s in order:
             lines += [f"{f},{s.pressure_kpa:g},{s.phase},{t:.4f}" for f, t in self.kept[s.index]]
@@ -143,11 +159,13 @@ class Extractor:
     def summary(self) -> str:
         """Per step: pressure, phase, frames kept and their time span (the CLI prints it)."""
         lines = ["step  pressure (kPa)  phase      frames  time (s)"]
+        out = {s.index for s in self.left_out()}
         for s in self.steps:
             kept = self.kept.get(s.index, [])
             span = f"{kept[0][1]:.2f}-{kept[-1][1]:.2f}" if kept else "-"
+            note = "  (left out: a one-pressure unloading pass is no curve)" * (s.index in out)
             lines.append(
-                f"{s.index:4d}  {s.pressure_kpa:14.3f}  {s.phase:9s}  {len(kept):6d}  {span}"
+                f"{s.index:4d}  {s.pressure_kpa:14.3f}  {s.phase:9s}  {len(kept):6d}  {span}{note}"
             )
         return "\n".join(lines)
 
@@ -196,6 +214,13 @@ def check_coverage(extractor: Extractor, video: Path | None) -> None:
             f"{where}: step {s.label()} has no frame in {source} (frames from 0 to "
             f"{extractor.last_time_s:.2f} s); expected frames covering every step of the log "
             "(trim the log, give the full video, or lower --settle-s for short steps)"
+        )
+    loading = sorted({s.pressure_kpa for s in extractor.used_steps() if s.phase == LOADING})
+    if len(loading) < 2:
+        raise ValueError(
+            f"{where}: the steady steps found hold {len(loading)} loading pressure(s) "
+            f"({', '.join(f'{p:g}' for p in loading)} kPa); a calibration needs >= 2 from 0 kPa "
+            "up (is the log in kPa? check --tolerance-kpa and --settle-s)"
         )
 
 
