@@ -252,3 +252,21 @@ def test_bad_device_id_exits_2(
     frame = str(s / "p12.0kpa.jpg")
     assert main(["measure", "--device-id", bad, "--out", str(tmp_path / "r.json"), frame]) == 2
     assert not (tmp_path / "r.json").exists()
+
+
+def test_a_curve_that_does_not_resolve_is_not_read_silently(tmp_path: Path) -> None:
+    """The classical routine's curve of the example is flat (``calibrate`` warns): reading it
+    for a controller is an error unless asked for; the phase name is read in any case."""
+    from contactcal.infer.calibration.calibrate import calibrate_session
+    from contactcal.infer.calibration.load import UnresolvedCurveError
+
+    example = Path(__file__).resolve().parents[1] / "examples" / "session" / "manifest.csv"
+    rep = calibrate_session(example, tmp_path / "c", "classical")
+    record = json.loads(rep.files["json"].read_text())
+    assert record["phases"]["loading"]["resolution"]["resolves"] is False
+    with pytest.raises(UnresolvedCurveError, match=r"calibration\.json: the loading curve rises"):
+        load_curve(rep.files["json"])
+    curve = load_curve(rep.files["json"], phase="Loading", allow_unresolved=True)
+    assert curve.onset_kpa == rep.curve.onset_kpa
+    unet = calibrate_session(example, tmp_path / "u", "unet")
+    assert load_curve(unet.files["json"], phase="LOADING").onset_kpa == unet.curve.onset_kpa

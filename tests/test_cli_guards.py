@@ -161,3 +161,17 @@ def test_a_frame_without_a_ring_says_so(tmp_path: Path) -> None:
     ref = EXAMPLE / "p00.0kpa.jpg"
     (m,) = measure_files([EXAMPLE / "p10.0kpa.jpg"], unet, ref)
     assert NO_RING_NOTE not in m.result.note and m.result.contact
+
+
+def test_rig_json_with_a_bom_and_a_bad_mm_per_px(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """A rig.json saved by Notepad (UTF-8 with BOM) reads; a bad --mm-per-px names the flag."""
+    from contactcal.infer.pipeline.scale import load_rig_config
+
+    rig = tmp_path / "rig.json"
+    rig.write_bytes(b"\xef\xbb\xbf" + b'{"mm_per_px": 0.0118, "image_width_px": 2592}')
+    assert load_rig_config(rig).mm_per_px == 0.0118
+    frame = str(Path(__file__).resolve().parents[1] / "examples" / "session" / "p05.0kpa.jpg")
+    assert main(["measure", "--mm-per-px", "0", "--out", "-", frame]) == 2
+    assert capsys.readouterr().err.startswith("contactcal: error: --mm-per-px 0: mm_per_px must")

@@ -142,7 +142,9 @@ def test_unlabelled_frames_are_listed(tmp_path: Path, capsys: pytest.CaptureFixt
     record = _record(out)
     assert [f["file"] for f in record["frames"]] == ["p00.0kpa.jpg", "p06.0kpa.jpg", "p12.0kpa.jpg"]
     assert len(record["unlabelled"]) == 18 and "p01.0kpa.jpg" in record["unlabelled"]
-    assert "18 frame(s) without a label" in capsys.readouterr().out
+    printed = capsys.readouterr().out
+    assert "18 frame(s) without a label" in printed and ", …\n" in printed
+    assert "p01.0kpa.jpg" in printed and "p20.0kpa.jpg" not in printed  # the first 10 named
 
 
 def test_onset_bounded_by_the_labels_is_said(
@@ -257,3 +259,17 @@ def test_onset_with_repeated_pressures(tmp_path: Path) -> None:
     onset = json.loads((out / "evaluation.json").read_text())["summary"]["onset"]
     assert onset["labels_onset_kpa"] is not None and "pooled" in onset["note"]
     assert abs(onset["methods"]["unet"]["error_kpa"]) < 0.5
+
+
+def test_every_labelled_frame_is_in_a_bin(tmp_path: Path) -> None:
+    """A step logged at 20.01 kPa (or a rig going past 20) is counted, in the open last bin."""
+    lines = MANIFEST.read_text().splitlines()
+    lines[-1] = lines[-1].rsplit(",", 1)[0] + ",20.01"
+    manifest = tmp_path / "manifest.csv"
+    rows = [r.split(",", 1) for r in lines[1:]]
+    manifest.write_text(lines[0] + "\n" + "".join(f"{EXAMPLE_SESSION / f},{p}\n" for f, p in rows))
+    out = tmp_path / "out"
+    assert _evaluate(out, MASKS, "--method", "classical", manifest=manifest) == 0
+    bins = {b["bin_kpa"]: b for b in _record(out)["summary"]["bins"]}
+    assert list(bins) == ["0-3", "3-5", "5-10", ">=10"]
+    assert sum(b["frames"] for b in bins.values()) == len(rows)

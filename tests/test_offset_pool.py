@@ -65,9 +65,11 @@ def test_sessions_agreeing_on_an_offset_give_the_keys(tmp_path: Path) -> None:
     assert again["rig_config"] == pooled["rig_config"]
     applied = _five(tmp_path / "a", (0.05, 0.06, 0.04, 0.07, 0.05), applied=0.1)
     assert pool_offsets(applied)["rig_config"][OFFSET_KEY] == pytest.approx(0.15)
-    far = _five(tmp_path / "far", (2.1, 2.2, 2.3, 2.2, 2.4))
-    out = pool_offsets(far)
-    assert out["rig_config"] is None and "beyond" in pooled_text(out)
+    far = _evaluation(tmp_path / "far", [4.2, 4.25, 4.3, 4.2, 4.1])  # evaluate: "does not fit"
+    with pytest.raises(ValueError, match=r"far/evaluation\.json: this session's offset \+4\.200"):
+        pool_offsets([*runs[:4], far])
+    near = _five(tmp_path / "near", (1.95, 1.96, 1.97, 1.98, 1.99))
+    assert pool_offsets(near)["rig_config"][OFFSET_KEY] == pytest.approx(1.97)
 
 
 def test_sessions_that_disagree_about_the_sign_give_none(tmp_path: Path) -> None:

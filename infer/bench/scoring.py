@@ -6,6 +6,7 @@ validation during training (so a model is selected on the numbers the benchmark 
 
 from __future__ import annotations
 
+import math
 import statistics
 from collections.abc import Sequence
 from dataclasses import dataclass
@@ -21,6 +22,9 @@ PRESSURE_BINS: tuple[tuple[float, float], ...] = (
     (5.0, 10.0),
     (10.0, 20.0001),
 )
+#: The bins of ``contactcal evaluate``: a rig's sessions may go past 20 kPa (or log 20.001), and a
+#: labelled frame is never left out of the table, so the last bin is open.
+OPEN_BINS: tuple[tuple[float, float], ...] = (*PRESSURE_BINS[:-1], (10.0, math.inf))
 
 
 #: Suffix of the rows that score the U-Net's probability mass instead of its pixel count.
@@ -136,8 +140,8 @@ def coverage_row(frames: Sequence[ScoredFrame]) -> dict[str, float | int | None]
 
 
 def bin_label(lo: float, hi: float) -> str:
-    """``"5-10"`` for the bin ``[5, 10)`` kPa (20.0001 shows as 20)."""
-    return f"{lo:g}-{hi:.0f}"
+    """``"5-10"`` for the bin ``[5, 10)`` kPa (20.0001 shows as 20), ``">=10"`` for an open one."""
+    return f">={lo:g}" if math.isinf(hi) else f"{lo:g}-{hi:.0f}"
 
 
 def bin_table(

@@ -32,12 +32,20 @@ def _curve(fit: dict[str, Any], onset: Any, unit: Any, inverse: Any, **more: Any
     )
 
 
-def _phase_curve(data: dict[str, Any], phase: str | None) -> Curve:
+def _phase_curve(data: dict[str, Any], phase: str | None, allow_unresolved: bool) -> Curve:
     """The curve of ``phase`` (None: the recorded inverse phase) from a version 3 record."""
-    name = phase or data["inverse_phase"]
+    name = (phase or data["inverse_phase"]).lower()
     if name not in data["phases"]:
         raise ValueError(f"no {name} phase (the record has {', '.join(data['phases'])})")
     ph = data["phases"][name]
+    res = ph.get("resolution") or {}
+    if res.get("resolves") is False and not allow_unresolved:
+        raise UnresolvedCurveError(
+            f"the {name} curve rises {res['rise']:.3g} {data['area_unit']} over its contact "
+            f"steps, no more than its own cross-validated error ({res['cv_rmse']:.3g}): it cannot "
+            "tell pressures apart, so a controller would get arbitrary pressures; recalibrate "
+            "(check the overlays), or read it anyway with allow_unresolved=True"
+        )
     m, b = ph.get("parametric"), ph.get("band")
     model = None if m is None else Saturating(m["p0_kpa"], m["k_kpa"], m["a_max"])
     band = None
@@ -48,16 +56,27 @@ def _phase_curve(data: dict[str, Any], phase: str | None) -> Curve:
     )
 
 
-def load_curve(path: str | os.PathLike[str], phase: str | None = None) -> Curve:
+class UnresolvedCurveError(ValueError):
+    """The record says the curve does not resolve pressures (``phases.*.resolution``)."""
+
+
+def load_curve(
+    path: str | os.PathLike[str], phase: str | None = None, allow_unresolved: bool = False
+) -> Curve:
     """Read a fitted `Curve` back from a ``calibration.json`` (for the controller).
 
     Args:
         path: the record.
-        phase: ``"loading"`` or ``"unloading"``; None → the phase the run inverted (versions
-            1 and 2 hold the loading pass only). A version 3 curve carries its parametric model
-            and its band (`Curve.pressure_interval_for_area`); older ones have no band.
+        phase: ``"loading"`` or ``"unloading"`` (any case); None → the phase the run inverted
+            (versions 1 and 2 hold the loading pass only). A version 3 curve carries its
+            parametric model and its band (`Curve.pressure_interval_for_area`); older ones
+            have no band.
+        allow_unresolved: read a curve the record says does not resolve pressures (its rise
+            over the contact steps no larger than its cross-validated error; ``calibrate``
+            warned); by default that is an error, not a silently flat curve.
 
     Raises:
+        UnresolvedCurveError: the curve does not resolve pressures (and not allowed).
         ValueError: unreadable file, not a contactcal calibration, or no such phase.
     """
     try:
@@ -71,9 +90,11 @@ def load_curve(path: str | os.PathLike[str], phase: str | None = None) -> Curve:
                 f"{', '.join(map(str, READABLE_VERSIONS))} (written by a newer contactcal?)"
             )
         if version == 3:
-            return _phase_curve(data, phase)
-        if phase not in (None, LOADING):
+            return _phase_curve(data, phase, allow_unresolved)
+        if phase is not None and phase.lower() != LOADING:
             raise ValueError(f"format_version {version} holds the loading pass only, not {phase}")
         return _curve(data["fit"], data["onset_kpa"], data["area_unit"], data.get("inverse"))
+    except UnresolvedCurveError as exc:
+        raise UnresolvedCurveError(f"{path}: {exc}") from exc
     except (OSError, ValueError, KeyError, TypeError, AttributeError) as exc:
         raise ValueError(f"{path}: not a readable contactcal calibration ({exc})") from exc

@@ -22,7 +22,6 @@ import numpy as np
 
 from contactcal.infer.evaluate.offset import (
     MIN_FRAMES,
-    TOO_FAR,
     UNRESOLVED,
     excludes_zero,
     median_interval,
@@ -87,6 +86,21 @@ def _sessions(paths: Sequence[str | os.PathLike[str]]) -> tuple[list[dict], list
     return kept, [r["file"] for r in runs if r not in kept]
 
 
+def _check_each_fits(
+    runs: Sequence[dict[str, Any]], meds: list[float], applied: float | None
+) -> None:
+    """Refuse a session whose own offset (with the one applied) is beyond ``MAX_OFFSET_MM``: its
+    ``evaluate`` said the model does not fit it, and a median over sessions would hide that."""
+    for r, m in zip(runs, meds, strict=True):
+        total = m + (applied or 0.0)
+        if abs(total) > MAX_OFFSET_MM:
+            raise ValueError(
+                f"{r['file']}: this session's offset {total:+.3f} mm is beyond the ±"
+                f"{MAX_OFFSET_MM:g} mm a rig config accepts (its evaluate said the model does not "
+                "fit it); check its labels, scale and overlays, or leave it out of the pool"
+            )
+
+
 def pool_offsets(paths: Sequence[str | os.PathLike[str]]) -> dict[str, Any]:
     """The pooled offset of several sessions' evaluations (folders or ``evaluation.json``).
 
@@ -94,12 +108,12 @@ def pool_offsets(paths: Sequence[str | os.PathLike[str]]) -> dict[str, Any]:
         ``sessions`` (file, frames, median mm each), ``left_out`` (files with fewer than
         ``MIN_FRAMES`` frames), ``median_mm`` (of the sessions' medians), ``interval_mm``
         (``median_interval`` over sessions), ``applied_mm``, ``rig_config`` (the two keys with
-        applied + pooled; None when the interval includes 0 or the total is beyond
-        ``MAX_OFFSET_MM``) and a ``note``.
+        applied + pooled; None when the interval includes 0) and a ``note``.
 
     Raises:
         ValueError: a file given twice, an unusable evaluation, evaluations of different models
-            or applied offsets, or fewer than :data:`MIN_SESSIONS` usable sessions.
+            or applied offsets, fewer than :data:`MIN_SESSIONS` usable sessions, or a session
+            whose own offset is beyond ``MAX_OFFSET_MM``.
     """
     runs, left_out = _sessions(paths)
     if len(runs) < MIN_SESSIONS:
@@ -111,11 +125,12 @@ def pool_offsets(paths: Sequence[str | os.PathLike[str]]) -> dict[str, Any]:
     sha = _same(runs, "model_sha256", "model")
     applied = _same(runs, "applied_mm", "the boundary offset already applied")
     meds = [float(np.median(r["frame_offsets_mm"])) for r in runs]
+    _check_each_fits(runs, meds, applied)
     interval = median_interval(meds)
     median = float(np.median(meds))
     total = round(median + (applied or 0.0), 3)
-    resolved, near = excludes_zero(interval), abs(total) <= MAX_OFFSET_MM
-    note = UNRESOLVED if not resolved else ("" if near else TOO_FAR.format(total))
+    resolved = excludes_zero(interval)  # within ±MAX_OFFSET_MM: every session is
+    note = "" if resolved else UNRESOLVED
     return {
         "sessions": [
             {"file": r["file"], "frames": len(r["frame_offsets_mm"]), "median_mm": m}
@@ -125,7 +140,7 @@ def pool_offsets(paths: Sequence[str | os.PathLike[str]]) -> dict[str, Any]:
         "median_mm": median,
         "interval_mm": interval,
         "applied_mm": applied,
-        "rig_config": {OFFSET_KEY: total, MODEL_KEY: sha} if resolved and near else None,
+        "rig_config": {OFFSET_KEY: total, MODEL_KEY: sha} if resolved else None,
         "note": note,
     }
 

@@ -10,7 +10,7 @@ from dataclasses import dataclass, replace
 from pathlib import Path
 from typing import Any
 
-from contactcal.infer.bench.scoring import PRESSURE_BINS, ScoredFrame, bin_table
+from contactcal.infer.bench.scoring import OPEN_BINS, ScoredFrame, bin_table
 from contactcal.infer.evaluate.labels import (
     Label,
     LabelError,
@@ -29,6 +29,8 @@ from contactcal.infer.pipeline.manifest import Frame, read_manifest
 from contactcal.infer.pipeline.measure import Measured
 from contactcal.infer.pipeline.options import MeasureOptions
 
+#: Unlabelled frames named in the printed table (a video session has hundreds; the JSON lists all).
+LISTED = 10
 #: ``--method`` choices: one method, or ``both`` (every method of the registry).
 METHOD_CHOICES = (*METHODS, "both")
 
@@ -153,7 +155,7 @@ def evaluate_session(
         paths = {"png": out / "evaluation.png", "json": out / "evaluation.json"}
         staged = {k: outs.stage(p) for k, p in paths.items()}  # refused here, before work
         scored, masks, offset = _score(manifest, frames, labelled, labs, names, measure)
-        onset, bins = onset_summary(scored), bin_table(scored, PRESSURE_BINS)
+        onset, bins = onset_summary(scored), bin_table(scored, OPEN_BINS)
         record = {
             "manifest": str(manifest.resolve()),
             "labels": str(labels.resolve()),
@@ -170,5 +172,9 @@ def evaluate_session(
         write_synced(staged["json"], json_text(record))
     table = "\n".join([format_table(bins, onset), *([offset_line(offset)] if offset else [])])
     if unlabelled:
-        table += f"\n{len(unlabelled)} frame(s) without a label, skipped: {', '.join(unlabelled)}"
+        shown = ", ".join(unlabelled[:LISTED]) + (", …" if len(unlabelled) > LISTED else "")
+        table += (
+            f"\n{len(unlabelled)} frame(s) without a label, skipped (all in evaluation.json's "
+            f"unlabelled): {shown}"
+        )
     return Evaluation(record, table, paths)

@@ -68,11 +68,10 @@ def change_gate_arg(p: argparse.ArgumentParser) -> None:
     p.add_argument(
         "--no-change-gate",
         action="store_true",
-        help="the U-Net (--method unet, or both): call a region contact even when it has not "
-        "changed since the "
-        "reference frame (the model's min_change gate is off; recorded). For a rig whose "
-        "contacts look almost like its 0 kPa frame, i.e. whose frames' notes say 'unchanged "
-        "from the reference frame' without it",
+        help="the U-Net (and its overlay outlines): call a region contact even when it has "
+        "not changed since the reference frame (the model's min_change gate is off; "
+        "recorded). For a rig whose contacts look almost like its 0 kPa frame, i.e. whose "
+        "frames' notes say 'unchanged from the reference frame' without it",
     )
 
 
@@ -105,7 +104,10 @@ def resolve_scale(args: argparse.Namespace, default_rig: Path | None = None) -> 
     from contactcal.infer.pipeline.scale import PixelScale, load_rig_config
 
     if args.mm_per_px is not None:
-        return PixelScale(args.mm_per_px, None)
+        try:
+            return PixelScale(args.mm_per_px, None)
+        except ValueError as exc:
+            raise ValueError(f"--mm-per-px {args.mm_per_px:g}: {exc}") from None
     rig = rig_file(args, default_rig)
     return None if rig is None else load_rig_config(rig)
 

@@ -73,7 +73,7 @@ def load_boundary_offset(path: str | os.PathLike[str]) -> BoundaryOffset | None:
     """
     p = Path(path)
     try:
-        data = json.loads(p.read_text(encoding="utf-8"))
+        data = json.loads(p.read_text(encoding="utf-8-sig"))  # a BOM (Notepad) is fine
     except (OSError, UnicodeDecodeError, json.JSONDecodeError):
         return None  # load_rig_config reports an unreadable file
     if not isinstance(data, dict) or (OFFSET_KEY not in data and MODEL_KEY not in data):

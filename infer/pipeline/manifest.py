@@ -298,5 +298,6 @@ def _check_distinct_files(where: str, frames: list[Frame]) -> None:
         if first is not f:
             raise ManifestError(
                 f"{where}: rows {first.row} ({first.file}) and {f.row} ({f.file}) are the same "
-                "image file; expected one image per pressure step: list each frame once"
+                "image file; expected each image on one row (a step may hold several images): list "
+                "each frame once"
             )

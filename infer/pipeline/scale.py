@@ -88,7 +88,7 @@ def load_rig_config(path: str | os.PathLike[str]) -> PixelScale:
     """
     p = Path(path)
     try:
-        data = json.loads(p.read_text(encoding="utf-8"))
+        data = json.loads(p.read_text(encoding="utf-8-sig"))  # a BOM (Notepad) is fine
     except FileNotFoundError as exc:
         raise RigConfigError(f"{p}: no such rig config file") from exc
     except (OSError, UnicodeDecodeError, json.JSONDecodeError) as exc:
