@@ -109,17 +109,12 @@ def calibrate_session(
     method = measure.method(method_name)
     measured = measure.measure(files, method, frames[0].file)
     points = _points(manifest, frames, measured, measure.scale)
-    results, gated_above = _session_points(manifest, points, options.session_rule, method.name)
-    results, reference_gated = flag_gated_reference(results)
+    results, checks = _session_points(manifest, points, options.session_rule, method.name)
     unit = PX if measure.scale is None else MM2
     fit = fit_session(results, unit, options.curve, options.inverse_phase, session.phase_source)
     recorded = Path(manifest_as if manifest_as is not None else manifest).resolve()
-    extra = {
-        **_extra(recorded, measure.scale, measured),
-        "session_rule": options.session_rule,
-        "gated_above_contact": gated_above,
-        "reference_gated_above_zero": reference_gated,
-    }
+    extra = {**_extra(recorded, measure.scale, measured), "session_rule": options.session_rule}
+    extra |= checks
     provenance = replace(
         provenance if provenance is not None else Provenance(),
         method_config=method.describe(),
@@ -128,21 +123,24 @@ def calibrate_session(
     model = None if measure.model is None else str(measure.model)
     with run_outputs([manifest, model, *files], join=outputs) as outs:
         paths = write_calibration(out_dir, results, fit, method.name, extra, provenance, outs)
-    table = format_table(results, fit)
-    if reference_gated:
-        table += "\nwarning: " + REFERENCE_NOTE.format(p=results[0].pressure_kpa)
+    gated_ref = checks["reference_gated_above_zero"]
+    warning = REFERENCE_NOTE.format(p=results[0].pressure_kpa) if gated_ref else ""
+    table = format_table(results, fit) + (f"\nwarning: {warning}" if warning else "")
     return CalibrationReport(table, frames, measured, fit.curve, paths, fit)
 
 
 def _session_points(
     manifest: Path, points: list[CalibrationPoint], session_rule: bool, name: str
-) -> tuple[list[CalibrationPoint], int]:
+) -> tuple[list[CalibrationPoint], dict[str, object]]:
     """The points as the calibration reports them: revised by the session rule (when on),
-    checked to keep a contact (:func:`_check_contact`), a gated frame above a contact noted
-    (:func:`flag_gated_above_contact`); and the number of such notes."""
+    checked to keep a contact (:func:`_check_contact`), a gated frame above a contact and a
+    gated reference above 0 kPa noted (:mod:`~contactcal.infer.calibration.gate_check`); and
+    the record's ``extra`` keys counting those notes."""
     results = revise_points(points) if session_rule else points
     _check_contact(manifest, points, results, name)
-    return flag_gated_above_contact(results)
+    results, above = flag_gated_above_contact(results)
+    results, reference = flag_gated_reference(results)
+    return results, {"gated_above_contact": above, "reference_gated_above_zero": reference}
 
 
 def _check_contact(

@@ -95,6 +95,19 @@ def _score(
     return scored, masks, offset
 
 
+def _table(bins_and_onset: str, offset: dict[str, Any] | None, unlabelled: list[str]) -> str:
+    """The printed table: bins and onset, the boundary offset's line, the unlabelled frames (the
+    first :data:`LISTED` named)."""
+    table = "\n".join([bins_and_onset, *([offset_line(offset)] if offset else [])])
+    if unlabelled:
+        shown = ", ".join(unlabelled[:LISTED]) + (", …" if len(unlabelled) > LISTED else "")
+        table += (
+            f"\n{len(unlabelled)} frame(s) without a label, skipped (all in evaluation.json's "
+            f"unlabelled): {shown}"
+        )
+    return table
+
+
 def _check_request(method: str, labels: Path, out: Path) -> None:
     """Refuse an unknown method, and a report inside the labels folder (its PNG would be read
     as a label by the next run)."""
@@ -170,11 +183,5 @@ def evaluate_session(
         }  # the evaluation.json content
         plot_evaluation(staged["png"], scored)
         write_synced(staged["json"], json_text(record))
-    table = "\n".join([format_table(bins, onset), *([offset_line(offset)] if offset else [])])
-    if unlabelled:
-        shown = ", ".join(unlabelled[:LISTED]) + (", …" if len(unlabelled) > LISTED else "")
-        table += (
-            f"\n{len(unlabelled)} frame(s) without a label, skipped (all in evaluation.json's "
-            f"unlabelled): {shown}"
-        )
+    table = _table(format_table(bins, onset), offset, unlabelled)
     return Evaluation(record, table, paths)
