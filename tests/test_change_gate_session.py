@@ -139,3 +139,16 @@ def test_a_session_starting_in_contact_is_said(tmp_path: Path) -> None:
     assert "record a 0 kPa frame first" in record["points"][0]["note"]
     full = calibrate_session(example / "manifest.csv", tmp_path / "full", "unet")
     assert "compared with itself" not in full.table  # 0 kPa reference: nothing to say
+
+
+def test_a_reference_at_rest_is_not_flagged() -> None:
+    """A video step's rest pressure is a noisy gauge's median (0.00x kPa): at rest, not flagged."""
+    from contactcal.infer.calibration.gate_check import REST_KPA, flag_gated_reference
+    from contactcal.infer.calibration.points import CalibrationPoint
+    from contactcal.infer.methods.base import UNCHANGED_NOTE
+
+    def ref(p: float) -> CalibrationPoint:
+        return CalibrationPoint("f.png", p, False, 0.0, None, f"{UNCHANGED_NOTE} (change 0.000)")
+
+    for p, flagged in ((0.0, False), (0.01, False), (REST_KPA, False), (1.0, True)):
+        assert flag_gated_reference([ref(p)])[1] is flagged

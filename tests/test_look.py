@@ -271,3 +271,20 @@ def test_membrane_departure_in_the_chosen_share_of_sessions_other_draws_unchange
                 departs += 1
                 assert slope <= 0.5
     assert 40 <= departs <= 80  # departure_fraction 0.5 of 120
+
+
+def test_the_departure_draws_come_after_every_earlier_table() -> None:
+    """Values of the last tables before the departure draws, pinned from the code before the
+    departure existed (2c31a8a): drawing it anywhere earlier would change them, and every
+    existing dataset's frames with them."""
+    s = sample_session(
+        np.random.default_rng([7, 3]), hard=True, speck_fraction=1.0, smooth_fraction=1.0
+    )
+    assert s.camera.look.centre_speck == (
+        0.10116129820748236,
+        2.033684505698352,
+        -0.09605662453718411,
+        0.025155428916479348,
+    )
+    assert s.optics.roughness_alpha == 0.005523328532230446
+    assert (s.membrane.slack_seed, s.finger.radius_mm) == (556782903, 9.732108635989364)

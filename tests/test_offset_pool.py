@@ -70,6 +70,8 @@ def test_sessions_agreeing_on_an_offset_give_the_keys(tmp_path: Path) -> None:
         pool_offsets([*runs[:4], far])
     near = _five(tmp_path / "near", (1.95, 1.96, 1.97, 1.98, 1.99))
     assert pool_offsets(near)["rig_config"][OFFSET_KEY] == pytest.approx(1.97)
+    edge = _evaluation(tmp_path / "edge", [2.0002, 2.0003, 2.0004, 2.0005, 2.0006])
+    assert pool_offsets([*near[:4], edge])["rig_config"] is not None  # 2.000 mm, as evaluate
 
 
 def test_sessions_that_disagree_about_the_sign_give_none(tmp_path: Path) -> None:

@@ -8,8 +8,9 @@ ring's inner edge *at* the contact edge ("the growing fingerprint region was del
 inner ring with an increasingly sharp edge"), as a membrane leaving a curved fingertip at the
 finger's own slope would. This script renders chosen sessions of a dataset again, in this
 process, with every session's ``MembraneParams.departure_slope`` set to ``--slope`` (0: as they
-were), everything else (seeds, finger, camera, masks) unchanged, so that two runs give paired
-sets. ``contactcal synth --departure-fraction`` draws the slope per session instead.
+were, for a set rendered without ``--departure-fraction``), everything else (seeds, finger,
+camera, masks) unchanged, so that two runs give paired sets. ``contactcal synth
+--departure-fraction`` draws the slope per session instead.
 
     .venv/bin/python docs/scripts/departure_slope.py --data data/v3_hires2 --fingers 0 3 1 \\
         --pressures 0 4 6 8 10 12 14 16 18 20 --slope 0.15 --out out/departure/s0.15

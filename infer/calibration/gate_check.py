@@ -51,7 +51,11 @@ def flag_gated_above_contact(
     return out, n
 
 
-#: Appended to the note of a reference frame above 0 kPa that the gate called unchanged.
+#: A reference frame at or below this pressure (kPa) is at rest: a video step's pressure is the
+#: median of a noisy gauge (0.00x kPa at rest), and contact onsets are 2-4 kPa.
+REST_KPA = 0.5
+#: Appended to the note of a reference frame above :data:`REST_KPA` that the gate called
+#: unchanged.
 REFERENCE_NOTE = (
     "this is the session's reference frame, compared with itself: at {p:g} kPa the display may "
     "already touch the finger, and the gate cannot tell; record a 0 kPa frame first (or measure "
@@ -60,7 +64,7 @@ REFERENCE_NOTE = (
 
 
 def flag_gated_reference(points: Sequence[CalibrationPoint]) -> tuple[list[CalibrationPoint], bool]:
-    """Note a reference frame above 0 kPa whose region the change gate removed.
+    """Note a reference frame above :data:`REST_KPA` whose region the change gate removed.
 
     The gate compares each frame with the session's reference (its lowest loading frame), so the
     reference itself always looks unchanged: at 0 kPa that is right, above it a contact there is
@@ -71,10 +75,10 @@ def flag_gated_reference(points: Sequence[CalibrationPoint]) -> tuple[list[Calib
 
     Returns:
         ``(points, flagged)``: the same points, the reference's note extended by
-        :data:`REFERENCE_NOTE` when it is above 0 kPa and gated; whether it was.
+        :data:`REFERENCE_NOTE` when it is above :data:`REST_KPA` and gated; whether it was.
     """
     ref = points[0] if points else None
-    if ref is None or ref.pressure_kpa <= 0.0 or not ref.note.startswith(UNCHANGED_NOTE):
+    if ref is None or ref.pressure_kpa <= REST_KPA or not ref.note.startswith(UNCHANGED_NOTE):
         return list(points), False
     noted = replace(ref, note=f"{ref.note}; {REFERENCE_NOTE.format(p=ref.pressure_kpa)}")
     return [noted, *points[1:]], True

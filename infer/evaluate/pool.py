@@ -89,15 +89,17 @@ def _sessions(paths: Sequence[str | os.PathLike[str]]) -> tuple[list[dict], list
 def _check_each_fits(
     runs: Sequence[dict[str, Any]], meds: list[float], applied: float | None
 ) -> None:
-    """Refuse a session whose own offset (with the one applied) is beyond ``MAX_OFFSET_MM``: its
-    ``evaluate`` said the model does not fit it, and a median over sessions would hide that."""
+    """Refuse a session whose own offset (with the one applied, rounded as ``evaluate`` rounds it)
+    is beyond ``MAX_OFFSET_MM``: the model does not fit it (or its labels or scale are wrong), and
+    a median over sessions would hide that."""
     for r, m in zip(runs, meds, strict=True):
-        total = m + (applied or 0.0)
+        total = round(m + (applied or 0.0), 3)  # as evaluate rounds it
         if abs(total) > MAX_OFFSET_MM:
             raise ValueError(
                 f"{r['file']}: this session's offset {total:+.3f} mm is beyond the ±"
-                f"{MAX_OFFSET_MM:g} mm a rig config accepts (its evaluate said the model does not "
-                "fit it); check its labels, scale and overlays, or leave it out of the pool"
+                f"{MAX_OFFSET_MM:g} mm a rig config accepts: the model does not fit that session, "
+                "or its labels or scale are wrong; check its labels, scale and overlays, or leave "
+                "it out of the pool"
             )
 
 

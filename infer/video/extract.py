@@ -4,8 +4,10 @@ Each frame is decided once the pressure log has passed its time (:mod:`.steps` i
 growing log gives the same decisions as the complete one): kept frames are written as
 ``frames/f<index>.png`` (lossless: the calibration measures what the camera gave), the rest
 (ramps, settling, before or after the log) are skipped. ``frames/manifest.csv`` lists the kept
-frames with columns ``file,pressure_kpa,phase,time_s``, several rows per step (repeats), the
-reference step (:func:`.steps.reference_step`) first.
+frames of the steps the calibration uses (:meth:`Extractor.used_steps`: all, except an unloading
+pass at one pressure, whose frames stay in ``frames/``) with columns
+``file,pressure_kpa,phase,time_s``, several rows per step (repeats), the reference step
+(:func:`.steps.reference_step`) first.
 """
 
 from __future__ import annotations
@@ -179,7 +181,8 @@ def check_coverage(extractor: Extractor, video: Path | None) -> None:
             before (the log went on) are left out, said on stderr.
 
     Raises:
-        ValueError: naming the log, the first uncovered step and the video's time span.
+        ValueError: naming the log: no steady step, the first uncovered step and the video's
+            time span, or fewer than two loading pressures among the used steps.
     """
     log = extractor.log
     where = "the log" if log is None else str(log.path)
