@@ -154,15 +154,22 @@ def boundary_offset(
         out["note"] = "in pixels only: give the rig's scale (--rig or --mm-per-px) for mm"
         return out
     arr = np.asarray(mm, dtype=float)
-    total = round(float(np.median(arr)) + (applied or 0.0), 3)
+    total, fits = rig_total(float(np.median(arr)), applied)
     out.update(median_mm=float(np.median(arr)), interval_mm=median_interval(arr))
     if not excludes_zero(out["interval_mm"]):
         out["note"] = UNRESOLVED
         return out
-    if abs(total) <= MAX_OFFSET_MM:
+    if fits:
         out["rig_config"] = {OFFSET_KEY: total, MODEL_KEY: model_sha256}
     out["note"] = TOO_FAR.format(total) if out["rig_config"] is None else APPLY_NOTE
     return out
+
+
+def rig_total(median_mm: float, applied_mm: float | None) -> tuple[float, bool]:
+    """The offset a rig config would state, mm (the measured median plus the one already
+    applied, rounded to µm as printed), and whether it is within ``MAX_OFFSET_MM``."""
+    total = round(median_mm + (applied_mm or 0.0), 3)
+    return total, abs(total) <= MAX_OFFSET_MM
 
 
 def unet_offset(

@@ -25,6 +25,7 @@ from contactcal.infer.evaluate.offset import (
     UNRESOLVED,
     excludes_zero,
     median_interval,
+    rig_total,
 )
 from contactcal.infer.pipeline.boundary import MAX_OFFSET_MM, MODEL_KEY, OFFSET_KEY
 
@@ -93,8 +94,8 @@ def _check_each_fits(
     is beyond ``MAX_OFFSET_MM``: the model does not fit it (or its labels or scale are wrong), and
     a median over sessions would hide that."""
     for r, m in zip(runs, meds, strict=True):
-        total = round(m + (applied or 0.0), 3)  # as evaluate rounds it
-        if abs(total) > MAX_OFFSET_MM:
+        total, fits = rig_total(m, applied)  # as evaluate states it
+        if not fits:
             raise ValueError(
                 f"{r['file']}: this session's offset {total:+.3f} mm is beyond the ±"
                 f"{MAX_OFFSET_MM:g} mm a rig config accepts: the model does not fit that session, "
@@ -130,8 +131,8 @@ def pool_offsets(paths: Sequence[str | os.PathLike[str]]) -> dict[str, Any]:
     _check_each_fits(runs, meds, applied)
     interval = median_interval(meds)
     median = float(np.median(meds))
-    total = round(median + (applied or 0.0), 3)
-    resolved = excludes_zero(interval)  # within ±MAX_OFFSET_MM: every session is
+    total, _ = rig_total(median, applied)  # within: every session is
+    resolved = excludes_zero(interval)
     note = "" if resolved else UNRESOLVED
     return {
         "sessions": [
