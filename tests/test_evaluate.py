@@ -103,6 +103,8 @@ def test_both_methods_outputs_and_summary(both: tuple[Path, dict[str, Any]]) -> 
     assert record["unlabelled"] == []
     bins = record["summary"]["bins"]
     assert {(b["method"], b["bin_kpa"]) for b in bins} >= {("unet", "5-10"), ("classical", "5-10")}
+    # the example's rig.json gives the scale: the errors in mm² are stated too
+    assert all(b["median_abs_error_mm2"] is not None for b in bins if b["bin_kpa"] == "5-10")
     onset = record["summary"]["onset"]
     assert onset["labels_onset_kpa"] is not None
     assert set(onset["methods"]) == {"unet", "classical"}

@@ -91,7 +91,8 @@ def _score(
     masks = [label_mask(lab, (m.width, m.height)) for lab, m in zip(labs, first, strict=True)]
     areas = [float(mask.area_px) for mask in masks]
     offset = unet_offset(measured.get("unet", []), areas, measure.scale, described, stale)
-    scored = score_frames(str(manifest), [f.pressure_kpa for f in labelled], masks, measured)
+    pressures = [f.pressure_kpa for f in labelled]
+    scored = score_frames(str(manifest), pressures, masks, measured, measure.scale)
     return scored, masks, offset
 
 

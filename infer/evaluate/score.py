@@ -21,6 +21,7 @@ from contactcal.infer.calibration.steps import pool
 from contactcal.infer.evaluate.labels import LabelMask
 from contactcal.infer.methods.base import AreaResult
 from contactcal.infer.pipeline.measure import Measured
+from contactcal.infer.pipeline.scale import PixelScale
 
 
 def iou(result: AreaResult, truth: np.ndarray) -> float | None:
@@ -48,6 +49,7 @@ def score_frames(
     pressures: Sequence[float],
     labels: Sequence[LabelMask],
     measured: dict[str, list[Measured]],
+    scale: PixelScale | None = None,
 ) -> list[ScoredFrame]:
     """One :class:`ScoredFrame` per method and labelled frame (label area = rasterised count).
 
@@ -56,6 +58,7 @@ def score_frames(
         pressures: ``(N,)`` kPa of the labelled frames.
         labels: the N rasterised labels, same order.
         measured: per method name, the N measurements, same order.
+        scale: the rig's pixel scale (then the bins state errors in mm² too); None: px only.
     """
     out = []
     for name, ms in measured.items():
@@ -71,6 +74,7 @@ def score_frames(
                     contact=bool(m.result.contact),
                     iou=iou(m.result, lab.mask) if lab.area_px > 0 else None,
                     area_interval_px=m.result.area_interval_px,
+                    mm_per_px=None if scale is None else scale.at_width(m.width),
                 )
             )
     return out
