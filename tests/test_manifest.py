@@ -214,3 +214,14 @@ def test_not_utf8(tmp_path: Path) -> None:
     path = _session(tmp_path, "")
     path.write_bytes(b"file,pressure_kpa\n\xff\xfe.png,0\n")
     _fails(path, "UTF-8")
+
+
+def test_a_windows_path_gets_a_hint(tmp_path: Path) -> None:
+    """A manifest written on Windows (backslashes) names the likely cause on POSIX."""
+    if os.sep == "\\":
+        pytest.skip("backslashes are separators here")
+    (tmp_path / "frames").mkdir()
+    manifest = tmp_path / "m.csv"
+    manifest.write_text("file,pressure_kpa\nframes\\p00.png,0\nframes\\p05.png,5\n")
+    with pytest.raises(ManifestError, match=r"not found: .*written with '\\' as on Windows"):
+        read_manifest(manifest)

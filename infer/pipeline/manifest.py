@@ -282,9 +282,11 @@ def _check_files(where: str, frames: list[Frame], base: Path) -> None:
             for f in missing[:_MAX_LISTED]
         )
         more = f"; and {len(missing) - _MAX_LISTED} more" if len(missing) > _MAX_LISTED else ""
+        windows = any("\\" in str(f.file) for f in missing) and os.sep != "\\"
+        hint = " (written with '\\' as on Windows? use '/' between folders)" if windows else ""
         raise ManifestError(
             f"{where}: {len(missing)} image file(s) not found: {listed}{more}; relative paths "
-            f"are resolved against the manifest's folder {base}"
+            f"are resolved against the manifest's folder {base}{hint}"
         )
     _check_distinct_files(where, frames)
 
