@@ -13,7 +13,6 @@ import argparse
 import os
 import sys
 from collections.abc import Callable, Iterator
-from dataclasses import replace
 from pathlib import Path
 from typing import TYPE_CHECKING
 
@@ -177,7 +176,8 @@ def calibrate_video(
 
     Args:
         args: the ``calibrate --video | --camera`` command line.
-        measure: how the extracted frames are measured (no outlines: no overlays here).
+        measure: how the extracted frames are measured (no outlines: :func:`is_video_run`
+            refused --overlay).
         provenance: the command line and the display's id, recorded.
     """
     from contactcal.infer.calibration.calibrate import calibrate_session
@@ -213,7 +213,7 @@ def calibrate_video(
             manifest,
             args.out,
             args.method,
-            replace(measure, outline=False),
+            measure,
             session_options(args),
             provenance,
             outputs=outs,
