@@ -191,6 +191,23 @@ def test_format_table() -> None:
     assert "dim" in table and "CV RMSE" in table and "as given" in table
     px = format_table(_results(mm2=False), _curve(_results(mm2=False), "px"))
     assert "median (px)" in px.splitlines()[0]
+    named = format_table(results, _curve(results), "TD-0042 left").splitlines()
+    assert named[0] == "device: TD-0042 left" and named[1:] == lines
+
+
+def test_curve_title_names_the_device(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    titles: list[str | None] = []
+
+    def spy(path: Path, results: object, fit: object, method: str, device_id: str | None) -> None:
+        titles.append(device_id)
+        Path(path).write_bytes(b"png")
+
+    monkeypatch.setattr(calibration_io, "plot_curve", spy)
+    results = _results()
+    prov = calibration_io.Provenance(device_id="TD-7")
+    calibration_io.write_calibration(tmp_path / "a", results, _curve(results), "unet", None, prov)
+    calibration_io.write_calibration(tmp_path / "b", results, _curve(results), "unet")
+    assert titles == ["TD-7", None]
 
 
 def test_calibration_records_provenance(tmp_path: Path) -> None:

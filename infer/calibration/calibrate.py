@@ -125,7 +125,8 @@ def calibrate_session(
         paths = write_calibration(out_dir, results, fit, method.name, extra, provenance, outs)
     gated_ref = checks["reference_gated_above_zero"]
     warning = REFERENCE_NOTE.format(p=results[0].pressure_kpa) if gated_ref else ""
-    table = format_table(results, fit) + (f"\nwarning: {warning}" if warning else "")
+    table = format_table(results, fit, provenance.device_id)
+    table += f"\nwarning: {warning}" if warning else ""
     return CalibrationReport(table, frames, measured, fit.curve, paths, fit)
 
 

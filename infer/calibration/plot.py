@@ -62,9 +62,15 @@ def _draw_curve(ax: Axes, curve: Curve, name: str, model: str) -> None:
 
 
 def plot_curve(
-    path: str | os.PathLike[str], results: list[CalibrationPoint], fit: SessionFit, method: str
+    path: str | os.PathLike[str],
+    results: list[CalibrationPoint],
+    fit: SessionFit,
+    method: str,
+    device_id: str | None = None,
 ) -> None:
     """Draw every phase's frames (filled: contact, hollow: none), fit, band and onset to a PNG.
+
+    The title names the method and, when given, the calibrated display (``device_id``).
 
     Uses matplotlib's object API with the Agg canvas (imported here, never at module import,
     and without touching pyplot's global backend).
@@ -93,7 +99,8 @@ def plot_curve(
         _draw_curve(ax, ph.curve, name, ph.selection["model"])
     ax.set_xlabel("pressure (kPa)")
     ax.set_ylabel(f"contact area ({unit})")
-    ax.set_title(f"Contact area vs pressure ({method})")
+    device = "" if device_id is None else f", device {device_id}"
+    ax.set_title(f"Contact area vs pressure ({method}{device})")
     ax.grid(alpha=0.3)
     ax.legend(loc="lower right", fontsize="small")
     fig.tight_layout()

@@ -237,7 +237,7 @@ def write_calibration(
     text = json_text(record, ensure_ascii=False)
     csv_text = _csv_text(fit)
     with run_outputs(join=outputs) as outs:
-        plot_curve(outs.stage(paths["png"]), results, fit, method)
+        plot_curve(outs.stage(paths["png"]), results, fit, method, record["device_id"])
         write_synced(outs.stage(paths["csv"]), csv_text)
         write_synced(outs.stage(paths["json"]), text)  # staged last, so moved last
     return paths

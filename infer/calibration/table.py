@@ -67,10 +67,13 @@ def _summary(fit: SessionFit) -> list[str]:
     return lines
 
 
-def format_table(results: list[CalibrationPoint], fit: SessionFit) -> str:
+def format_table(
+    results: list[CalibrationPoint], fit: SessionFit, device_id: str | None = None
+) -> str:
     """Aligned text table of the steps: phase, pressure (kPa), frames, median area, spread
     (min-max and interquartile range, with repeated frames), fit and its 90 % band (curve
-    unit), contact, notes; then each phase's model, CV errors and onset, and the hysteresis."""
+    unit), contact, notes; then each phase's model, CV errors and onset, and the hysteresis.
+    With ``device_id``, a first line names the calibrated display."""
     u = fit.curve.area_unit
     head = ["phase", "pressure (kPa)", "n", f"median ({u})", "min-max", "IQR", f"fit ({u})"]
     head += ["90 % band", "contact", "note"]
@@ -85,4 +88,5 @@ def format_table(results: list[CalibrationPoint], fit: SessionFit) -> str:
         return "  ".join(out).rstrip()
 
     body = [line(head), line(["-" * w for w in widths]), *(line(r) for r in rows)]
-    return "\n".join([*body, "", *_summary(fit)])
+    device = [] if device_id is None else [f"device: {device_id}"]
+    return "\n".join([*device, *body, "", *_summary(fit)])
