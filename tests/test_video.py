@@ -28,7 +28,12 @@ from contactcal.infer.video.extract import (
     open_video,
     video_frames,
 )
-from contactcal.infer.video.live import LogPoller, capture_frames, returned_to_zero
+from contactcal.infer.video.live import (
+    LogPoller,
+    capture_frames,
+    open_camera,
+    returned_to_zero,
+)
 from contactcal.infer.video.log import PressureLogError, read_pressure_log
 from contactcal.infer.video.steps import StepConfig, detect_steps
 
@@ -312,3 +317,11 @@ def test_a_vent_to_zero_is_left_out_and_a_rerun_is_refused(
     code, err = _run([*argv, str(tmp_path / "flat.csv"), "--out", str(tmp_path / "f")], capsys)
     assert code == 2 and "flat.csv: the steady steps found hold 1 loading pressure" in err, err
     assert not (tmp_path / "f").exists()
+
+
+def test_missing_camera_is_one_line(capfd: pytest.CaptureFixture[str]) -> None:
+    level = cv2.utils.logging.getLogLevel()
+    with pytest.raises(ValueError, match="camera 97: cannot be opened"):
+        open_camera(97)
+    assert "WARN" not in capfd.readouterr().err  # OpenCV's backend warnings held back
+    assert cv2.utils.logging.getLogLevel() == level

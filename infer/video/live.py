@@ -33,10 +33,18 @@ PREVIEW_FORMATS = ((".mp4", "mp4v"), (".avi", "MJPG"))
 def open_camera(index: int) -> cv2.VideoCapture:
     """Open camera ``index`` (OpenCV's numbering).
 
+    OpenCV's own warnings while it tries its backends are held back (its log level is restored
+    afterwards): a camera that does not open gets the one line below instead.
+
     Raises:
         ValueError: the camera cannot be opened.
     """
-    cap = cv2.VideoCapture(index)
+    level = cv2.utils.logging.getLogLevel()
+    cv2.utils.logging.setLogLevel(cv2.utils.logging.LOG_LEVEL_ERROR)
+    try:
+        cap = cv2.VideoCapture(index)
+    finally:
+        cv2.utils.logging.setLogLevel(level)
     if not cap.isOpened():
         raise ValueError(
             f"camera {index}: cannot be opened; check the index (0 is the first camera) and "
