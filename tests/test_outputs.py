@@ -213,6 +213,24 @@ def test_measure_overlays_one_per_input(tmp_path: Path) -> None:
     ]
 
 
+def test_overlay_rerun_names_the_earlier_overlays(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    s = copy_session(tmp_path, ("p00.0kpa.jpg", "p08.0kpa.jpg", "p16.0kpa.jpg"))
+    ov = tmp_path / "ov"
+    argv = ["measure", "--method", "classical", "--overlay", str(ov), "--out"]
+    assert (
+        main([*argv, str(tmp_path / "1.json"), str(s / "p08.0kpa.jpg"), str(s / "p16.0kpa.jpg")])
+        == 0
+    )
+    assert "earlier run" not in capsys.readouterr().out
+    assert main([*argv, str(tmp_path / "2.json"), str(s / "p08.0kpa.jpg")]) == 0
+    out = capsys.readouterr().out.splitlines()
+    assert out[-1].startswith(f"note: {ov} also holds 1 overlay(s) this run did not write")
+    assert "(p16.0kpa_overlay.png)" in out[-1]
+    assert (ov / "p16.0kpa_overlay.png").exists()  # kept: nothing is deleted
+
+
 def test_calibrate_is_all_or_nothing(
     tmp_path: Path, capsys: pytest.CaptureFixture[str], monkeypatch: pytest.MonkeyPatch
 ) -> None:

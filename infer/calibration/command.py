@@ -58,7 +58,7 @@ def _cmd_calibrate(args: argparse.Namespace) -> int:
     from contactcal.infer.calibration.calibrate import calibrate_session
     from contactcal.infer.calibration.provenance import Provenance
     from contactcal.infer.files.atomic import run_outputs
-    from contactcal.infer.pipeline.overlay import write_overlays
+    from contactcal.infer.pipeline.overlay import earlier_overlays_note, write_overlays
     from contactcal.infer.video.command import calibrate_video, is_video_run
 
     provenance = Provenance(argv=args.argv, device_id=args.device_id)  # refuses a bad id
@@ -67,6 +67,7 @@ def _cmd_calibrate(args: argparse.Namespace) -> int:
     if is_video_run(args):  # --video / --camera: contactcal.infer.video.command
         return calibrate_video(args, measure_options(args), provenance)
     measure = measure_options(args, args.manifest.parent / "rig.json")
+    written: list[Path] = []
     with run_outputs(run_inputs(args)) as outs:
         rep = calibrate_session(
             args.manifest,
@@ -81,6 +82,11 @@ def _cmd_calibrate(args: argparse.Namespace) -> int:
             files = [f.file for f in rep.frames]
             runs = overlay_runs(args, measure, rep.measured, files, files[0])
             titles = [f"{f.pressure_kpa:g} kPa, {f.phase}" for f in rep.frames]
-            write_overlays(runs, args.overlay, titles, outputs=outs, bit_depth=args.bit_depth)
+            written = write_overlays(
+                runs, args.overlay, titles, outputs=outs, bit_depth=args.bit_depth
+            )
     print(rep.table)
+    note = earlier_overlays_note(written)
+    if note is not None:
+        print(note)
     return 0

@@ -39,7 +39,7 @@ def _cmd_measure(args: argparse.Namespace) -> int:
     from contactcal.infer.files.atomic import run_outputs, write_synced
     from contactcal.infer.files.jsonable import json_text
     from contactcal.infer.image.read import SUPPORTED_SUFFIXES
-    from contactcal.infer.pipeline.overlay import write_overlays
+    from contactcal.infer.pipeline.overlay import earlier_overlays_note, write_overlays
 
     check_device_id(args.device_id)
     check_change_gate(args)
@@ -59,9 +59,10 @@ def _cmd_measure(args: argparse.Namespace) -> int:
         text = json_text(rows)
         if json_path is not None:
             write_synced(json_path, text)
+        written: list[Path] = []
         if args.overlay is not None:
             runs = overlay_runs(args, options, measured, args.images, args.reference)
-            write_overlays(runs, args.overlay, outputs=outs, bit_depth=args.bit_depth)
+            written = write_overlays(runs, args.overlay, outputs=outs, bit_depth=args.bit_depth)
     if to_stdout:
         sys.stdout.write(text)
     for m in measured:
@@ -69,6 +70,9 @@ def _cmd_measure(args: argparse.Namespace) -> int:
         area = f"{mm2:8.1f} mm²" if mm2 is not None else f"{m.result.area_px:10.0f} px"
         line = f"{m.file}  contact={'yes' if m.result.contact else 'no ':3s} area={area}"
         print(line, file=sys.stderr if to_stdout else sys.stdout)
+    note = earlier_overlays_note(written)
+    if note is not None:
+        print(note, file=sys.stderr if to_stdout else sys.stdout)
     return 0
 
 

@@ -128,3 +128,28 @@ def write_overlays(
             title = titles[k] if titles is not None else m.file.name
             write_image(outs.stage(paths[k]), draw_overlay(gray, contours, title))
     return paths
+
+
+def earlier_overlays_note(written: Sequence[Path]) -> str | None:
+    """A line naming overlays in the folder of ``written`` that this run did not write.
+
+    A rerun with fewer or other frames leaves the earlier run's overlays beside the new ones;
+    nothing is deleted (they may be someone's record), but the user is told.
+
+    Args:
+        written: this run's overlay paths (all in one folder).
+
+    Returns:
+        ``None`` when the folder holds no other ``*_overlay.png``, else a one-line note.
+    """
+    if not written:
+        return None
+    folder, mine = written[0].parent, {p.name for p in written}
+    others = sorted(p.name for p in folder.glob("*_overlay.png") if p.name not in mine)
+    if not others:
+        return None
+    shown = ", ".join(others[:3]) + (", …" if len(others) > 3 else "")
+    return (
+        f"note: {folder} also holds {len(others)} overlay(s) this run did not write ({shown}); "
+        "they are from an earlier run (use an empty --overlay folder to keep runs apart)"
+    )
