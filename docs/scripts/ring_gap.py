@@ -6,14 +6,16 @@ For each dataset given (e.g. the ``--slope 0`` and ``--slope 0.5`` renders of
 * **ring peak**: the mean grey level as a function of the signed distance from the true contact
   edge (exact mask; 0.02 mm bins, outside > 0), and the distance of its maximum within
   0-3 mm outside the edge, mm (the brightest band around the patch: the inner ring);
-* **U-Net offset**: the outward move of the shipped model's region that gives the true area
-  (Steiner, ``docs/scripts/offset_transfer.py``), mm; < 0: the region lies inside the contact;
+* **U-Net offset**: the outward move of the U-Net's region (the shipped model, or ``--model``)
+  that gives the true area (Steiner, ``docs/scripts/offset_transfer.py``), mm; < 0: the region
+  lies inside the contact;
 * the U-Net's and the classical routine's median |relative area error|.
 
 Prints one line per dataset (medians over its frames), and with ``--sessions`` one per session
 with its membrane's departure slope (``session.json``). Report only: nothing is chosen on it.
 
-    .venv/bin/python docs/scripts/ring_gap.py out/departure/s0 out/departure/s0.5 [--sessions]
+    .venv/bin/python docs/scripts/ring_gap.py out/departure/s0 out/departure/s0.5 [--sessions] \
+        [--model M.onnx]
 """
 
 from __future__ import annotations
@@ -73,9 +75,13 @@ def classical_errors(folder: Path) -> list[list[float]]:
 
 
 def departure_slope(session_folder: Path) -> float:
-    """The session's ``membrane.departure_slope`` from its ``session.json`` (0 when absent)."""
+    """The session's ``membrane.departure_slope`` from its ``session.json``; where that lacks it,
+    the dataset's ``config.json`` (``departure_slope.py`` re-renders record it there); else 0."""
     info = json.loads((session_folder / "session.json").read_text())
-    return float(info["membrane"].get("departure_slope", 0.0))
+    if "departure_slope" in info["membrane"]:
+        return float(info["membrane"]["departure_slope"])
+    config = json.loads((session_folder.parent / "config.json").read_text())
+    return float(config.get("departure_slope", 0.0))
 
 
 def _line(label: str, peaks: list[float], f: np.ndarray, classical: list[float]) -> str:
@@ -93,6 +99,7 @@ def main() -> None:
     ap = argparse.ArgumentParser()
     ap.add_argument("data", type=Path, nargs="+")
     ap.add_argument("--sessions", action="store_true", help="also one line per session")
+    ap.add_argument("--model", type=Path, help="U-Net model (default: the shipped one)")
     args = ap.parse_args()
     for folder in args.data:
         sessions = list(sessions_of(read_index(folder)).values())
@@ -104,7 +111,7 @@ def main() -> None:
             ]
             for rows in sessions
         ]
-        f = measure_dataset(folder, None)
+        f = measure_dataset(folder, args.model)
         f = f[(f[:, P] >= 5) & (f[:, TRUE] > 0)]
         classical = classical_errors(folder)
         flat = [x for c in classical for x in c]
