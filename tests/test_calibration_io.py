@@ -210,6 +210,15 @@ def test_curve_title_names_the_device(tmp_path: Path, monkeypatch: pytest.Monkey
     assert titles == ["TD-7", None]
 
 
+def test_curve_title_takes_any_device_id(tmp_path: Path) -> None:
+    from contactcal.infer.calibration.plot import plot_curve
+
+    results = _results()
+    odd = "x$_$y $\\frac$ " + "W" * 90  # mathtext that would not parse, and a long id
+    plot_curve(tmp_path / "c.png", results, _curve(results), "unet", odd)
+    assert (tmp_path / "c.png").read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+
+
 def test_calibration_records_provenance(tmp_path: Path) -> None:
     from contactcal.infer.methods.unet.runner import DEFAULT_MODEL, OnnxSegmenter
 

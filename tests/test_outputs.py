@@ -231,6 +231,19 @@ def test_overlay_rerun_names_the_earlier_overlays(
     assert (ov / "p16.0kpa_overlay.png").exists()  # kept: nothing is deleted
 
 
+def test_earlier_overlays_note_is_case_blind(tmp_path: Path) -> None:
+    from contactcal.infer.pipeline.overlay import earlier_overlays_note
+
+    for name in ("A_overlay.png", "b_overlay.png", "odd\nname_overlay.png"):
+        (tmp_path / name).write_bytes(b"png")
+    (tmp_path / "dir_overlay.png").mkdir()
+    note = earlier_overlays_note([tmp_path / "a_overlay.png", tmp_path / "B_overlay.png"])
+    assert note is not None and "holds 1 overlay(s)" in note
+    assert "'odd\\nname_overlay.png'" in note and "\n" not in note
+    (tmp_path / "odd\nname_overlay.png").unlink()
+    assert earlier_overlays_note([tmp_path / "a_overlay.png", tmp_path / "B_overlay.png"]) is None
+
+
 def test_calibrate_is_all_or_nothing(
     tmp_path: Path, capsys: pytest.CaptureFixture[str], monkeypatch: pytest.MonkeyPatch
 ) -> None:

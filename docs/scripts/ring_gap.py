@@ -75,13 +75,18 @@ def classical_errors(folder: Path) -> list[list[float]]:
 
 
 def departure_slope(session_folder: Path) -> float:
-    """The session's ``membrane.departure_slope`` from its ``session.json``; where that lacks it,
-    the dataset's ``config.json`` (``departure_slope.py`` re-renders record it there); else 0."""
+    """The session's departure slope dz/dr.
+
+    From ``membrane.departure_slope`` in its ``session.json``; where that lacks it, from the
+    dataset's ``config.json`` (``departure_slope.py`` re-renders record it there); else 0.
+    """
     info = json.loads((session_folder / "session.json").read_text())
     if "departure_slope" in info["membrane"]:
         return float(info["membrane"]["departure_slope"])
-    config = json.loads((session_folder.parent / "config.json").read_text())
-    return float(config.get("departure_slope", 0.0))
+    config = session_folder.parent / "config.json"
+    if not config.is_file():
+        return 0.0
+    return float(json.loads(config.read_text()).get("departure_slope", 0.0))
 
 
 def _line(label: str, peaks: list[float], f: np.ndarray, classical: list[float]) -> str:

@@ -123,10 +123,9 @@ def calibrate_session(
     model = None if measure.model is None else str(measure.model)
     with run_outputs([manifest, model, *files], join=outputs) as outs:
         paths = write_calibration(out_dir, results, fit, method.name, extra, provenance, outs)
-    gated_ref = checks["reference_gated_above_zero"]
-    warning = REFERENCE_NOTE.format(p=results[0].pressure_kpa) if gated_ref else ""
     table = format_table(results, fit, provenance.device_id)
-    table += f"\nwarning: {warning}" if warning else ""
+    if checks["reference_gated_above_zero"]:
+        table += "\nwarning: " + REFERENCE_NOTE.format(p=results[0].pressure_kpa)
     return CalibrationReport(table, frames, measured, fit.curve, paths, fit)
 
 

@@ -7,6 +7,7 @@ from __future__ import annotations
 
 import math
 import os
+import textwrap
 from typing import TYPE_CHECKING
 
 import numpy as np
@@ -19,6 +20,8 @@ if TYPE_CHECKING:
     from contactcal.infer.calibration.points import CalibrationPoint
     from contactcal.infer.calibration.session import SessionFit
 
+#: Characters per title line for the device id: 40 of the widest glyph fit the 6.4-in figure.
+TITLE_CHARS = 40
 #: Colour and line style per phase.
 _STYLE = {"loading": ("tab:red", "-"), "unloading": ("tab:purple", "--")}
 
@@ -99,8 +102,10 @@ def plot_curve(
         _draw_curve(ax, ph.curve, name, ph.selection["model"])
     ax.set_xlabel("pressure (kPa)")
     ax.set_ylabel(f"contact area ({unit})")
-    device = "" if device_id is None else f", device {device_id}"
-    ax.set_title(f"Contact area vs pressure ({method}{device})")
+    title = f"Contact area vs pressure ({method})"
+    if device_id is not None:  # its own line(s), wrapped: an id may be 100 characters
+        title += "\n" + "\n".join(textwrap.wrap(f"device {device_id}", TITLE_CHARS))
+    ax.set_title(title, parse_math=False)  # a "$" in an id is text, not mathtext
     ax.grid(alpha=0.3)
     ax.legend(loc="lower right", fontsize="small")
     fig.tight_layout()

@@ -144,11 +144,16 @@ def earlier_overlays_note(written: Sequence[Path]) -> str | None:
     """
     if not written:
         return None
-    folder, mine = written[0].parent, {p.name for p in written}
-    others = sorted(p.name for p in folder.glob("*_overlay.png") if p.name not in mine)
+    folder, mine = written[0].parent, {p.name.casefold() for p in written}
+    others = sorted(
+        p.name
+        for p in folder.glob("*_overlay.png")
+        if p.name.casefold() not in mine and p.is_file()  # as overlay_names: case-blind
+    )
     if not others:
         return None
-    shown = ", ".join(others[:3]) + (", …" if len(others) > 3 else "")
+    shown = ", ".join(n if n.isprintable() else ascii(n) for n in others[:3])
+    shown += ", …" if len(others) > 3 else ""
     return (
         f"note: {folder} also holds {len(others)} overlay(s) this run did not write ({shown}); "
         "they are from an earlier run (use an empty --overlay folder to keep runs apart)"

@@ -33,14 +33,15 @@ PREVIEW_FORMATS = ((".mp4", "mp4v"), (".avi", "MJPG"))
 def open_camera(index: int) -> cv2.VideoCapture:
     """Open camera ``index`` (OpenCV's numbering).
 
-    OpenCV's own warnings while it tries its backends are held back (its log level is restored
-    afterwards): a camera that does not open gets the one line below instead.
+    OpenCV's own messages while it tries its backends (warnings, and on some builds an error
+    line) are held back, its log level restored afterwards: a camera that does not open gets the
+    one line below instead.
 
     Raises:
         ValueError: the camera cannot be opened.
     """
     level = cv2.utils.logging.getLogLevel()
-    cv2.utils.logging.setLogLevel(cv2.utils.logging.LOG_LEVEL_ERROR)
+    cv2.utils.logging.setLogLevel(cv2.utils.logging.LOG_LEVEL_SILENT)
     try:
         cap = cv2.VideoCapture(index)
     finally:
