@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import dataclasses
+from collections.abc import Iterator
 
 import numpy as np
 import pytest
@@ -19,7 +20,7 @@ from contactcal.synth.look import (
     tone_curve,
     vignette_gain,
 )
-from contactcal.synth.randomize import sample_session
+from contactcal.synth.randomize import SessionParams, sample_session
 
 H, W = 60, 80
 HARD = LookEffects(
@@ -183,24 +184,27 @@ def test_smooth_coating_in_the_chosen_share_of_hard_sessions_only() -> None:
     assert 18 <= smooth <= 42  # smooth_fraction 0.5 of 60
 
 
-def test_centre_speck_in_the_chosen_share_of_sessions_other_draws_unchanged() -> None:
-    """The option only adds a speck: every other parameter is what the seed gave before."""
-    specks = 0
+def _drawn_with_and_without(**option: float) -> Iterator[tuple[SessionParams, SessionParams]]:
+    """``(plain, with option)`` sessions of one seed each, for 60 seeds × normal and hard."""
     for seed in range(60):
         for hard in (False, True):
             plain = sample_session(np.random.default_rng([seed, 2]), hard=hard)
-            with_speck = sample_session(
-                np.random.default_rng([seed, 2]), hard=hard, speck_fraction=0.5
-            )
-            assert plain.camera.look.centre_speck == (0.0, 0.0, 0.0, 0.0)
-            strength, radius, x, y = with_speck.camera.look.centre_speck
-            look = dataclasses.replace(with_speck.camera.look, centre_speck=(0.0, 0.0, 0.0, 0.0))
-            camera = dataclasses.replace(with_speck.camera, look=look)
-            assert dataclasses.replace(with_speck, camera=camera) == plain
-            if strength > 0:
-                specks += 1
-                assert 0.1 <= strength <= 0.4 and 1.0 <= radius <= 4.0
-                assert np.hypot(x, y) <= 0.12
+            yield plain, sample_session(np.random.default_rng([seed, 2]), hard=hard, **option)
+
+
+def test_centre_speck_in_the_chosen_share_of_sessions_other_draws_unchanged() -> None:
+    """The option only adds a speck: every other parameter is what the seed gave before."""
+    specks = 0
+    for plain, with_speck in _drawn_with_and_without(speck_fraction=0.5):
+        assert plain.camera.look.centre_speck == (0.0, 0.0, 0.0, 0.0)
+        strength, radius, x, y = with_speck.camera.look.centre_speck
+        look = dataclasses.replace(with_speck.camera.look, centre_speck=(0.0, 0.0, 0.0, 0.0))
+        camera = dataclasses.replace(with_speck.camera, look=look)
+        assert dataclasses.replace(with_speck, camera=camera) == plain
+        if strength > 0:
+            specks += 1
+            assert 0.1 <= strength <= 0.4 and 1.0 <= radius <= 4.0
+            assert np.hypot(x, y) <= 0.12
     assert 40 <= specks <= 80  # speck_fraction 0.5 of 120
 
 
@@ -257,19 +261,14 @@ def test_camera_blur_means_the_same_optics_at_every_width() -> None:
 def test_membrane_departure_in_the_chosen_share_of_sessions_other_draws_unchanged() -> None:
     """Like the speck: drawn last, so every other parameter is what the seed gave before."""
     departs = 0
-    for seed in range(60):
-        for hard in (False, True):
-            plain = sample_session(np.random.default_rng([seed, 2]), hard=hard)
-            with_d = sample_session(
-                np.random.default_rng([seed, 2]), hard=hard, departure_fraction=0.5
-            )
-            assert plain.membrane.departure_slope == 0.0
-            slope = with_d.membrane.departure_slope
-            membrane = dataclasses.replace(with_d.membrane, departure_slope=0.0)
-            assert dataclasses.replace(with_d, membrane=membrane) == plain
-            if slope > 0:
-                departs += 1
-                assert slope <= 0.5
+    for plain, with_d in _drawn_with_and_without(departure_fraction=0.5):
+        assert plain.membrane.departure_slope == 0.0
+        slope = with_d.membrane.departure_slope
+        membrane = dataclasses.replace(with_d.membrane, departure_slope=0.0)
+        assert dataclasses.replace(with_d, membrane=membrane) == plain
+        if slope > 0:
+            departs += 1
+            assert slope <= 0.5
     assert 40 <= departs <= 80  # departure_fraction 0.5 of 120
 
 
