@@ -99,17 +99,25 @@ def rig_file(args: argparse.Namespace, default_rig: Path | None = None) -> Path 
     return None
 
 
-def resolve_scale(args: argparse.Namespace, default_rig: Path | None = None) -> PixelScale | None:
-    """The pixel scale ``--mm-per-px`` or the rig config (:func:`rig_file`) gives; None: none."""
-    from contactcal.infer.pipeline.scale import PixelScale, load_rig_config
+def resolve_rig(
+    args: argparse.Namespace, default_rig: Path | None = None
+) -> tuple[PixelScale | None, BoundaryOffset | None]:
+    """The pixel scale and the boundary offset of a run, the rig config (:func:`rig_file`) read
+    once: the scale from ``--mm-per-px``, else from the rig config; the offset from the rig config,
+    also with ``--mm-per-px`` (the offset is in mm, so another source of the scale does not change
+    it, and dropping it silently would). None: not given."""
+    from contactcal.infer.pipeline.boundary import rig_boundary
+    from contactcal.infer.pipeline.scale import PixelScale, read_rig_json, rig_scale
 
+    rig = rig_file(args, default_rig)
+    data = None if rig is None else read_rig_json(rig)
+    boundary = None if data is None else rig_boundary(data, str(rig))
     if args.mm_per_px is not None:
         try:
-            return PixelScale(args.mm_per_px, None)
+            return PixelScale(args.mm_per_px, None), boundary
         except ValueError as exc:
             raise ValueError(f"--mm-per-px {args.mm_per_px:g}: {exc}") from None
-    rig = rig_file(args, default_rig)
-    return None if rig is None else load_rig_config(rig)
+    return (None if data is None else rig_scale(data, rig)), boundary
 
 
 def check_out_folder(out: Path, command: str) -> None:
@@ -125,29 +133,18 @@ def check_out_folder(out: Path, command: str) -> None:
         )
 
 
-def resolve_boundary(
-    args: argparse.Namespace, default_rig: Path | None = None
-) -> BoundaryOffset | None:
-    """The boundary offset the rig config (:func:`rig_file`) states; None: none. Also with
-    ``--mm-per-px``: the offset is in mm, so another source of the scale does not change it (and
-    dropping it silently would)."""
-    from contactcal.infer.pipeline.boundary import load_boundary_offset
-
-    rig = rig_file(args, default_rig)
-    return None if rig is None else load_boundary_offset(rig)
-
-
 def measure_options(args: argparse.Namespace, default_rig: Path | None = None) -> MeasureOptions:
     """The run's :class:`~contactcal.infer.pipeline.options.MeasureOptions` from its command
-    line: ``--model``, the scale and boundary offset (:func:`resolve_scale`,
-    :func:`resolve_boundary`; ``default_rig``: the ``rig.json`` read when no option names one),
+    line: ``--model``, the scale and boundary offset (:func:`resolve_rig`; ``default_rig``: the
+    ``rig.json`` read when no option names one),
     ``--bit-depth``, ``--no-change-gate``, ``--threads`` and ``--overlay`` (outlines)."""
     from contactcal.infer.pipeline.options import MeasureOptions
 
+    scale, boundary = resolve_rig(args, default_rig)
     return MeasureOptions(
         model=args.model,
-        scale=resolve_scale(args, default_rig),
-        boundary=resolve_boundary(args, default_rig),
+        scale=scale,
+        boundary=boundary,
         bit_depth=args.bit_depth,
         change_gate=not args.no_change_gate,
         threads=getattr(args, "threads", 1),

@@ -16,15 +16,15 @@ tenths of one).
 
 from __future__ import annotations
 
-import json
 import math
 import numbers
 import os
 import re
 from dataclasses import dataclass, replace
-from pathlib import Path
+from typing import Any
 
 from contactcal.infer.methods.base import AreaResult
+from contactcal.infer.pipeline.scale import read_rig_json
 
 #: Largest |offset| accepted, mm: ten times the generators' disagreement (~0.18 mm), and a
 #: tenth of a contact patch's radius; a larger value is a unit or sign slip.
@@ -64,26 +64,31 @@ class BoundaryOffset:
             )
 
 
-def load_boundary_offset(path: str | os.PathLike[str]) -> BoundaryOffset | None:
-    """The boundary offset a rig config states (None when it states none).
+def rig_boundary(data: dict[str, Any], source: str) -> BoundaryOffset | None:
+    """The boundary offset a rig config's JSON object states (None when it states none);
+    ``source`` names the file in errors.
 
     Raises:
-        BoundaryOffsetError: only one of the two keys, or an invalid value (the scale's own
-            errors are :func:`~contactcal.infer.pipeline.scale.load_rig_config`'s).
+        BoundaryOffsetError: only one of the two keys, or an invalid value.
     """
-    p = Path(path)
-    try:
-        data = json.loads(p.read_text(encoding="utf-8-sig"))  # a BOM (Notepad) is fine
-    except (OSError, UnicodeDecodeError, json.JSONDecodeError):
-        return None  # load_rig_config reports an unreadable file
-    if not isinstance(data, dict) or (OFFSET_KEY not in data and MODEL_KEY not in data):
+    if OFFSET_KEY not in data and MODEL_KEY not in data:
         return None
     if OFFSET_KEY not in data or MODEL_KEY not in data:
         raise BoundaryOffsetError(
-            f"{p}: {OFFSET_KEY} and {MODEL_KEY} go together (the offset holds for one model); "
+            f"{source}: {OFFSET_KEY} and {MODEL_KEY} go together (the offset holds for one model); "
             "add the missing one as `contactcal evaluate` printed it, or remove both"
         )
-    return BoundaryOffset(data[OFFSET_KEY], data[MODEL_KEY], str(p))
+    return BoundaryOffset(data[OFFSET_KEY], data[MODEL_KEY], source)
+
+
+def load_boundary_offset(path: str | os.PathLike[str]) -> BoundaryOffset | None:
+    """The boundary offset a rig config file states (None when it states none).
+
+    Raises:
+        RigConfigError: the file is missing, unreadable or not a JSON object.
+        BoundaryOffsetError: only one of the two keys, or an invalid value.
+    """
+    return rig_boundary(read_rig_json(path), str(path))
 
 
 def offset_area(area: float, perimeter: float, d: float) -> float:

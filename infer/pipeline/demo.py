@@ -13,11 +13,11 @@ from contactcal.infer.files.atomic import run_outputs, write_synced
 from contactcal.infer.image.read import load_image
 from contactcal.infer.image.write import write_image
 from contactcal.infer.methods.registry import METHODS
-from contactcal.infer.pipeline.boundary import load_boundary_offset
+from contactcal.infer.pipeline.boundary import rig_boundary
 from contactcal.infer.pipeline.examples import example_manifest
 from contactcal.infer.pipeline.options import MeasureOptions
 from contactcal.infer.pipeline.overlay import draw_overlay, montage
-from contactcal.infer.pipeline.scale import load_rig_config
+from contactcal.infer.pipeline.scale import read_rig_json, rig_scale
 
 #: Pressures shown in the overlay montage (nearest frames), kPa.
 MONTAGE_KPA = (0.0, 2.0, 4.0, 8.0, 14.0, 20.0)
@@ -38,8 +38,11 @@ def run_demo(
     manifest = Path(manifest) if manifest is not None else example_manifest()
     rig = manifest.parent / "rig.json"
     measure = MeasureOptions(outline=True)
-    if rig.is_file():  # as `calibrate` reads the rig.json beside a manifest
-        measure = replace(measure, scale=load_rig_config(rig), boundary=load_boundary_offset(rig))
+    if rig.is_file():  # as `calibrate` reads the rig.json beside a manifest (once)
+        data = read_rig_json(rig)
+        measure = replace(
+            measure, scale=rig_scale(data, rig), boundary=rig_boundary(data, str(rig))
+        )
     reports: dict[str, CalibrationReport] = {}
     lines = [f"session: {manifest}"]
     with run_outputs() as outs:

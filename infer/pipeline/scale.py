@@ -16,6 +16,7 @@ import numbers
 import os
 from dataclasses import dataclass
 from pathlib import Path
+from typing import Any
 
 #: Plausible mm per pixel at the contact plane. The rig's camera gives ~0.012 mm/px on a
 #: 2592 px frame (a ~30 mm field); 1e-4 mm/px (a 0.26 mm field) is finer than any camera's view
@@ -25,6 +26,7 @@ MM_PER_PX_RANGE = (1e-4, 10.0)
 #: Plausible width (px) a scale was measured at: a rig frame is >= 16 px wide and no camera
 #: sensor has more than 100,000 px per row.
 IMAGE_WIDTH_RANGE_PX = (16, 100_000)
+_EXAMPLE = '{"mm_per_px": 0.0118, "image_width_px": 2592}'
 
 
 class RigConfigError(ValueError):
@@ -79,12 +81,12 @@ def _width(value: object) -> object:
     return value
 
 
-def load_rig_config(path: str | os.PathLike[str]) -> PixelScale:
-    """Read a rig config JSON (``mm_per_px`` and ``image_width_px``).
+def read_rig_json(path: str | os.PathLike[str]) -> dict[str, Any]:
+    """The JSON object of a rig config file (read once; the scale and the boundary offset are
+    parsed from it).
 
     Raises:
-        RigConfigError: missing file, invalid JSON, missing or invalid (non-numeric,
-            non-finite, out-of-range, fractional width) fields.
+        RigConfigError: missing file, unreadable or invalid JSON, or not a JSON object.
     """
     p = Path(path)
     try:
@@ -93,12 +95,34 @@ def load_rig_config(path: str | os.PathLike[str]) -> PixelScale:
         raise RigConfigError(f"{p}: no such rig config file") from exc
     except (OSError, UnicodeDecodeError, json.JSONDecodeError) as exc:
         raise RigConfigError(f"{p}: not a readable JSON rig config ({exc})") from exc
-    if not isinstance(data, dict) or "mm_per_px" not in data or "image_width_px" not in data:
+    if not isinstance(data, dict):
+        raise RigConfigError(f"{p}: expected a JSON object, e.g. {_EXAMPLE}")
+    return data
+
+
+def rig_scale(data: dict[str, Any], path: str | os.PathLike[str]) -> PixelScale:
+    """The pixel scale a rig config's JSON object states (``path`` names it in errors).
+
+    Raises:
+        RigConfigError: missing or invalid (non-numeric, non-finite, out-of-range, fractional
+            width) fields.
+    """
+    p = Path(path)
+    if "mm_per_px" not in data or "image_width_px" not in data:
         raise RigConfigError(
-            f"{p}: expected a JSON object with 'mm_per_px' and 'image_width_px', e.g. "
-            '{"mm_per_px": 0.0118, "image_width_px": 2592}'
+            f"{p}: expected a JSON object with 'mm_per_px' and 'image_width_px', e.g. {_EXAMPLE}"
         )
     try:
         return PixelScale(data["mm_per_px"], _width(data["image_width_px"]))
     except ValueError as exc:
         raise RigConfigError(f"{p}: {exc}") from exc
+
+
+def load_rig_config(path: str | os.PathLike[str]) -> PixelScale:
+    """Read a rig config JSON (``mm_per_px`` and ``image_width_px``).
+
+    Raises:
+        RigConfigError: missing file, invalid JSON, missing or invalid (non-numeric,
+            non-finite, out-of-range, fractional width) fields.
+    """
+    return rig_scale(read_rig_json(path), path)
