@@ -35,7 +35,8 @@ from contactcal.infer.video.live import (
     returned_to_zero,
 )
 from contactcal.infer.video.log import PressureLogError, read_pressure_log
-from contactcal.infer.video.steps import StepConfig, detect_steps
+from contactcal.infer.video.step_config import StepConfig
+from contactcal.infer.video.steps import detect_steps
 
 EXAMPLE = Path(__file__).resolve().parents[1] / "examples" / "session"
 FPS = 10.0

@@ -23,7 +23,7 @@ if TYPE_CHECKING:
 
 def add_parsers(sub: argparse._SubParsersAction) -> None:
     """Add ``calibrate`` to the ``contactcal`` subcommands."""
-    from contactcal.infer.video.command import add_video_args
+    from contactcal.infer.video.args import add_video_args
 
     c = sub.add_parser("calibrate", help="calibrate a session: area vs pressure and its inverse")
     c.add_argument("manifest", type=Path, nargs="?", metavar="MANIFEST.csv")
@@ -59,7 +59,8 @@ def _cmd_calibrate(args: argparse.Namespace) -> int:
     from contactcal.infer.calibration.provenance import Provenance
     from contactcal.infer.files.atomic import run_outputs
     from contactcal.infer.pipeline.overlay import earlier_overlays_note, write_overlays
-    from contactcal.infer.video.command import calibrate_video, is_video_run
+    from contactcal.infer.video.args import is_video_run
+    from contactcal.infer.video.command import calibrate_video
 
     provenance = Provenance(argv=args.argv, device_id=args.device_id)  # refuses a bad id
     check_change_gate(args)

@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import hashlib
 import os
 
 #: Read size, bytes (bounded memory for large files).
@@ -15,6 +14,8 @@ def sha256_file(path: str | os.PathLike[str]) -> str:
     Raises:
         OSError: unreadable file (the message names it).
     """
+    import hashlib  # here, not at the top: its OpenSSL start (~5 ms) is not measure's
+
     h = hashlib.sha256()
     with open(path, "rb") as fh:
         while chunk := fh.read(_CHUNK):

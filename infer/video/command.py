@@ -10,13 +10,12 @@ inputs, never replaced.
 from __future__ import annotations
 
 import argparse
-import os
 import sys
 from collections.abc import Callable, Iterator
 from pathlib import Path
 from typing import TYPE_CHECKING
 
-from contactcal.infer.video.steps import StepConfig
+from contactcal.infer.video.step_config import StepConfig
 
 if TYPE_CHECKING:
     import numpy as np
@@ -30,75 +29,6 @@ if TYPE_CHECKING:
 
 #: Preview frame rate when the camera states none, frames/s.
 DEFAULT_CAMERA_FPS = 30.0
-
-
-def add_video_args(p: argparse.ArgumentParser) -> None:
-    """The ``calibrate`` options of video and camera input."""
-    g = p.add_argument_group("video or camera input (instead of MANIFEST.csv)")
-    source = g.add_mutually_exclusive_group()
-    source.add_argument("--video", type=Path, help="video of the session (e.g. .avi, .mp4)")
-    source.add_argument("--camera", type=int, metavar="INDEX", help="live camera (0: the first)")
-    g.add_argument(
-        "--pressure-log",
-        type=Path,
-        metavar="LOG.csv",
-        help="the controller's log: time_s (s since the first frame),pressure_kpa",
-    )
-    cfg = StepConfig()
-    g.add_argument(
-        "--settle-s",
-        type=float,
-        default=cfg.settle_s,
-        help="s the pressure must hold before frames are kept (default %(default)s)",
-    )
-    g.add_argument(
-        "--tolerance-kpa",
-        type=float,
-        default=cfg.tolerance_kpa,
-        help="± kPa a steady step stays within (default %(default)s: a tenth of 1 kPa steps, "
-        "twice a regulator's noise)",
-    )
-    g.add_argument(
-        "--duration-s",
-        type=float,
-        help="--camera: stop after this many s (default: when the log is back at 0 kPa)",
-    )
-    g.add_argument("--preview", action="store_true", help="--video: also write DIR/preview.mp4")
-    g.add_argument("--show", action="store_true", help="show the preview in a window")
-
-
-def is_video_run(args: argparse.Namespace) -> bool:
-    """Whether ``calibrate`` reads a video or camera; checks the options' combination.
-
-    Raises:
-        ValueError: a missing or conflicting option (one line saying which).
-    """
-    live = args.video is not None or args.camera is not None
-    if not live:
-        given = {
-            "--pressure-log": args.pressure_log,
-            "--show": args.show,
-            "--preview": args.preview,
-            "--duration-s": args.duration_s,
-        }
-        extra = [o for o, v in given.items() if v not in (None, False)]
-        if args.manifest is None or extra:
-            raise ValueError(
-                "calibrate: expected MANIFEST.csv, or --video VIDEO / --camera INDEX with "
-                f"--pressure-log LOG.csv{f' (got {extra[0]} without them)' if extra else ''}"
-            )
-        return False
-    if args.manifest is not None:
-        raise ValueError("calibrate: give MANIFEST.csv or --video/--camera, not both")
-    if args.pressure_log is None:
-        raise ValueError("calibrate: --video/--camera need --pressure-log LOG.csv")
-    if args.overlay is not None:
-        raise ValueError("calibrate: --overlay is for MANIFEST.csv; with a video use --preview")
-    if args.duration_s is not None and (args.camera is None or not args.duration_s > 0):
-        raise ValueError("calibrate: --duration-s is for --camera and must be > 0")
-    if args.show and sys.platform.startswith("linux") and not os.environ.get("DISPLAY"):
-        raise ValueError("calibrate: --show needs a display (DISPLAY is unset); drop --show")
-    return True
 
 
 def _preview(
@@ -176,8 +106,8 @@ def calibrate_video(
 
     Args:
         args: the ``calibrate --video | --camera`` command line.
-        measure: how the extracted frames are measured (no outlines: :func:`is_video_run`
-            refused --overlay).
+        measure: how the extracted frames are measured (no outlines:
+            :func:`~contactcal.infer.video.args.is_video_run` refused --overlay).
         provenance: the command line and the display's id, recorded.
     """
     from contactcal.infer.calibration.calibrate import calibrate_session

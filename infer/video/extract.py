@@ -25,7 +25,8 @@ import numpy as np
 from contactcal.infer.calibration.phases import LOADING, UNLOADING
 from contactcal.infer.image.write import write_image
 from contactcal.infer.video.log import PressureLog
-from contactcal.infer.video.steps import Step, StepConfig, detect_steps, reference_step, step_at
+from contactcal.infer.video.step_config import StepConfig
+from contactcal.infer.video.steps import Step, detect_steps, reference_step, step_at
 
 #: The manifest's columns.
 MANIFEST_COLUMNS = ("file", "pressure_kpa", "phase", "time_s")

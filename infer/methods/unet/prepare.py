@@ -25,6 +25,7 @@ import cv2
 import numpy as np
 
 from contactcal.infer.image.gray import to_gray_u8
+from contactcal.infer.image.percentile import percentiles
 from contactcal.infer.methods.unet.config import PreprocessConfig
 from contactcal.infer.methods.unet.ridge import ridge_energy
 from contactcal.infer.methods.unet.ring import RingFit, locate_ring
@@ -171,7 +172,7 @@ def _to_network(
     inside = crop[valid_window(box, gray.shape, s)]
     # No network pixel inside the image: nothing to normalise to; postprocess then reports no
     # contact (it ignores every network pixel outside the image), so the scale is immaterial.
-    level = max(float(np.percentile(inside, config.norm_percentile)) if inside.size else 1.0, 1.0)
+    level = max(percentiles(inside, (config.norm_percentile,))[0] if inside.size else 1.0, 1.0)
     # unit_to_network(clip(crop / level, 0, 1)) in place on the crop (a new float32 array).
     np.divide(crop, level, out=crop)
     np.clip(crop, 0.0, 1.0, out=crop)

@@ -8,6 +8,7 @@ import cv2
 import numpy as np
 
 from contactcal.infer.image.gray import to_gray_u8
+from contactcal.infer.image.percentile import percentiles
 from contactcal.infer.methods.unet.config import PreprocessConfig
 
 #: Largest plausible ring radius, × the image's longest side: the ring may be cut by the border,
@@ -71,8 +72,8 @@ def locate_ring(gray: np.ndarray, config: PreprocessConfig = PreprocessConfig())
         work = cv2.resize(
             gray, (max(1, round(w * s)), max(1, round(h * s))), interpolation=cv2.INTER_AREA
         )
-    bright = float(np.percentile(work, config.ring_percentile))
-    median = float(np.median(work))
+    # For a uint8 image its 50th percentile is np.median's value.
+    bright, median = percentiles(work, (config.ring_percentile, 50.0))
     if bright < 8.0 or bright < config.ring_min_contrast * max(median, 1.0):
         return fallback
     binary = (work >= config.ring_threshold_fraction * bright).astype(np.uint8)
