@@ -5,21 +5,23 @@ Each concept adds its own subcommands (``add_parsers`` in ``pipeline/commands.py
 (``synth``, ``train``) add theirs through the :data:`COMMAND_GROUP` entry points.
 
 Exit codes: 0 success, 1 a run that found nothing usable (e.g. no contact in any frame),
-2 bad input or usage (one-line message on stderr, nothing written).
+2 bad input or usage (one-line message on stderr, nothing written); 130 interrupted (Ctrl-C),
+143 or 129 stopped by SIGTERM or SIGHUP (one line; outputs all or nothing, as on Ctrl-C).
 """
 
 from __future__ import annotations
 
 import argparse
-import contextlib
 import sys
 from collections.abc import Sequence
+from contextlib import nullcontext
 from typing import Any
 
 from contactcal.infer.bench import command as bench_command
 from contactcal.infer.calibration import command as calibrate_command
 from contactcal.infer.errors import RunError
 from contactcal.infer.evaluate import command as evaluate_command
+from contactcal.infer.files.interrupt import Terminated, stop_signals_interrupt
 from contactcal.infer.image.cv_threads import opencv_threads
 from contactcal.infer.pipeline import commands as pipeline_commands
 
@@ -95,11 +97,12 @@ def main(argv: Sequence[str] | None = None) -> int:
     parser = build_parser(argv[0] if argv else None)
     args = parser.parse_args(argv)
     args.argv = argv  # recorded in calibration.json
-    if getattr(args, "threads", 1) < 1:
-        parser.error("--threads must be >= 1")
+    if getattr(args, "threads", 1) < 1:  # one line, as every other bad input
+        print(f"contactcal: error: --threads {args.threads}: expected >= 1", file=sys.stderr)
+        return 2
     try:
         threads = getattr(args, "threads", None)  # measure, calibrate (not train: torch_threads)
-        with opencv_threads(threads) if threads else contextlib.nullcontext():
+        with stop_signals_interrupt(), opencv_threads(threads) if threads else nullcontext():
             return int(args.func(args))
     except RunError as exc:
         print(f"contactcal: {exc}", file=sys.stderr)
@@ -107,8 +110,11 @@ def main(argv: Sequence[str] | None = None) -> int:
     except (ValueError, OSError) as exc:
         print(f"contactcal: error: {exc}", file=sys.stderr)
         return 2
-    except KeyboardInterrupt:  # staged outputs were discarded on the way out
+    except KeyboardInterrupt as exc:  # staged outputs were discarded on the way out
         said = INTERRUPTED.get(args.command, "its outputs are all or nothing: none was written")
+        if isinstance(exc, Terminated):  # SIGTERM, SIGHUP: the shell's status for the signal
+            print(f"contactcal {args.command}: stopped by {exc}; {said}", file=sys.stderr)
+            return 128 + exc.signum
         print(f"contactcal {args.command}: interrupted; {said}", file=sys.stderr)
         return 130
 

@@ -118,6 +118,7 @@ def test_demo(tmp_path: Path) -> None:
     records = {m: json.loads((tmp_path / m / "calibration.json").read_text()) for m in METHODS}
     for method, rec in records.items():
         assert rec["method"] == method and rec["area_unit"] == "mm²"
+        assert rec["argv"] == ["demo", "--out", str(tmp_path)]  # was null: not recorded
         assert [p["pressure_kpa"] for p in rec["points"]] == sorted(truth)
         assert (tmp_path / method / "curve.png").stat().st_size > 0
     unet = {p["pressure_kpa"]: p for p in records["unet"]["points"]}

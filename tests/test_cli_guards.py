@@ -175,3 +175,88 @@ def test_rig_json_with_a_bom_and_a_bad_mm_per_px(
     frame = str(Path(__file__).resolve().parents[1] / "examples" / "session" / "p05.0kpa.jpg")
     assert main(["measure", "--mm-per-px", "0", "--out", "-", frame]) == 2
     assert capsys.readouterr().err.startswith("contactcal: error: --mm-per-px 0: mm_per_px must")
+
+
+@pytest.mark.parametrize(
+    ("text", "said"),
+    [
+        ('{"mm_per_px": 0.126, "image_width_px": 400, "mmperpx": 3}', "unknown key 'mmperpx'"),
+        ('{"mm_per_px": 0.126, "image_width_px": 400, "mm_per_px": 0.2}', "'mm_per_px' is given"),
+    ],
+)
+def test_rig_json_with_a_misspelt_or_repeated_key_is_refused(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str], text: str, said: str
+) -> None:
+    """json would drop a misspelt key, or keep the last of two values, without a word."""
+    rig = tmp_path / "rig.json"
+    rig.write_text(text)
+    frame = str(Path(__file__).resolve().parents[1] / "examples" / "session" / "p05.0kpa.jpg")
+    assert main(["measure", "--rig", str(rig), "--out", "-", frame]) == 2
+    err = _one_error(capsys)
+    assert str(rig) in err and said in err
+
+
+def test_sigterm_is_handled_as_ctrl_c(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str], monkeypatch
+) -> None:
+    import signal
+
+    from contactcal.infer.pipeline import measure
+
+    def term(*args: object, **kwargs: object) -> None:
+        signal.raise_signal(signal.SIGTERM)
+
+    monkeypatch.setattr(measure, "load_image", term)
+    out = tmp_path / "cal"
+    before = signal.getsignal(signal.SIGTERM)
+    code = main(["calibrate", MANIFEST, "--method", "classical", "--out", str(out)])
+    assert code == 128 + signal.SIGTERM
+    assert "stopped by SIGTERM" in _one_error(capsys)
+    assert not out.exists() or not any(out.iterdir())
+    assert signal.getsignal(signal.SIGTERM) is before  # restored after the command
+
+
+def test_an_ignored_sighup_stays_ignored() -> None:
+    import signal
+
+    from contactcal.infer.files.interrupt import stop_signals_interrupt
+
+    before = signal.signal(signal.SIGHUP, signal.SIG_IGN)  # as nohup leaves it
+    try:
+        with stop_signals_interrupt():
+            assert signal.getsignal(signal.SIGHUP) is signal.SIG_IGN
+            signal.raise_signal(signal.SIGHUP)  # ignored: the block goes on
+    finally:
+        signal.signal(signal.SIGHUP, before)
+
+
+def test_sigterm_waits_for_a_commit_to_finish() -> None:
+    import signal
+
+    from contactcal.infer.files.interrupt import (
+        Terminated,
+        deferred_interrupt,
+        stop_signals_interrupt,
+    )
+
+    done = []
+    with pytest.raises(Terminated), stop_signals_interrupt():
+        with deferred_interrupt():
+            signal.raise_signal(signal.SIGTERM)
+            done.append("renamed")  # still runs: the signal waits for the block
+    assert done == ["renamed"]
+
+
+def test_unet_options_without_a_unet_and_zero_threads_are_one_line(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """--model with --method classical was silently ignored; --threads 0 printed argparse's
+    usage line before its error."""
+    out = tmp_path / "cal"
+    model = str(Path(__file__).resolve().parents[1] / "models" / "contact_unet.onnx")
+    argv = ["calibrate", MANIFEST, "--method", "classical", "--model", model, "--out", str(out)]
+    assert main(argv) == 2
+    assert "--model applies to the U-Net only" in _one_error(capsys)
+    assert main(["calibrate", MANIFEST, "--threads", "0", "--out", str(out)]) == 2
+    assert _one_error(capsys) == "contactcal: error: --threads 0: expected >= 1"
+    assert not out.exists()

@@ -56,7 +56,7 @@ def test_reduced_decode(tmp_path: Path) -> None:
 
 @pytest.mark.parametrize(
     ("content", "match"),
-    [(b"", "empty file"), (b"not an image at all", "not a decodable image|truncated")],
+    [(b"", "empty file"), (b"not an image at all", r"not a PNG file \(its content is not an")],
 )
 def test_bad_files(tmp_path: Path, content: bytes, match: str) -> None:
     path = tmp_path / "bad.png"
@@ -168,3 +168,14 @@ def test_images_that_are_no_rig_frame(tmp_path: Path, h: int, w: int) -> None:
 def test_smallest_frames_accepted(tmp_path: Path) -> None:
     assert load_image(_write(tmp_path / "a.png", np.zeros((16, 64), np.uint8))).shape == (16, 64)
     assert load_image(_write(tmp_path / "b.png", np.zeros((29, 37), np.uint8))).shape == (29, 37)
+
+
+@pytest.mark.parametrize(("src", "named"), [(".jpg", ".png"), (".png", ".jpg"), (".bmp", ".tif")])
+def test_content_of_another_type_than_the_suffix(tmp_path: Path, src: str, named: str) -> None:
+    """A JPEG named .png was called a truncated PNG; the message now says what the file is."""
+    real = _write(tmp_path / f"frame{src}", np.full((32, 48), 90, np.uint8))
+    wrong = tmp_path / f"renamed{named}"
+    wrong.write_bytes(real.read_bytes())
+    with pytest.raises(ImageError, match=rf"renamed\{named}: not a .* file \(its content is a"):
+        load_image(wrong)
+    assert load_image(real).shape == (32, 48)

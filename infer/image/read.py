@@ -39,6 +39,29 @@ MIN_FRAME_SIDE_PX = 16
 MAX_ASPECT_RATIO = 4.0
 
 
+#: File signatures (first bytes) of the formats read, by name and suffixes.
+_SIGNATURES: tuple[tuple[str, tuple[bytes, ...], tuple[str, ...]], ...] = (
+    ("PNG", (b"\x89PNG\r\n\x1a\n",), (".png",)),
+    ("JPEG", (b"\xff\xd8\xff",), (".jpg", ".jpeg")),
+    ("TIFF", (b"II*\x00", b"MM\x00*"), (".tif", ".tiff")),
+    ("BMP", (b"BM",), (".bmp",)),
+)
+_SIGNATURES_BY_NAME = {name: suffixes[0] for name, _, suffixes in _SIGNATURES}
+
+
+def _check_content(path: Path, data: bytes) -> None:
+    """Reject a file whose content is not the format its suffix names (the suffix decides how it
+    is decoded and checked: a JPEG named .png would be called a truncated PNG)."""
+    suffix = path.suffix.lower()
+    found = next((name for name, sigs, _ in _SIGNATURES if data.startswith(sigs)), None)
+    named = next(name for name, _, suffixes in _SIGNATURES if suffix in suffixes)
+    if found == named:
+        return
+    what = f"a {found} image" if found else "not an image of a supported type"
+    fix = f"rename it to {_SIGNATURES_BY_NAME[found]}" if found else "export the frame again"
+    raise ImageError(f"{path}: not a {named} file (its content is {what}); {fix}")
+
+
 def _check_complete(path: Path, data: bytes) -> None:
     """Reject truncated PNG/JPEG files, which OpenCV may decode partially without failing."""
     suffix = path.suffix.lower()
@@ -78,6 +101,7 @@ def read_file_bytes(path: str | os.PathLike[str]) -> bytes:
         raise ImageError(f"{p}: cannot read ({exc.strerror})") from exc
     if not data:
         raise ImageError(f"{p}: empty file (0 bytes)")
+    _check_content(p, data)
     _check_complete(p, data)
     return data
 
@@ -111,10 +135,13 @@ def _scale_depth(p: Path, img: np.ndarray, depth: int | None, source: str) -> np
     """Integer samples holding ``depth``-bit data → uint8; full-range samples pass unchanged."""
     if img.dtype not in (np.uint8, np.uint16):
         return img  # float (intensities in [0, 1]) or a dtype to_gray_u8 reports
+    bits = 8 * img.dtype.itemsize
+    if depth is None and bits == 8:
+        return img  # 8-bit samples are full range (no scan of the frame for its maximum)
     colour = img[..., :3] if img.ndim == 3 and img.shape[2] == 4 else img  # alpha is dropped
-    bits, top = 8 * img.dtype.itemsize, int(colour.max())
+    top = int(colour.max())
     if depth is None:
-        if bits == 8 or top > LOW_BITS_MAX:
+        if top > LOW_BITS_MAX:
             return img
         raise ImageError(
             f"{p}: 16-bit samples with maximum {top} (<= {LOW_BITS_MAX}) and no sBIT chunk; "

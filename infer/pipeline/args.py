@@ -76,15 +76,18 @@ def change_gate_arg(p: argparse.ArgumentParser) -> None:
 
 
 def check_change_gate(args: argparse.Namespace) -> None:
-    """Refuse ``--no-change-gate`` where no U-Net would run (it would be silently ignored).
+    """Refuse the U-Net's options where no U-Net would run (they would be silently ignored).
 
     Raises:
-        ValueError: ``--no-change-gate`` with ``--method classical`` and no ``--overlay``.
+        ValueError: ``--no-change-gate`` or ``--model`` with ``--method classical`` and no
+            ``--overlay``.
     """
     runs_unet = args.method in ("unet", "both") or getattr(args, "overlay", None) is not None
-    if args.no_change_gate and not runs_unet:
+    unet_only = (("--no-change-gate", args.no_change_gate), ("--model", args.model))
+    given = [option for option, value in unet_only if value]
+    if given and not runs_unet:
         raise ValueError(
-            f"--no-change-gate applies to the U-Net only, and --method {args.method} runs none; "
+            f"{given[0]} applies to the U-Net only, and --method {args.method} runs none; "
             "drop it, or use --method unet"
         )
 

@@ -24,13 +24,11 @@ from dataclasses import dataclass, replace
 from typing import Any
 
 from contactcal.infer.methods.base import AreaResult
-from contactcal.infer.pipeline.scale import read_rig_json
+from contactcal.infer.pipeline.scale import MODEL_KEY, OFFSET_KEY, read_rig_json
 
 #: Largest |offset| accepted, mm: ten times the generators' disagreement (~0.18 mm), and a
 #: tenth of a contact patch's radius; a larger value is a unit or sign slip.
 MAX_OFFSET_MM = 2.0
-#: The rig config's keys (both or neither).
-OFFSET_KEY, MODEL_KEY = "boundary_offset_mm", "boundary_offset_model_sha256"
 #: The start of the note of a frame whose region an inward offset removed (``calibrate`` looks for
 #: it to name the offset when no contact is left).
 GONE_NOTE = "no contact: the rig's boundary offset leaves no area"

@@ -80,5 +80,5 @@ def _cmd_demo(args: argparse.Namespace) -> int:
     from contactcal.infer.pipeline.demo import run_demo
 
     check_out_folder(args.out, "demo")
-    print(run_demo(args.out, args.manifest))
+    print(run_demo(args.out, args.manifest, args.argv))
     return 0

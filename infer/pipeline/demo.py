@@ -3,12 +3,14 @@
 from __future__ import annotations
 
 import os
+from collections.abc import Sequence
 from dataclasses import replace
 from pathlib import Path
 
 import numpy as np
 
 from contactcal.infer.calibration.calibrate import CalibrationReport, calibrate_session
+from contactcal.infer.calibration.provenance import Provenance
 from contactcal.infer.files.atomic import run_outputs, write_synced
 from contactcal.infer.image.read import load_image
 from contactcal.infer.image.write import write_image
@@ -24,12 +26,19 @@ MONTAGE_KPA = (0.0, 2.0, 4.0, 8.0, 14.0, 20.0)
 
 
 def run_demo(
-    out_dir: str | os.PathLike[str], manifest: str | os.PathLike[str] | None = None
+    out_dir: str | os.PathLike[str],
+    manifest: str | os.PathLike[str] | None = None,
+    argv: Sequence[str] | None = None,
 ) -> str:
     """Calibrate a session (default: the bundled example) with every method.
 
     Writes ``<out>/<method>/{calibration.json, calibration.csv, curve.png}``, a side-by-side
     overlay montage ``<out>/overlay_montage.png`` and ``<out>/summary.txt``, all or nothing.
+
+    Args:
+        out_dir: the output folder.
+        manifest: the session; None: the bundled example.
+        argv: the command line, recorded in each ``calibration.json`` (None: not run from it).
 
     Returns:
         The printed summary (one table per method).
@@ -43,11 +52,14 @@ def run_demo(
         measure = replace(
             measure, scale=rig_scale(data, rig), boundary=rig_boundary(data, str(rig))
         )
+    recorded = Provenance(argv=None if argv is None else list(argv))
     reports: dict[str, CalibrationReport] = {}
     lines = [f"session: {manifest}"]
     with run_outputs() as outs:
         for method in METHODS:
-            rep = calibrate_session(manifest, out / method, method, measure, outputs=outs)
+            rep = calibrate_session(
+                manifest, out / method, method, measure, provenance=recorded, outputs=outs
+            )
             reports[method] = rep
             lines += [f"\n== {method} → {out / method}", rep.table]
         frames = next(iter(reports.values())).frames

@@ -27,6 +27,10 @@ MM_PER_PX_RANGE = (1e-4, 10.0)
 #: sensor has more than 100,000 px per row.
 IMAGE_WIDTH_RANGE_PX = (16, 100_000)
 _EXAMPLE = '{"mm_per_px": 0.0118, "image_width_px": 2592}'
+#: The boundary offset's keys (:mod:`.boundary`; both or neither).
+OFFSET_KEY, MODEL_KEY = "boundary_offset_mm", "boundary_offset_model_sha256"
+#: Every key a rig config may hold: a misspelt one would otherwise drop its value silently.
+RIG_KEYS = ("mm_per_px", "image_width_px", OFFSET_KEY, MODEL_KEY)
 
 
 class RigConfigError(ValueError):
@@ -86,18 +90,42 @@ def read_rig_json(path: str | os.PathLike[str]) -> dict[str, Any]:
     parsed from it).
 
     Raises:
-        RigConfigError: missing file, unreadable or invalid JSON, or not a JSON object.
+        RigConfigError: missing file, unreadable or invalid JSON, not a JSON object, a key
+            given twice, or a key not in :data:`RIG_KEYS`.
     """
     p = Path(path)
     try:
-        data = json.loads(p.read_text(encoding="utf-8-sig"))  # a BOM (Notepad) is fine
+        text = p.read_text(encoding="utf-8-sig")  # a BOM (Notepad) is fine
+        data = json.loads(text, object_pairs_hook=_pairs_once)
     except FileNotFoundError as exc:
         raise RigConfigError(f"{p}: no such rig config file") from exc
     except (OSError, UnicodeDecodeError, json.JSONDecodeError) as exc:
         raise RigConfigError(f"{p}: not a readable JSON rig config ({exc})") from exc
+    except _DuplicateKey as exc:
+        raise RigConfigError(f"{p}: key {exc} is given twice; keep one value") from exc
     if not isinstance(data, dict):
         raise RigConfigError(f"{p}: expected a JSON object, e.g. {_EXAMPLE}")
+    unknown = [k for k in data if k not in RIG_KEYS]
+    if unknown:
+        raise RigConfigError(
+            f"{p}: unknown key {unknown[0]!r}; expected only {', '.join(RIG_KEYS)} "
+            "(check the spelling)"
+        )
     return data
+
+
+class _DuplicateKey(Exception):
+    """A JSON object with a key twice (``json`` would keep the last value silently)."""
+
+
+def _pairs_once(pairs: list[tuple[str, Any]]) -> dict[str, Any]:
+    """``object_pairs_hook`` of :func:`read_rig_json`: a dict, refusing repeated keys."""
+    out: dict[str, Any] = {}
+    for key, value in pairs:
+        if key in out:
+            raise _DuplicateKey(repr(key))
+        out[key] = value
+    return out
 
 
 def rig_scale(data: dict[str, Any], path: str | os.PathLike[str]) -> PixelScale:
