@@ -225,7 +225,7 @@ def test_bad_inputs_exit_2(
         ("missing.avi", "log.csv"): "missing.avi: video not found",
         ("v.avi", "nocol.csv"): "lacks column(s) ['pressure_kpa']",
         ("v.avi", "unsorted.csv"): "row 3: time_s",
-        ("v.avi", "long.csv"): "step 5 kPa (unloading",
+        ("v.avi", "long.csv"): "ends at 5.00 s, before step 5 kPa (unloading",
     }
     for (video, log), expected in cases.items():
         argv = [

@@ -214,6 +214,12 @@ def check_coverage(extractor: Extractor, video: Path | None) -> None:
         if video is None and s.start_s > extractor.last_time_s:
             print(f"note: step {s.label()} began after the capture ended", file=sys.stderr)
             continue
+        if s.start_s > extractor.last_time_s:  # the frames stop before the step begins
+            raise ValueError(
+                f"{source} ends at {extractor.last_time_s:.2f} s, before step {s.label()} of "
+                f"{where}; expected frames covering every step of the log: is the video cut "
+                "short (a truncated copy), or the log another recording's?"
+            )
         raise ValueError(
             f"{where}: step {s.label()} has no frame in {source} (frames from 0 to "
             f"{extractor.last_time_s:.2f} s); expected frames covering every step of the log "
