@@ -83,6 +83,11 @@ def test_output_folder_link_and_unwritable_folder(
     assert main(argv) == 2
     assert "symbolic link to a folder" in _one_error(capsys)
     assert (real / "calibration.json").read_text() == "{}"
+    # A new folder below the link was created through it (the review's linkdir/sub).
+    argv[-1] = str(tmp_path / "link" / "sub")
+    assert main(argv) == 2
+    assert "link: is a symbolic link to a folder" in _one_error(capsys)
+    assert sorted(p.name for p in real.iterdir()) == ["calibration.json"]
     frame = str(EXAMPLE / "p10.0kpa.jpg")
     assert main(["measure", "--out", "/proc/x.json", frame]) == 2
     msg = _one_error(capsys)

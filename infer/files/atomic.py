@@ -143,11 +143,14 @@ class OutputSet:
             raise OutputError(f"{path}: written twice by one run; give each output its own name")
         stage = self._stages.get(final.parent)
         if stage is None:
-            if final.parent.is_symlink():
+            # The folder that gets new entries: the output's folder, or the nearest existing
+            # folder above it (where this run creates the missing ones).
+            receiving = next(p for p in (final.parent, *final.parents) if os.path.lexists(p))
+            if receiving.is_symlink():
                 raise OutputError(
-                    f"{final.parent}: is a symbolic link to a folder; outputs never write "
+                    f"{receiving}: is a symbolic link to a folder; outputs never write "
                     f"through a link into its target (give the folder itself: "
-                    f"{final.parent.resolve()})"
+                    f"{receiving.resolve()})"
                 )
             self._make_folder(final.parent)
             remove_stale_temporaries(final.parent)
