@@ -3,6 +3,7 @@ and the distribution-free interval of a median it shares with ``evaluate``."""
 
 from __future__ import annotations
 
+import hashlib
 import json
 import math
 from pathlib import Path
@@ -18,12 +19,23 @@ from contactcal.infer.pipeline.boundary import MODEL_KEY, OFFSET_KEY
 SHA = "ab" * 32
 
 
+def _inputs(folder: Path) -> dict[str, object]:
+    """``evaluate``'s input digests for a session of its own (distinct frames per folder)."""
+
+    def entry(name: str) -> dict[str, str]:
+        return {"file": name, "sha256": hashlib.sha256(f"{folder}/{name}".encode()).hexdigest()}
+
+    manifest = {"file": "manifest.csv", "sha256": "0" * 64}  # alike in every session
+    return {"manifest": manifest, "reference": entry("p0.png"), "frames": [entry("p5.png")]}
+
+
 def _evaluation(
     folder: Path, offsets: object, sha: str = SHA, applied: float | None = None
 ) -> Path:
     folder.mkdir(parents=True)
     off = {"model_sha256": sha, "applied_mm": applied, "frame_offsets_mm": offsets}
-    (folder / "evaluation.json").write_text(json.dumps({"boundary_offset": off}))
+    record = {"inputs": _inputs(folder), "boundary_offset": off}
+    (folder / "evaluation.json").write_text(json.dumps(record))
     return folder
 
 

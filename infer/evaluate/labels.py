@@ -1,7 +1,9 @@
 """A session's hand labels: a folder of mask PNGs or an ImageJ ellipse CSV, matched to frames.
 
 Masks: ``<frame stem>.png`` per labelled frame, the frame's size; 0 = background, > 0 = contact
-(an all-zero mask labels a frame without contact). Other files in the folder are ignored.
+(an all-zero mask labels a frame without contact). Other files in the folder are ignored. A
+mask without a pixel 0 (no background: inverted, or a background of another value) is refused;
+so is any label covering more than the window ring (:mod:`~contactcal.infer.evaluate.window`).
 
 Ellipses: a UTF-8 CSV with (at least) the columns :data:`LABEL_COLUMNS`, one row per labelled
 frame, in ImageJ's convention (:mod:`contactcal.infer.evaluate.ellipse`). ``file`` is the frame's
@@ -190,7 +192,12 @@ def _ellipse_labels(path: Path, frames: list[Frame], manifest: Path) -> list[Lab
 
 
 def _read_mask(path: Path) -> np.ndarray:
-    """``(H, W)`` bool: any colour channel > 0 (alpha ignored)."""
+    """``(H, W)`` bool: any colour channel > 0 (alpha ignored).
+
+    Raises:
+        LabelError: not a decodable image, or no pixel 0 (no background: an inverted mask, or a
+            background of another value), which would make the whole frame contact.
+    """
     buf = np.frombuffer(read_file_bytes(path), np.uint8)
     img = decode_strict(buf, cv2.IMREAD_UNCHANGED, str(path))
     if img is None or img.ndim not in (2, 3):
@@ -199,8 +206,18 @@ def _read_mask(path: Path) -> np.ndarray:
         )
     if img.ndim == 3:
         img = img[..., : 3 if img.shape[2] >= 3 else 1]
-        return np.any(img > 0, axis=2)
-    return img > 0
+        mask = np.any(img > 0, axis=2)
+    else:
+        mask = img > 0
+    if mask.all():
+        values = np.unique(img)
+        shown = ", ".join(str(v) for v in values[:4]) + (", …" if values.size > 4 else "")
+        raise LabelError(
+            f"{path}: no pixel is 0 (values {shown}), so the whole frame would be contact; "
+            "expected 0 = background, > 0 = contact (an inverted mask, or a background other "
+            "than 0?)"
+        )
+    return mask
 
 
 def label_mask(label: Label, frame_size: tuple[int, int]) -> LabelMask:

@@ -1,6 +1,8 @@
 """``contactcal evaluate``: measure a session's hand-labelled frames and score every method.
 
 Outputs (all or nothing, never replacing an input): ``evaluation.json`` and ``evaluation.png``.
+``evaluation.json`` records the sha256 of the manifest, the reference frame and each labelled
+frame (``inputs``), by which ``contactcal boundary-offset`` pools each session once.
 """
 
 from __future__ import annotations
@@ -11,6 +13,7 @@ from pathlib import Path
 from typing import Any
 
 from contactcal.infer.bench.scoring import OPEN_BINS, ScoredFrame, bin_table
+from contactcal.infer.evaluate.identity import input_digests
 from contactcal.infer.evaluate.labels import (
     Label,
     LabelError,
@@ -22,6 +25,7 @@ from contactcal.infer.evaluate.offset import current_offset, offset_line, unet_o
 from contactcal.infer.evaluate.plots import plot_evaluation
 from contactcal.infer.evaluate.report import format_table
 from contactcal.infer.evaluate.score import frame_records, onset_summary, score_frames
+from contactcal.infer.evaluate.window import Window, check_label_area, find_window
 from contactcal.infer.files.atomic import OutputSet, run_outputs, write_synced
 from contactcal.infer.files.jsonable import json_text
 from contactcal.infer.methods.registry import METHODS
@@ -76,6 +80,19 @@ def _measure(
     return out, described, stale
 
 
+def _label_masks(
+    labs: list[Label], measured: list[Measured], window: Window | None
+) -> list[LabelMask]:
+    """The labels rasterised at their frames' sizes, each checked to fit the window ring
+    (:func:`~contactcal.infer.evaluate.window.check_label_area`)."""
+    masks = []
+    for lab, m in zip(labs, measured, strict=True):
+        mask = label_mask(lab, (m.width, m.height))
+        check_label_area(lab, mask, (m.width, m.height), window)
+        masks.append(mask)
+    return masks
+
+
 def _score(
     manifest: Path,
     frames: list[Frame],
@@ -87,8 +104,7 @@ def _score(
     """The labelled frames measured by each method and scored against their labels' masks;
     the masks; the U-Net's boundary offset record (None without a U-Net run)."""
     measured, described, stale = _measure(names, frames, [f.file for f in labelled], measure)
-    first = measured[names[0]]
-    masks = [label_mask(lab, (m.width, m.height)) for lab, m in zip(labs, first, strict=True)]
+    masks = _label_masks(labs, measured[names[0]], find_window(frames[0].file, measure.bit_depth))
     areas = [float(mask.area_px) for mask in masks]
     offset = unet_offset(measured.get("unet", []), areas, measure.scale, described, stale)
     pressures = [f.pressure_kpa for f in labelled]
@@ -153,8 +169,10 @@ def evaluate_session(
         The :class:`Evaluation`.
 
     Raises:
-        LabelError: bad labels (naming the file); ManifestError / ImageError: bad manifest or
-            frame; ValueError: unknown method or an output that would replace an input.
+        LabelError: bad labels (naming the file), among them a mask without background (no
+            pixel 0) or a label covering more than the reference frame's window ring;
+            ManifestError / ImageError: bad manifest or frame; ValueError: unknown method or an
+            output that would replace an input.
     """
     manifest, labels, out = Path(manifest), Path(labels), Path(out_dir)
     measure = measure if measure is not None else MeasureOptions()
@@ -173,6 +191,7 @@ def evaluate_session(
         record = {
             "manifest": str(manifest.resolve()),
             "labels": str(labels.resolve()),
+            "inputs": input_digests(manifest, frames[0].file, [f.file for f in labelled]),
             "methods": names,
             "model": None if measure.model is None else os.fspath(measure.model),
             "change_gate": "on" if measure.change_gate else "off (--no-change-gate)",

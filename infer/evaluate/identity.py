@@ -1,0 +1,123 @@
+"""Which frames an evaluation read, by content: so that one session is pooled only once.
+
+``contactcal evaluate`` records the sha256 of its manifest, of the session's reference frame and
+of every labelled frame (``inputs`` in ``evaluation.json``). ``contactcal boundary-offset`` pools
+sessions as independent values; two evaluations that read the same frame (byte-identical: a
+copied evaluation folder, ``evaluate`` run twice on one session, or one session's labels split
+over two runs that share its reference) are one session, and are refused with both files named.
+
+The manifest's digest is recorded but does not identify a session: sessions of one protocol
+have byte-identical manifests (the same file names and pressures in their own folders; e.g. the
+five sessions of ``contactcal procedural`` in ``docs/evaluate.md``). Frames differ between
+sessions (a camera's noise alone makes every capture unique), so the frames decide.
+
+An ``evaluation.json`` without ``inputs`` (written by an older ``evaluate``) cannot be checked,
+and is refused with a line saying to run ``evaluate`` on that session again (seconds), rather
+than pooled unchecked.
+"""
+
+from __future__ import annotations
+
+import os
+import re
+from collections.abc import Sequence
+from pathlib import Path
+from typing import Any
+
+from contactcal.infer.files.digest import sha256_file
+
+_HEX64 = re.compile(r"[0-9a-f]{64}")
+
+
+def input_digests(manifest: Path, reference: Path, labelled: Sequence[Path]) -> dict[str, Any]:
+    """The ``inputs`` of ``evaluation.json``: sha256 of the manifest, reference and labelled frames.
+
+    Args:
+        manifest: the session manifest (its path is recorded resolved).
+        reference: the session's reference frame (the manifest's lowest-pressure frame).
+        labelled: the labelled frames, in the order scored.
+
+    Returns:
+        ``{"manifest": {"file", "sha256"}, "reference": {"file", "sha256"}, "frames": [{"file",
+        "sha256"}, ...]}``; frame names are relative to the manifest's folder.
+
+    Raises:
+        OSError: an unreadable file.
+    """
+    base = manifest.resolve().parent
+    done: dict[Path, str] = {}
+
+    def entry(path: Path) -> dict[str, str]:
+        if path not in done:
+            done[path] = sha256_file(path)
+        return {"file": os.path.relpath(path.resolve(), base), "sha256": done[path]}
+
+    return {
+        "manifest": {"file": str(manifest.resolve()), "sha256": sha256_file(manifest)},
+        "reference": entry(reference),
+        "frames": [entry(f) for f in labelled],
+    }
+
+
+def _entry_ok(value: object) -> bool:
+    return (
+        isinstance(value, dict)
+        and isinstance(value.get("file"), str)
+        and isinstance(value.get("sha256"), str)
+        and _HEX64.fullmatch(value["sha256"]) is not None
+    )
+
+
+def read_frame_digests(file: str, record: dict[str, Any]) -> dict[str, str]:
+    """The frames an evaluation read: sha256 → frame name (reference first).
+
+    Args:
+        file: the ``evaluation.json`` (for messages).
+        record: its content.
+
+    Raises:
+        ValueError: no ``inputs`` (an older ``evaluate``), or malformed ones (naming ``file``).
+    """
+    inputs = record.get("inputs")
+    if inputs is None:
+        raise ValueError(
+            f"{file}: records no digests of the frames it read (written by an older "
+            "`contactcal evaluate`), so whether it repeats another session cannot be checked; "
+            "run `contactcal evaluate` (this version) on its session again"
+        )
+    frames = inputs.get("frames") if isinstance(inputs, dict) else None
+    ref = inputs.get("reference") if isinstance(inputs, dict) else None
+    if not (_entry_ok(ref) and isinstance(frames, list) and all(map(_entry_ok, frames))):
+        raise ValueError(
+            f"{file}: its inputs are malformed; expected the reference and frames, each with "
+            "its file and sha256 (64 hex digits), as `contactcal evaluate` writes them"
+        )
+    out: dict[str, str] = {}
+    for e in [ref, *frames]:
+        out.setdefault(e["sha256"], e["file"])
+    return out
+
+
+def check_distinct_sessions(runs: Sequence[dict[str, Any]]) -> None:
+    """Refuse two evaluations that read a byte-identical frame: they are of one session.
+
+    Args:
+        runs: each with ``file`` (its ``evaluation.json``) and ``digests``
+            (:func:`read_frame_digests`).
+
+    Raises:
+        ValueError: naming both files and the shared frame.
+    """
+    seen: dict[str, tuple[str, str]] = {}  # sha256 → (evaluation file, frame name)
+    for run in runs:
+        for sha, name in run["digests"].items():
+            if sha not in seen:
+                seen[sha] = (run["file"], name)
+                continue
+            first, first_name = seen[sha]
+            also = "" if name == first_name else f" (named {name} in the second)"
+            raise ValueError(
+                f"{first} and {run['file']}: both read the frame {first_name}{also}, sha256 "
+                f"{sha[:12]}…: evaluations of one session, which counts once; pool one "
+                "evaluation per session"
+            )

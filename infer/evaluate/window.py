@@ -1,0 +1,81 @@
+"""The largest contact a label can state on this rig: the area inside the window ring.
+
+The skin touches the window inside the rig's bright outer ring, so a label whose contact covers
+the whole frame, or more pixels than the disc of that ring, cannot be a contact label (an
+inverted mask, a mask of another frame or an ellipse in the wrong unit): it is refused naming
+its file, not scored. The ring is the one the U-Net centres its crop on
+(:func:`~contactcal.infer.methods.unet.ring.locate_ring`), found on the session's reference
+frame; where none is found only the whole-frame check applies.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from pathlib import Path
+
+from contactcal.infer.evaluate.labels import Label, LabelError, LabelMask
+from contactcal.infer.image.read import load_image
+from contactcal.infer.methods.unet.ring import locate_ring
+from contactcal.infer.pipeline.measure import RING_RADIUS_TOLERANCE
+
+
+@dataclass(frozen=True)
+class Window:
+    """The reference frame's window ring, as a bound on a label's contact area."""
+
+    reference: Path  # the frame the ring was found on
+    radius_px: float  # px of the frame, the ring's outer edge
+
+    @property
+    def max_area_px(self) -> float:
+        """px², the disc of the ring's outer edge, its radius grown by the tolerance a frame's
+        ring may differ from the reference's (``RING_RADIUS_TOLERANCE``)."""
+        return math.pi * (self.radius_px * (1.0 + RING_RADIUS_TOLERANCE)) ** 2
+
+
+def find_window(reference: Path, bit_depth: int | None = None) -> Window | None:
+    """The window ring of ``reference`` (None when no ring is found).
+
+    Args:
+        reference: the session's reference frame (the manifest's lowest-pressure frame).
+        bit_depth: significant bits of a 16-bit frame (None: from the file), as measured.
+
+    Raises:
+        ImageError: an unreadable frame (``measure`` refuses it first).
+    """
+    ring = locate_ring(load_image(reference, bit_depth=bit_depth))
+    return Window(reference, ring.radius) if ring.found else None
+
+
+def check_label_area(
+    label: Label, mask: LabelMask, frame_size: tuple[int, int], window: Window | None
+) -> None:
+    """Refuse a label whose contact is larger than any contact on this rig can be.
+
+    Args:
+        label: the label (for its file or CSV row).
+        mask: its rasterised mask.
+        frame_size: its frame's ``(width, height)``, px.
+        window: the reference frame's ring (None: only the whole frame bounds the contact).
+
+    Raises:
+        LabelError: the label covers every pixel of the frame, or more than the window ring's
+            area (naming the label's file and the reference frame).
+    """
+    w, h = frame_size
+    if mask.area_px >= w * h:
+        raise LabelError(
+            f"{label.where()}: labels all {w}×{h} px of its frame {label.frame.name} as contact; "
+            "expected the contact patch only, inside the window ring (0 = background, > 0 = "
+            "contact for a mask)"
+        )
+    if window is not None and mask.area_px > window.max_area_px:
+        raise LabelError(
+            f"{label.where()}: labels {mask.area_px} px of its frame {label.frame.name} as "
+            f"contact ({mask.area_px / (w * h):.0%} of the frame), more than the "
+            f"{window.max_area_px:.0f} px inside the window ring (radius {window.radius_px:.0f} "
+            f"px found on the reference {window.reference.name}, "
+            f"+{RING_RADIUS_TOLERANCE:.0%} tolerance); "
+            "expected the contact patch only (an inverted mask?)"
+        )
