@@ -17,6 +17,13 @@ How a step is resampled (each frame's own uncertainty, best source first):
 Steps below the contact range keep their frames. So the band shows the measurement noise
 propagated through the fit; a bias shared by all frames (the method's systematic error) is
 not in it.
+
+Where the contact starts is known only to lie in the onset's bracket (between the highest
+pressure without contact and the lowest in contact); the resamples keep most contact flags,
+so they would not show that. The band therefore also holds every non-decreasing curve that is
+0 up to the bracket's low end and reaches the upper edge at its high end (`_cover_bracket`):
+an area below the first contact step's maps to the whole bracket, however the fit placed
+the onset inside it.
 """
 
 from __future__ import annotations
@@ -34,16 +41,39 @@ BAND_LEVEL = 0.9
 _Z90 = 1.6448536269514722  # standard-normal 95th percentile: 90 % interval = ±1.645 sigma
 #: Points of the band's pressure grid besides the steps (resolution of the band's inverse).
 _GRID_POINTS = 121
+#: Fraction of the onset's bracket between its ends and the grid points just inside them.
+_BRACKET_EDGE = 1e-6
 
 Refit = Callable[[np.ndarray, np.ndarray, np.ndarray], "Curve | None"]
 
 
 def band_grid(curve: Curve) -> np.ndarray:
-    """``(G,)`` pressures (kPa): an even grid over the calibrated range, the steps, the onset."""
+    """``(G,)`` pressures (kPa): an even grid over the calibrated range, the steps, the onset,
+    and points just inside the onset's bracket (where `_cover_bracket` steps the edges)."""
     p = curve.pressures_kpa
     extra = [] if curve.onset_kpa is None else [curve.onset_kpa]
+    bracket = curve.onset_bracket_kpa
+    if bracket is not None and bracket[0] is not None:
+        eps = _BRACKET_EDGE * (bracket[1] - bracket[0])
+        extra += [bracket[0] + eps, bracket[1] - eps]
     grid = np.union1d(np.linspace(p[0], p[-1], _GRID_POINTS), [*p, *extra])
     return grid[(grid >= min(p[0], *extra)) & (grid <= p[-1])]
+
+
+def _cover_bracket(
+    grid: np.ndarray, lo: np.ndarray, hi: np.ndarray, curve: Curve
+) -> tuple[np.ndarray, np.ndarray]:
+    """The edges widened over the onset's bracket ``(b0, b1]``: the lower edge 0 below ``b1``,
+    the upper edge at least its value at ``b1`` above ``b0`` (unchanged without a bracket or
+    without a pressure without contact below the contact range)."""
+    bracket = curve.onset_bracket_kpa
+    if bracket is None or bracket[0] is None:
+        return lo, hi
+    b0, b1 = bracket
+    top = float(np.interp(b1, grid, hi))
+    lo = np.where(grid < b1, 0.0, lo)
+    hi = np.where((grid > b0) & (grid <= b1), np.maximum(hi, top), hi)
+    return lo, hi
 
 
 def _draw_frames(step: Step, rng: np.random.Generator) -> tuple[np.ndarray, np.ndarray]:
@@ -104,10 +134,11 @@ def bootstrap_band(
         if again is not None and again.has_contact:
             curves.append([again.area_at(q) for q in grid])
     fit = np.asarray([curve.area_at(q) for q in grid])
-    if len(curves) < 2:
-        return Band(grid, fit, fit, BAND_LEVEL, len(curves), seed)
-    tail = (1 - BAND_LEVEL) / 2
-    lo, hi = np.quantile(np.asarray(curves), [tail, 1 - tail], axis=0)
-    lo = np.maximum.accumulate(np.minimum(lo, fit))
-    hi = np.maximum.accumulate(np.maximum(hi, fit))
+    lo = hi = fit
+    if len(curves) >= 2:
+        tail = (1 - BAND_LEVEL) / 2
+        lo, hi = np.quantile(np.asarray(curves), [tail, 1 - tail], axis=0)
+        lo = np.maximum.accumulate(np.minimum(lo, fit))
+        hi = np.maximum.accumulate(np.maximum(hi, fit))
+    lo, hi = _cover_bracket(grid, lo, hi, curve)
     return Band(grid, lo, hi, BAND_LEVEL, len(curves), seed)

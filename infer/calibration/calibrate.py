@@ -16,7 +16,12 @@ from contactcal.infer.calibration.gate_check import (
 )
 from contactcal.infer.calibration.phases import LOADING
 from contactcal.infer.calibration.points import CalibrationPoint
-from contactcal.infer.calibration.provenance import Provenance, input_digests
+from contactcal.infer.calibration.provenance import (
+    Provenance,
+    identical_frames,
+    identical_frames_warning,
+    input_digests,
+)
 from contactcal.infer.calibration.record import write_calibration
 from contactcal.infer.calibration.rings import revise_points
 from contactcal.infer.calibration.session import SessionFit, fit_session
@@ -113,19 +118,22 @@ def calibrate_session(
     unit = PX if measure.scale is None else MM2
     fit = fit_session(results, unit, options.curve, options.inverse_phase, session.phase_source)
     recorded = Path(manifest_as if manifest_as is not None else manifest).resolve()
-    extra = {**_extra(recorded, measure.scale, measured), "session_rule": options.session_rule}
-    extra |= checks
     provenance = replace(
         provenance if provenance is not None else Provenance(),
         method_config=method.describe(),
         inputs=input_digests(manifest, files, recorded),
     )
+    same = identical_frames(provenance.inputs, [f.pressure_kpa for f in frames])
+    extra = {**_extra(recorded, measure.scale, measured), "session_rule": options.session_rule}
+    extra |= checks | {"identical_frames": same}
     model = None if measure.model is None else str(measure.model)
     with run_outputs([manifest, model, *files], join=outputs) as outs:
         paths = write_calibration(out_dir, results, fit, method.name, extra, provenance, outs)
     table = format_table(results, fit, provenance.device_id)
     if checks["reference_gated_above_zero"]:
         table += "\nwarning: " + REFERENCE_NOTE.format(p=results[0].pressure_kpa)
+    if same:
+        table += "\n" + identical_frames_warning(same)
     return CalibrationReport(table, frames, measured, fit.curve, paths, fit)
 
 

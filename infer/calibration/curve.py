@@ -40,6 +40,12 @@ class Curve:
             its values at ``pressures_kpa`` and evaluation and inverse use the form), or None for
             the piecewise-linear isotonic fit.
         band: the curve's uncertainty band, or None (e.g. read from a format 1-2 record).
+        onset_bracket_kpa: ``(lo, hi)``, kPa: the onset lies in ``(lo, hi]``, ``lo`` the highest
+            pressure without contact below the contact range (None: contact from the lowest
+            pressure), ``hi`` the lowest pressure of the contact range; None when unknown (no
+            contact, or read from a record).
+        onset_rule: how the onset was placed in its bracket
+            (:mod:`~contactcal.infer.calibration.onset`'s ``*_RULE``), or None when unknown.
     """
 
     pressures_kpa: np.ndarray
@@ -50,6 +56,8 @@ class Curve:
     table_max_rows: int = 100
     model: Saturating | None = None
     band: Band | None = None
+    onset_bracket_kpa: tuple[float | None, float] | None = None
+    onset_rule: str | None = None
 
     def __post_init__(self) -> None:
         p = np.array(self.pressures_kpa, dtype=np.float64).reshape(-1)

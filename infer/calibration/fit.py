@@ -16,13 +16,23 @@ from numpy.typing import ArrayLike
 
 from contactcal.infer.calibration.curve import MM2, Curve
 from contactcal.infer.calibration.isotonic import despike, isotonic_fit
-from contactcal.infer.calibration.onset import onset_index, refine_onset
+from contactcal.infer.calibration.onset import (
+    FITTED_BELOW_LOWEST_RULE,
+    FITTED_RULE,
+    MIDPOINT_BELOW_RULE,
+    onset_bracket,
+    onset_index,
+    refine_onset,
+)
 from contactcal.infer.calibration.parametric import fit_saturating
 from contactcal.infer.calibration.points import prepare_points
 
 #: Curve models: the isotonic fit, the saturating parametric one, or chosen per session by
 #: cross-validation (:mod:`contactcal.infer.calibration.select`).
 CURVE_MODELS = ("auto", "isotonic", "parametric")
+#: Fraction of the onset's bracket within which a parametric onset counts as pinned to the
+#: bracket's low end (the grid search's final cell is ~4e-6 of the bracket).
+PINNED_FRACTION = 1e-5
 
 
 @dataclass(frozen=True)
@@ -86,9 +96,11 @@ def estimate_onset(
     only contact flags are such false positives.
 
     Refinement: the line through the fitted areas of the first two contact frames of the
-    range is extrapolated to zero area, clamped to ``[pressure at s - 1, pressure at s]``.
-    With no frame below ``s`` the onset is the lowest pressure (not calibrated below it);
-    without a usable slope, the midpoint of the interval. On a convex start (area growing
+    range is extrapolated to zero area. The onset always lies in the bracket ``(pressure at
+    s - 1, pressure at s]`` (never at or below a pressure whose frame shows no contact): an
+    extrapolation at or below its low end (a concave start, e.g. coarse steps on a saturating
+    curve), or no usable slope, gives the bracket's midpoint. With no frame below ``s`` the
+    onset is the lowest pressure (not calibrated below it). On a convex start (area growing
     faster than linearly) the extrapolation is biased towards the first contact frame: for
     ``area ∝ (p - p0)²`` with ``p0`` on a frame it gives ``p0 + 2/3`` of a step.
 
@@ -141,14 +153,23 @@ def fit_monotone(
     p, a, c = prepare_points(pressures_kpa, areas, contact)
     fit = np.zeros_like(a)
     s = onset_index(c)
-    onset: float | None = None
-    if s is not None:
-        idx = np.flatnonzero(c[s:]) + s
-        smooth = despike(a[idx], cfg.median_window)
-        iso = isotonic_fit(p[idx], smooth)
-        fit[s:] = np.interp(p[s:], p[idx], iso)
-        onset = refine_onset(p, fit, idx)
-    return Curve(p, fit, onset, area_unit, cfg.table_step, cfg.table_max_rows)
+    if s is None:
+        return Curve(p, fit, None, area_unit, cfg.table_step, cfg.table_max_rows)
+    idx = np.flatnonzero(c[s:]) + s
+    smooth = despike(a[idx], cfg.median_window)
+    iso = isotonic_fit(p[idx], smooth)
+    fit[s:] = np.interp(p[s:], p[idx], iso)
+    onset, rule = refine_onset(p, fit, idx)
+    return Curve(
+        p,
+        fit,
+        onset,
+        area_unit,
+        cfg.table_step,
+        cfg.table_max_rows,
+        onset_bracket_kpa=onset_bracket(p, s),
+        onset_rule=rule,
+    )
 
 
 def fit_parametric(
@@ -163,7 +184,11 @@ def fit_parametric(
 
     The contact range is found as in `fit_monotone`; its contact points are fitted with the
     onset bounded to ``[pressure at s - 1, pressure at s]`` (``s``: first frame of the range;
-    without a frame below it, one step lower, >= 0 kPa). Arguments as `fit_monotone`.
+    without a frame below it, one step lower, >= 0 kPa). A fitted onset pinned to the low
+    bound of a frame without contact (within :data:`PINNED_FRACTION` of the bracket: the
+    least-squares form wants an earlier onset than that frame allows) is replaced, as in
+    `fit_monotone`, by the bracket's midpoint, with ``K`` and ``A_max`` refitted for it.
+    Arguments as `fit_monotone`.
 
     Returns:
         The `Curve` with its ``model``, or None with fewer than 3 contact points in the range.
@@ -177,8 +202,22 @@ def fit_parametric(
     # onset range: between the last frame without contact and the first with; with none
     # below, one step below the first frame but not below 0 kPa (no suction onset).
     lo = float(p[s - 1]) if s > 0 else max(0.0, float(2 * p[0] - p[1]))
-    model = fit_saturating(p[idx], a[idx], (lo, float(p[s])))
+    hi = float(p[s])
+    model = fit_saturating(p[idx], a[idx], (lo, hi))
+    rule = FITTED_BELOW_LOWEST_RULE if s == 0 else FITTED_RULE
+    if model is not None and s > 0 and model.p0_kpa - lo <= PINNED_FRACTION * (hi - lo):
+        mid = 0.5 * (lo + hi)
+        model, rule = fit_saturating(p[idx], a[idx], (mid, mid)), MIDPOINT_BELOW_RULE
     if model is None:
         return None
-    fit = model.area(p)
-    return Curve(p, fit, model.p0_kpa, area_unit, cfg.table_step, cfg.table_max_rows, model=model)
+    return Curve(
+        p,
+        model.area(p),
+        model.p0_kpa,
+        area_unit,
+        cfg.table_step,
+        cfg.table_max_rows,
+        model=model,
+        onset_bracket_kpa=onset_bracket(p, s),
+        onset_rule=rule,
+    )

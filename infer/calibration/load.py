@@ -40,11 +40,15 @@ def _phase_curve(data: dict[str, Any], phase: str | None, allow_unresolved: bool
     ph = data["phases"][name]
     res = ph.get("resolution") or {}
     if res.get("resolves") is False and not allow_unresolved:
+        # format 3 records written before the rise floor hold no reason: that criterion
+        why = res.get("reason") or (
+            f"rises {res['rise']:.3g} {data['area_unit']} over its contact steps, no more than "
+            f"its own cross-validated error ({res['cv_rmse']:.3g})"
+        )
         raise UnresolvedCurveError(
-            f"the {name} curve rises {res['rise']:.3g} {data['area_unit']} over its contact "
-            f"steps, no more than its own cross-validated error ({res['cv_rmse']:.3g}): it cannot "
-            "tell pressures apart, so a controller would get arbitrary pressures; recalibrate "
-            "(check the overlays), or read it anyway with allow_unresolved=True"
+            f"the {name} curve {why}: it cannot tell pressures apart, so a controller would get "
+            "arbitrary pressures; recalibrate (check the overlays), or read it anyway with "
+            "allow_unresolved=True"
         )
     m, b = ph.get("parametric"), ph.get("band")
     model = None if m is None else Saturating(m["p0_kpa"], m["k_kpa"], m["a_max"])

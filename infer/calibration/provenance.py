@@ -10,6 +10,7 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
+from contactcal.infer.calibration.hysteresis import MATCH_TOLERANCE_KPA
 from contactcal.infer.files.digest import sha256_file
 
 #: Longest accepted ``--device-id``, characters.
@@ -92,3 +93,48 @@ class Provenance:
 
     def __post_init__(self) -> None:
         check_device_id(self.device_id)
+
+
+def identical_frames(
+    inputs: dict[str, Any], pressures_kpa: Sequence[float]
+) -> list[dict[str, Any]]:
+    """Groups of byte-identical frames (same sha256) listed at different pressures.
+
+    A camera never gives two byte-identical frames of a live scene (sensor noise): the same
+    content at different pressures means a frozen camera or duplicated files, and the areas
+    measured there cannot show how the contact changes with pressure. Pressures at most
+    :data:`~contactcal.infer.calibration.hysteresis.MATCH_TOLERANCE_KPA` apart count as one set
+    point (a video's static frames of one set point, logged a few 0.01 kPa apart on the loading
+    and the unloading pass, may decode identically).
+
+    Args:
+        inputs: :func:`input_digests`'s result, its frames in the order of ``pressures_kpa``.
+        pressures_kpa: each frame's pressure, kPa.
+
+    Returns:
+        ``[{"sha256", "files", "pressures_kpa"}, ...]``, one per content seen at set points
+        more than that tolerance apart, in order of first appearance (empty when there is none).
+    """
+    groups: dict[str, list[tuple[str, float]]] = {}
+    for entry, p in zip(inputs["frames"], pressures_kpa, strict=True):
+        groups.setdefault(entry["sha256"], []).append((entry["file"], float(p)))
+    return [
+        {"sha256": h, "files": [f for f, _ in g], "pressures_kpa": [p for _, p in g]}
+        for h, g in groups.items()
+        if max(p for _, p in g) - min(p for _, p in g) > MATCH_TOLERANCE_KPA
+    ]
+
+
+def identical_frames_warning(groups: list[dict[str, Any]]) -> str:
+    """The printed warning for :func:`identical_frames`'s groups (at least one)."""
+    shown = "; ".join(
+        f"{len(g['files'])} frames ({g['files'][0]} … {g['files'][-1]}) at "
+        f"{', '.join(f'{p:g}' for p in sorted(set(g['pressures_kpa'])))} kPa"
+        for g in groups[:3]
+    )
+    more = f"; and {len(groups) - 3} more groups" if len(groups) > 3 else ""
+    return (
+        f"warning: byte-identical frames at different pressures: {shown}{more} (the record's "
+        "extra.identical_frames): a frozen camera or duplicated files? Their areas cannot show "
+        "a change with pressure; check the frames and recalibrate"
+    )

@@ -110,6 +110,8 @@ def _phase(ph: PhaseFit) -> dict[str, Any]:
         "model": ph.selection["model"],
         "selection": ph.selection,
         "onset_kpa": c.onset_kpa,
+        "onset_bracket_kpa": None if c.onset_bracket_kpa is None else list(c.onset_bracket_kpa),
+        "onset_rule": c.onset_rule,
         "resolution": ph.resolution(),
         "calibrated_range": {
             "pressure_kpa": [float(c.pressures_kpa[0]), float(c.pressures_kpa[-1])],

@@ -14,8 +14,13 @@ from contactcal.infer.calibration.fit import CurveConfig
 from contactcal.infer.calibration.hysteresis import hysteresis
 from contactcal.infer.calibration.phases import LOADING, PHASES, UNLOADING
 from contactcal.infer.calibration.points import CalibrationPoint
-from contactcal.infer.calibration.select import choose_model, fit_model
+from contactcal.infer.calibration.select import MIN_CV_STEPS, choose_model, fit_model
 from contactcal.infer.calibration.steps import Step, group_steps
+
+#: Fraction of a curve's largest fitted area its rise over the contact steps must exceed to
+#: resolve pressures: below it the whole calibrated range spans a few per cent of the area, the
+#: order of one frame's measurement scatter (e.g. the example session's band, about ±2.5 %).
+MIN_RISE_FRACTION = 0.05
 
 
 @dataclass(frozen=True, eq=False)
@@ -29,17 +34,22 @@ class PhaseFit:
 
     def resolution(self) -> dict[str, Any] | None:
         """Whether the curve can tell pressures apart: its rise over the steps in contact above
-        its onset against its own cross-validated error (None without contact).
+        its onset against a floor and its own cross-validated error (None without contact).
 
         The step at the onset is left out (the fit is 0 there by construction, so a constant
         "contact" from the lowest step would seem to rise). A curve that fails (e.g. the
-        classical routine reporting the membrane's glow as a constant "contact" from 0 kPa) has
-        an inverse that cannot tell pressures apart, whatever its band says.
+        classical routine reporting the membrane's glow as a constant "contact" from 0 kPa, or
+        a frozen camera giving the same area at every pressure) has an inverse that cannot tell
+        pressures apart, whatever its band says. A perfect fit of a flat curve has a zero error,
+        so the rise must also exceed :data:`MIN_RISE_FRACTION` of the largest fitted area.
 
         Returns:
             ``rise`` (curve unit, from the first to the last such step), ``cv_rmse`` (the
-            chosen model's, curve unit) and ``resolves``: the rise exceeds the error; None
-            ("not measured") with fewer than two such steps or no cross-validated error.
+            chosen model's, curve unit, or None), ``floor`` (curve unit), ``resolves``: the
+            rise exceeds both (False: it does not; None, "not assessed": fewer than two such
+            steps, or no cross-validated error with fewer than :data:`MIN_CV_STEPS` contact
+            steps) and ``reason``: why not, said of the curve ("rises ... no more than ...",
+            "not assessed: ..."; None when it resolves).
         """
         c = self.curve
         if not c.has_contact or c.onset_kpa is None:
@@ -47,8 +57,29 @@ class PhaseFit:
         above = [s.pressure_kpa for s in self.steps if s.contact and s.pressure_kpa > c.onset_kpa]
         cv = self.selection["cv_rmse"].get(self.selection["model"])
         rise = float(c.area_at(max(above)) - c.area_at(min(above))) if above else 0.0
-        resolves = None if len(above) < 2 or cv is None else bool(rise > cv)
-        return {"rise": rise, "cv_rmse": cv, "resolves": resolves}
+        floor = MIN_RISE_FRACTION * float(c.area_range()[1])
+        rises = (
+            f"rises {rise:.3g} {c.area_unit} from its first to its last step in contact, no more "
+            "than "
+        )
+        more = "; record more steps above the onset"
+        resolves: bool | None = None
+        if len(above) < 2:
+            reason = f"not assessed: {len(above)} step(s) in contact above the onset" + more
+        elif rise <= floor:
+            resolves = False
+            reason = rises + f"{MIN_RISE_FRACTION:.0%} of its largest area ({floor:.3g})"
+        elif cv is None:
+            reason = (
+                "not assessed: no cross-validated error to compare its rise with (fewer than "
+                f"{MIN_CV_STEPS} steps in contact, or a leave-one-out refit failed)" + more
+            )
+        elif rise <= cv:
+            resolves = False
+            reason = rises + f"its cross-validated error ({cv:.3g})"
+        else:
+            resolves, reason = True, None
+        return {"rise": rise, "cv_rmse": cv, "floor": floor, "resolves": resolves, "reason": reason}
 
 
 @dataclass(frozen=True, eq=False)

@@ -2,8 +2,10 @@
 
 from __future__ import annotations
 
+from contactcal.infer.calibration.curve import Curve
+from contactcal.infer.calibration.onset import MIDPOINT_RULES
 from contactcal.infer.calibration.points import CalibrationPoint
-from contactcal.infer.calibration.session import SessionFit
+from contactcal.infer.calibration.session import PhaseFit, SessionFit
 
 
 def _rows(results: list[CalibrationPoint], fit: SessionFit) -> list[list[str]]:
@@ -34,24 +36,51 @@ def _rows(results: list[CalibrationPoint], fit: SessionFit) -> list[list[str]]:
     return rows
 
 
+def _onset(name: str, curve: Curve) -> tuple[str, list[str]]:
+    """The onset as the summary line shows it (with its bracket), and its warnings."""
+    onset, bracket = curve.onset_kpa, curve.onset_bracket_kpa
+    if onset is None:
+        return "no contact", []
+    at = f"onset {onset:.2f} kPa"
+    if bracket is None:
+        return at, []
+    lo, hi = bracket
+    if lo is None:
+        return f"{at}; in contact from the lowest pressure, {hi:g} kPa: not calibrated below", []
+    at += f", between {lo:g} kPa (no contact) and {hi:g} kPa (contact)"
+    if curve.onset_rule not in MIDPOINT_RULES:
+        return at, []
+    return at, [
+        f"warning: the {name} onset is the {curve.onset_rule}; it is known only to lie in "
+        f"({lo:g}, {hi:g}] kPa, and the inverse's band spans that bracket for areas below the "
+        f"one at {hi:g} kPa (record finer steps between {lo:g} and {hi:g} kPa to place it)"
+    ]
+
+
+def _resolution(name: str, ph: PhaseFit) -> list[str]:
+    """The warning line of a curve that does not resolve pressures or was not assessed."""
+    res = ph.resolution()
+    if res is None or res["resolves"] is True:
+        return []
+    if res["resolves"] is False:
+        return [
+            f"warning: the {name} curve {res['reason']}: its inverse cannot tell pressures "
+            "apart (do the areas grow with pressure? check the overlays)"
+        ]
+    return [f"warning: whether the {name} curve resolves pressure is {res['reason']}"]
+
+
 def _summary(fit: SessionFit) -> list[str]:
-    """One line per phase (model, CV errors, onset), and the hysteresis."""
+    """One line per phase (model, CV errors, onset and its bracket) with its warnings, and the
+    hysteresis."""
     unit = fit.curve.area_unit
     lines = [f"phases: {fit.phase_source}; inverse: {fit.inverse_phase} curve"]
     for name, ph in fit.phases.items():
         cv = ph.selection["cv_rmse"]
         shown = ", ".join(f"{k} {'–' if v is None else f'{v:.2f}'}" for k, v in cv.items())
-        onset = ph.curve.onset_kpa
-        at = "no contact" if onset is None else f"onset {onset:.2f} kPa"
+        at, warnings = _onset(name, ph.curve)
         lines.append(f"{name}: {ph.selection['model']} fit ({at}; CV RMSE {unit}: {shown})")
-        res = ph.resolution()
-        if res is not None and res["resolves"] is False:
-            cv = f"{res['cv_rmse']:.1f}"
-            lines.append(
-                f"warning: the {name} curve rises {res['rise']:.1f} {unit} from its first to its "
-                f"last step in contact, no more than its cross-validated error ({cv} {unit}): "
-                "its inverse cannot tell pressures apart (do the areas grow with pressure?)"
-            )
+        lines += warnings + _resolution(name, ph)
     h = fit.hysteresis
     if h is not None and h["max_abs_difference"] is not None:
         lines.append(
