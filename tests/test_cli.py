@@ -119,6 +119,7 @@ def test_demo(tmp_path: Path) -> None:
     for method, rec in records.items():
         assert rec["method"] == method and rec["area_unit"] == "mm²"
         assert rec["argv"] == ["demo", "--out", str(tmp_path)]  # was null: not recorded
+        assert rec["extra"]["reference_frame"] == "p00.0kpa.jpg"  # as the manifest lists it
         assert [p["pressure_kpa"] for p in rec["points"]] == sorted(truth)
         assert (tmp_path / method / "curve.png").stat().st_size > 0
     unet = {p["pressure_kpa"]: p for p in records["unet"]["points"]}

@@ -283,6 +283,7 @@ def test_video_areas_equal_stills(
     points = record["points"]
     final = (out / "frames" / "manifest.csv").resolve()  # recorded where it stays, not staged
     assert record["extra"]["manifest"] == str(final) == record["inputs"]["manifest"]["file"]
+    assert (final.parent / record["extra"]["reference_frame"]).is_file()  # not a staged path
     assert final.is_file()
     assert {round(p["pressure_kpa"]) for p in points} == set(kpas) and len(points) > 3 * len(kpas)
     for p in points:

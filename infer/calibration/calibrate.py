@@ -124,7 +124,11 @@ def calibrate_session(
         inputs=input_digests(manifest, files, recorded),
     )
     same = identical_frames(provenance.inputs, [f.pressure_kpa for f in frames])
-    extra = {**_extra(recorded, measure.scale, measured), "session_rule": options.session_rule}
+    listed = os.path.relpath(frames[0].file, manifest.parent)  # as the manifest names it
+    extra = {
+        **_extra(recorded, listed, measure.scale, measured),
+        "session_rule": options.session_rule,
+    }
     extra |= checks | {"identical_frames": same}
     model = None if measure.model is None else str(measure.model)
     with run_outputs([manifest, model, *files], join=outputs) as outs:
@@ -220,12 +224,15 @@ def _points(
 
 
 def _extra(
-    manifest: Path, scale: PixelScale | None, measured: Sequence[Measured]
+    manifest: Path, reference: str, scale: PixelScale | None, measured: Sequence[Measured]
 ) -> dict[str, object]:
-    """The record's ``extra``: the manifest's path, the pixel scale and the boundary offset
-    applied (mm; null: none, e.g. none in the rig config, or the classical routine)."""
+    """The record's ``extra``: the manifest's path, the reference frame every frame was measured
+    against (the loading pass's lowest-pressure frame, as the manifest lists it), the pixel
+    scale and the boundary offset applied (mm; null: none, e.g. none in the rig config, or the
+    classical routine)."""
     return {
         "manifest": str(manifest),
+        "reference_frame": reference,
         "mm_per_px": None if scale is None else scale.mm_per_px,
         "scale_image_width_px": None if scale is None else scale.image_width_px,
         "boundary_offset_mm": measured[0].boundary_offset_mm if measured else None,
