@@ -18,19 +18,21 @@ than pooled unchecked.
 
 from __future__ import annotations
 
-import os
 import re
 from collections.abc import Sequence
 from pathlib import Path
 from typing import Any
 
-from contactcal.infer.files.digest import sha256_file
+from contactcal.infer.calibration.provenance import input_digests as frame_digests
 
 _HEX64 = re.compile(r"[0-9a-f]{64}")
 
 
 def input_digests(manifest: Path, reference: Path, labelled: Sequence[Path]) -> dict[str, Any]:
     """The ``inputs`` of ``evaluation.json``: sha256 of the manifest, reference and labelled frames.
+
+    The digests are ``calibration.json``'s
+    (:func:`~contactcal.infer.calibration.provenance.input_digests`), the reference frame apart.
 
     Args:
         manifest: the session manifest (its path is recorded resolved).
@@ -44,19 +46,9 @@ def input_digests(manifest: Path, reference: Path, labelled: Sequence[Path]) -> 
     Raises:
         OSError: an unreadable file.
     """
-    base = manifest.resolve().parent
-    done: dict[Path, str] = {}
-
-    def entry(path: Path) -> dict[str, str]:
-        if path not in done:
-            done[path] = sha256_file(path)
-        return {"file": os.path.relpath(path.resolve(), base), "sha256": done[path]}
-
-    return {
-        "manifest": {"file": str(manifest.resolve()), "sha256": sha256_file(manifest)},
-        "reference": entry(reference),
-        "frames": [entry(f) for f in labelled],
-    }
+    digests = frame_digests(manifest, [reference, *labelled])
+    first, *frames = digests["frames"]
+    return {"manifest": digests["manifest"], "reference": first, "frames": frames}
 
 
 def _entry_ok(value: object) -> bool:
