@@ -124,3 +124,26 @@ def test_hysteresis_matches_steps_of_a_noisy_log() -> None:
     assert h["difference"] == [0.0, 3.0, 2.0] and h["max_abs_at_kpa"] == 4.0
     far = steps("unloading", [5.5, 3.0], [22.0, 13.0])
     assert hysteresis((up, curve), (far, curve))["max_abs_difference"] is None
+    # no brackets (a record's curve): the shift has no range
+    assert h["onset_shift_range_kpa"] is None and h["onset_bracket_kpa"]["loading"] is None
+
+
+def test_hysteresis_onset_shift_range_from_the_brackets() -> None:
+    """Onsets known to lie in (2, 4] loading and (1, 3] unloading: the shift lies in (-3, 1)."""
+    from contactcal.infer.calibration.curve import PX, Curve
+    from contactcal.infer.calibration.hysteresis import hysteresis
+    from contactcal.infer.calibration.table import _onset_shift
+
+    up = Curve([2.0, 4.0], [0.0, 10.0], 3.0, PX, onset_bracket_kpa=(2.0, 4.0))
+    down = Curve([1.0, 3.0], [0.0, 10.0], 2.5, PX, onset_bracket_kpa=(1.0, 3.0))
+    h = hysteresis(([], up), ([], down))
+    assert h["onset_shift_kpa"] == -0.5 and h["onset_shift_range_kpa"] == [-3.0, 1.0]
+    assert h["onset_bracket_kpa"] == {"loading": [2.0, 4.0], "unloading": [1.0, 3.0]}
+    assert _onset_shift(h) == [
+        "onset shift (unloading - loading): -0.50 kPa, known to lie between -3 and +1 kPa "
+        "from the steps"
+    ]
+    lowest = Curve([1.0, 3.0], [5.0, 10.0], 1.0, PX, onset_bracket_kpa=(None, 1.0))
+    h = hysteresis(([], up), ([], lowest))
+    assert h["onset_shift_range_kpa"] is None and "range unknown" in _onset_shift(h)[0]
+    assert _onset_shift(hysteresis(([], up), ([], Curve([1.0], [0.0], None, PX)))) == []

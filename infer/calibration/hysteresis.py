@@ -32,8 +32,12 @@ def hysteresis(
     Returns:
         ``{"pressures_kpa": [...], "difference": [...], "max_abs_difference",
         "max_abs_at_kpa", "mean_difference", "onset_kpa": {"loading", "unloading"},
-        "onset_shift_kpa"}``; the difference fields are None without a common pressure, the
-        shift None when a pass has no onset.
+        "onset_bracket_kpa": {"loading", "unloading"}, "onset_shift_kpa",
+        "onset_shift_range_kpa"}``; the difference fields are None without a common pressure,
+        the shift None when a pass has no onset. A pass's onset is only known to lie in its
+        bracket ``(lo, hi]`` (the curve's ``onset_bracket_kpa``), so the shift is only known
+        to lie in ``(down_lo - up_hi, down_hi - up_lo)``: that range, or None when a pass has
+        no onset or is in contact from its lowest pressure (no ``lo``).
     """
     up = {s.pressure_kpa: s.median for s in loading[0]}
     pairs: dict[float, float] = {}
@@ -44,6 +48,7 @@ def hysteresis(
     common = sorted(pairs)
     diff = np.asarray([pairs[q] for q in common], dtype=np.float64)
     on_up, on_down = loading[1].onset_kpa, unloading[1].onset_kpa
+    b_up, b_down = loading[1].onset_bracket_kpa, unloading[1].onset_bracket_kpa
     k = int(np.argmax(np.abs(diff))) if diff.size else None
     return {
         "pressures_kpa": common,
@@ -53,5 +58,22 @@ def hysteresis(
         "max_abs_at_kpa": None if k is None else common[k],
         "mean_difference": float(diff.mean()) if diff.size else None,
         "onset_kpa": {"loading": on_up, "unloading": on_down},
+        "onset_bracket_kpa": {"loading": _listed(b_up), "unloading": _listed(b_down)},
         "onset_shift_kpa": None if on_up is None or on_down is None else on_down - on_up,
+        "onset_shift_range_kpa": _shift_range(b_up, b_down),
     }
+
+
+def _listed(bracket: tuple[float | None, float] | None) -> list[float | None] | None:
+    """A bracket as the record holds it (a list), or None."""
+    return None if bracket is None else list(bracket)
+
+
+def _shift_range(
+    up: tuple[float | None, float] | None, down: tuple[float | None, float] | None
+) -> list[float] | None:
+    """``[down_lo - up_hi, down_hi - up_lo]``, kPa: the onset shift's range given both passes'
+    brackets; None unless both have a lower end (a frame without contact below contact)."""
+    if up is None or down is None or up[0] is None or down[0] is None:
+        return None
+    return [down[0] - up[1], down[1] - up[0]]

@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+from typing import Any
+
 from contactcal.infer.calibration.curve import Curve
 from contactcal.infer.calibration.onset import MIDPOINT_RULES
 from contactcal.infer.calibration.points import CalibrationPoint
@@ -93,7 +95,18 @@ def _summary(fit: SessionFit) -> list[str]:
             "hysteresis: not measured (no unloading step within "
             f"{h['matched_within_kpa']:g} kPa of a loading step)"
         )
-    return lines
+    return lines + _onset_shift(h)
+
+
+def _onset_shift(h: dict[str, Any] | None) -> list[str]:
+    """The line of the onset shift between the passes, with the range the steps allow."""
+    if h is None or h["onset_shift_kpa"] is None:
+        return []
+    line = f"onset shift (unloading - loading): {h['onset_shift_kpa']:+.2f} kPa"
+    rng = h["onset_shift_range_kpa"]
+    if rng is None:
+        return [line + " (a pass is in contact from its lowest pressure: range unknown)"]
+    return [line + f", known to lie between {rng[0]:+g} and {rng[1]:+g} kPa from the steps"]
 
 
 def format_table(
