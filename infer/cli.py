@@ -22,6 +22,7 @@ from contactcal.infer.calibration import command as calibrate_command
 from contactcal.infer.errors import RunError
 from contactcal.infer.evaluate import command as evaluate_command
 from contactcal.infer.files.interrupt import Terminated, stop_signals_interrupt
+from contactcal.infer.files.stdout import named_stdout
 from contactcal.infer.image.cv_threads import opencv_threads
 from contactcal.infer.pipeline import commands as pipeline_commands
 
@@ -102,8 +103,9 @@ def main(argv: Sequence[str] | None = None) -> int:
         return 2
     try:
         threads = getattr(args, "threads", None)  # measure, calibrate (not train: torch_threads)
-        with stop_signals_interrupt(), opencv_threads(threads) if threads else nullcontext():
-            return int(args.func(args))
+        with named_stdout(), stop_signals_interrupt():
+            with opencv_threads(threads) if threads else nullcontext():
+                return int(args.func(args))
     except RunError as exc:
         print(f"contactcal: {exc}", file=sys.stderr)
         return exc.code

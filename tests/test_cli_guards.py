@@ -4,8 +4,11 @@ folder that is a link, a folder given as a frame, and a curve that cannot tell p
 
 from __future__ import annotations
 
+import errno
+import io
 import json
 import os
+import sys
 from pathlib import Path
 
 import pytest
@@ -265,3 +268,25 @@ def test_unet_options_without_a_unet_and_zero_threads_are_one_line(
     assert main(["calibrate", MANIFEST, "--threads", "0", "--out", str(out)]) == 2
     assert _one_error(capsys) == "contactcal: error: --threads 0: expected >= 1"
     assert not out.exists()
+
+
+class _FullStdout(io.StringIO):
+    """A standard output on a full disk."""
+
+    def write(self, text: str) -> int:
+        raise OSError(errno.ENOSPC, os.strerror(errno.ENOSPC))
+
+
+@pytest.mark.parametrize("command", ["measure", "calibrate"])
+def test_a_failing_standard_output_is_named(
+    command: str, tmp_path: Path, capsys: pytest.CaptureFixture[str], monkeypatch
+) -> None:
+    monkeypatch.setattr(sys, "stdout", _FullStdout())
+    if command == "measure":
+        argv = ["measure", str(EXAMPLE / "p05.0kpa.jpg"), "--mm-per-px", "0.02", "--out", "-"]
+    else:
+        argv = ["calibrate", MANIFEST, "--out", str(tmp_path / "cal")]
+    assert main([*argv, "--method", "classical"]) == 2
+    line = _one_error(capsys)
+    assert "writing to standard output failed (No space left on device)" in line
+    assert "[Errno" not in line

@@ -1,0 +1,71 @@
+"""Standard output that names itself when it fails (a full disk, a closed pipe)."""
+
+from __future__ import annotations
+
+import contextlib
+import os
+import sys
+from collections.abc import Iterator
+from typing import Any, TextIO
+
+
+class StdoutError(OSError):
+    """Writing to standard output failed: its message says so, unlike the bare OSError's
+    ``[Errno 28] No space left on device``."""
+
+    def __str__(self) -> str:
+        return f"writing to standard output failed ({self.strerror}): what it printed is incomplete"
+
+
+class _Named:
+    """``stream`` with ``write`` and ``flush`` raising :class:`StdoutError`; the rest as is."""
+
+    def __init__(self, stream: TextIO) -> None:
+        self._stream = stream
+
+    def write(self, text: str) -> int:
+        try:
+            return self._stream.write(text)
+        except OSError as exc:
+            raise _named(exc) from exc
+
+    def flush(self) -> None:
+        try:
+            self._stream.flush()
+        except OSError as exc:
+            raise _named(exc) from exc
+
+    def __getattr__(self, name: str) -> Any:
+        return getattr(self._stream, name)
+
+
+def _named(exc: OSError) -> StdoutError:
+    return StdoutError(exc.errno, exc.strerror)
+
+
+@contextlib.contextmanager
+def named_stdout() -> Iterator[None]:
+    """In the block, a failed write to ``sys.stdout`` raises :class:`StdoutError`; at its end
+    stdout is flushed, so that the last lines' failure surfaces here and not at exit.
+
+    On a :class:`StdoutError` the stdout file descriptor is pointed at the null device, so that
+    the interpreter's own flush at exit does not print a second, unnamed error.
+    """
+    before = sys.stdout
+    sys.stdout = _Named(before)  # type: ignore[assignment]
+    try:
+        yield
+        sys.stdout.flush()
+    except StdoutError:
+        _silence(before)
+        raise
+    finally:
+        sys.stdout = before
+
+
+def _silence(stream: TextIO) -> None:
+    """Point ``stream``'s file descriptor at the null device (Python's advice for SIGPIPE)."""
+    with contextlib.suppress(OSError, ValueError, AttributeError):
+        null = os.open(os.devnull, os.O_WRONLY)
+        os.dup2(null, stream.fileno())
+        os.close(null)
