@@ -10,6 +10,8 @@ from typing import Any
 
 import numpy as np
 
+from contactcal.infer.pipeline.manifest import MAX_PRESSURE_KPA
+
 #: ``index.csv`` columns, in order.
 INDEX_COLUMNS = tuple(
     "finger session frame mask pressure_kpa contact area_px area_mm2 area_mm2_projected"
@@ -43,15 +45,20 @@ def check_frame_names(pressures_kpa: tuple[float, ...]) -> None:
 
 
 def check_sweep(fingers: int, pressures_kpa: tuple[float, ...]) -> None:
-    """A dataset's fingers (>= 1) and pressures (finite, >= 0 kPa, distinct frame names).
+    """A dataset's fingers (>= 1) and pressures (finite, 0-100 kPa, distinct frame names).
 
     Raises:
         ValueError: naming the option and what was expected.
     """
     if fingers < 1:
         raise ValueError(f"--fingers must be >= 1, got {fingers}")
-    if not pressures_kpa or not all(math.isfinite(p) and p >= 0 for p in pressures_kpa):
-        raise ValueError(f"pressures must be finite and >= 0 kPa, got {pressures_kpa}")
+    if not pressures_kpa or not all(
+        math.isfinite(p) and 0 <= p <= MAX_PRESSURE_KPA for p in pressures_kpa
+    ):
+        raise ValueError(
+            f"pressures must be finite, 0-{MAX_PRESSURE_KPA:g} kPa (what a manifest may hold), "
+            f"got {pressures_kpa}"
+        )
     check_frame_names(pressures_kpa)
 
 
@@ -75,8 +82,11 @@ def parse_pressures(text: str) -> tuple[float, ...]:
         raise ValueError(
             f"--pressures: expected start:stop:step (e.g. 0:20:1) or a comma list, got {text!r}"
         ) from None
-    if not all(math.isfinite(p) and p >= 0 for p in values):
-        raise ValueError(f"--pressures: expected finite values >= 0 kPa, got {text!r}")
+    if not all(math.isfinite(p) and 0 <= p <= MAX_PRESSURE_KPA for p in values):
+        raise ValueError(
+            f"--pressures: expected finite values of 0-{MAX_PRESSURE_KPA:g} kPa (what `calibrate` "
+            f"reads from a manifest), got {text!r}"
+        )
     check_frame_names(values)
     return values
 

@@ -156,7 +156,7 @@ def test_cli_manifest_errors(tmp_path: Path, capsys: pytest.CaptureFixture[str])
     manifest.write_text("file,pressure_kpa\np00.0kpa.jpg,0\np10.0kpa.jpg,5\np10.0kpa.jpg,10\n")
     _exit_2(capsys, argv, "rows 2", "and 3", "same image file")
     manifest.write_text("file,pressure_kpa\np00.0kpa.jpg,0\np10.0kpa.jpg,1e308\n")
-    _exit_2(capsys, argv, "row 2", "above the plausible 200 kPa")
+    _exit_2(capsys, argv, "row 2", "above the plausible 100 kPa")
 
 
 def test_cli_no_rig_frame(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:

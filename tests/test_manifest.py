@@ -108,8 +108,10 @@ def test_empty_file_cell(tmp_path: Path) -> None:
         ("-1", "negative"),
         ("", "not a number"),
         ("2 kPa", "not a number"),
-        ("1e308", "above the plausible 200 kPa"),
-        ("20000", "above the plausible 200 kPa"),
+        ("1e308", "above the plausible 100 kPa"),
+        ("20000", "above the plausible 100 kPa"),
+        ("200", "not mbar"),  # a 0-20 kPa sweep's top in mbar
+        ("100.0001", "pressure_kpa 100.0001 is above"),  # the cell as written, not rounded
     ],
 )
 def test_bad_pressure(tmp_path: Path, cell: str, problem: str) -> None:
@@ -173,8 +175,8 @@ def test_phases_from_row_order(tmp_path: Path) -> None:
 
 
 def test_pressure_range_bounds_are_accepted(tmp_path: Path) -> None:
-    frames = read_manifest(_session(tmp_path, "file,pressure_kpa\na.png,0\nb.png,200\n"))
-    assert [f.pressure_kpa for f in frames] == [0.0, 200.0]
+    frames = read_manifest(_session(tmp_path, "file,pressure_kpa\na.png,0\nb.png,100\n"))
+    assert [f.pressure_kpa for f in frames] == [0.0, 100.0]
 
 
 def test_same_file_on_two_rows(tmp_path: Path) -> None:

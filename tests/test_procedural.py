@@ -139,7 +139,7 @@ def test_refuses_existing_out_and_cleans_killed_runs(tmp_path: Path) -> None:
 def test_bad_arguments() -> None:
     assert parse_pressures("0:4:2") == (0.0, 2.0, 4.0)
     assert parse_pressures("4,0") == (4.0, 0.0)  # as given; the generator sorts them
-    for bad in ("0:20", "a,b", "-1,2", "1.01,1.02", "nan"):
+    for bad in ("0:20", "a,b", "-1,2", "1.01,1.02", "nan", "0:300:50"):
         with pytest.raises(ValueError, match="--pressures"):
             parse_pressures(bad)
     with pytest.raises(ValueError, match="--fingers"):

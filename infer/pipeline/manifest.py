@@ -42,10 +42,13 @@ PHASE_COLUMN = "phase"
 _KNOWN = (*REQUIRED_COLUMNS, PHASE_COLUMN)
 _HEADER = ",".join(REQUIRED_COLUMNS)
 _MAX_LISTED = 5
-#: Highest plausible chamber gauge pressure, kPa. The display works at 0-20 kPa; 200 kPa is ten
-#: times that, so a larger value is a unit slip (Pa for kPa) or a typo, not a calibration step.
-#: (Negative gauge pressure, suction, is no calibration step either: the lower bound is 0.)
-MAX_PRESSURE_KPA = 200.0
+#: Highest plausible chamber gauge pressure, kPa. The display works at 0-20 kPa; 100 kPa (1 bar
+#: above the atmosphere on a 70 µm membrane) is five times that, so a larger value is a unit slip
+#: or a typo, not a calibration step: mbar for kPa turns a 0-20 kPa sweep's top into 200, Pa into
+#: 20000. (A 0-10 kPa sweep in mbar tops out at the bound itself and passes: no bound tells it
+#: from a 100 kPa display.) Negative gauge pressure, suction, is no calibration step either: the
+#: lower bound is 0.
+MAX_PRESSURE_KPA = 100.0
 
 
 class ManifestError(ValueError):
@@ -211,8 +214,8 @@ def _parse_pressure(at: str, cell: str) -> float:
         )
     if value > MAX_PRESSURE_KPA:
         raise ManifestError(
-            f"{at}: pressure_kpa {value:g} is above the plausible {MAX_PRESSURE_KPA:g} kPa "
-            "(the display works at 0-20 kPa); expected kPa, not Pa or another unit"
+            f"{at}: pressure_kpa {cell.strip()} is above the plausible {MAX_PRESSURE_KPA:g} kPa "
+            "(the display works at 0-20 kPa); expected kPa, not mbar, Pa or another unit"
         )
     return value
 

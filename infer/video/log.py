@@ -143,7 +143,8 @@ def parse_log(text: str, where: Path, complete: bool = True) -> PressureLog:
         p = _value(where, row, "pressure_kpa", cells[col["pressure_kpa"]])
         if not -GAUGE_ZERO_NOISE_KPA <= p <= MAX_PRESSURE_KPA:
             raise PressureLogError(
-                f"{where}: row {row}: pressure_kpa {p:g} is outside the plausible "
+                f"{where}: row {row}: pressure_kpa {cells[col['pressure_kpa']].strip()} is "
+                "outside the plausible "
                 f"-{GAUGE_ZERO_NOISE_KPA:g} to {MAX_PRESSURE_KPA:g} kPa (the display works at "
                 "0-20 kPa); expected the gauge pressure in kPa"
             )
