@@ -5,6 +5,7 @@ from __future__ import annotations
 import csv
 import functools
 import json
+import math
 from dataclasses import replace as dataclasses_replace
 from pathlib import Path
 from typing import Any
@@ -17,9 +18,20 @@ from contactcal.infer.bench import run as bench_run
 from contactcal.infer.bench.accuracy import from_record, onset_errors, to_record
 from contactcal.infer.bench.config import BenchConfig
 from contactcal.infer.bench.plots import pareto_points
-from contactcal.infer.bench.report import coverage_table, hard_table, md_table, onset_table
+from contactcal.infer.bench.report import (
+    accuracy_tables,
+    coverage_table,
+    hard_table,
+    md_table,
+    onset_table,
+)
 from contactcal.infer.bench.run import run_bench
-from contactcal.infer.bench.scoring import PRESSURE_BINS, ScoredFrame, bin_table
+from contactcal.infer.bench.scoring import (
+    PRESSURE_BINS,
+    ScoredFrame,
+    bin_table,
+    covering_bins,
+)
 from contactcal.infer.cli import main
 
 #: A benchmark small enough for a unit test (timing numbers are not checked).
@@ -194,6 +206,18 @@ def test_tables_by_hand() -> None:
     assert onset_table(onset) == [{"method": "m", "median_abs": 2.0, "max_abs": 2.0}]
     table = md_table([five], [("bin_kpa", "kPa", False), ("median_abs_rel_error", "err", True)])
     assert table.splitlines() == ["| kPa | err |", "|---|---|", "| 5-10 | 25.0 % |"]
+
+
+def test_a_frame_past_the_last_bin_opens_it() -> None:
+    """A dataset past 20 kPa: its frames are in the tables (last bin ">=10"), not dropped."""
+    frames = [_frame(4.0, 100.0, 100.0), _frame(25.0, 400.0, 420.0), _frame(30.0, 400.0, 440.0)]
+    bins = covering_bins([f.pressure_kpa for f in frames], PRESSURE_BINS)
+    assert bins[:-1] == PRESSURE_BINS[:-1] and bins[-1] == (10.0, math.inf)
+    assert covering_bins([4.0, 20.0], PRESSURE_BINS) == PRESSURE_BINS
+    rows = {r["bin_kpa"]: r for r in accuracy_tables(frames, [], PRESSURE_BINS)["bins"]}
+    assert list(rows) == ["0-3", "3-5", "5-10", ">=10"]
+    assert rows[">=10"]["contact_frames"] == 2
+    assert rows[">=10"]["median_abs_rel_error"] == pytest.approx(0.075)
 
 
 def test_onset_errors_by_hand() -> None:

@@ -15,7 +15,7 @@ from typing import Any
 from contactcal.infer.bench.accuracy import evaluate, onset_errors, to_record
 from contactcal.infer.bench.dataset import IndexRow, read_index, sessions_of
 from contactcal.infer.bench.report import BIN_COLUMNS, HARD_COLUMNS, accuracy_tables, md_table
-from contactcal.infer.bench.scoring import ScoredFrame, bin_label, bin_row
+from contactcal.infer.bench.scoring import ScoredFrame, bin_label, bin_row, covering_bins
 
 #: Bin of the side-by-side table that pools every frame at or above 5 kPa, kPa.
 POOLED_FROM_KPA = 5.0
@@ -86,6 +86,7 @@ def side_by_side(
         quantity has no frames).
     """
     methods = sorted({f.method for fs in scored.values() for f in fs})
+    bins = covering_bins([f.pressure_kpa for fs in scored.values() for f in fs], bins)
     ranges = [(bin_label(lo, hi), lo, hi) for lo, hi in bins]
     ranges.append((f"≥{POOLED_FROM_KPA:g}", POOLED_FROM_KPA, float("inf")))
     rows = []

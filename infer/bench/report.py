@@ -13,6 +13,7 @@ from contactcal.infer.bench.scoring import (
     bin_label,
     bin_table,
     coverage_row,
+    covering_bins,
     median_or_none,
 )
 from contactcal.infer.files.atomic import write_json, write_text
@@ -272,7 +273,9 @@ def accuracy_tables(
     onset: Sequence[Mapping[str, Any]],
     bins: Sequence[tuple[float, float]],
 ) -> dict[str, list[dict[str, Any]]]:
-    """The ``bins``, ``hard`` and ``coverage`` tables of one dataset's scored frames."""
+    """The ``bins``, ``hard`` and ``coverage`` tables of one dataset's scored frames (the last
+    bin opened when a frame lies past it: :func:`~contactcal.infer.bench.scoring.covering_bins`)."""
+    bins = covering_bins([f.pressure_kpa for f in frames], bins)
     return {
         "bins": bin_table(frames, bins),
         "hard": hard_table(frames, onset),

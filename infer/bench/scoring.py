@@ -27,6 +27,22 @@ PRESSURE_BINS: tuple[tuple[float, float], ...] = (
 OPEN_BINS: tuple[tuple[float, float], ...] = (*PRESSURE_BINS[:-1], (10.0, math.inf))
 
 
+def covering_bins(
+    pressures_kpa: Sequence[float], bins: Sequence[tuple[float, float]]
+) -> tuple[tuple[float, float], ...]:
+    """``bins``, with the last one opened (its end +inf, shown as ``">=lo"``) when a pressure
+    lies at or above its end, so that a table leaves no frame out (a dataset past 20 kPa).
+
+    Args:
+        pressures_kpa: the frames' pressures, kPa.
+        bins: ascending ``[lo, hi)`` bins, kPa.
+    """
+    out = tuple(bins)
+    if out and any(p >= out[-1][1] for p in pressures_kpa):
+        out = (*out[:-1], (out[-1][0], math.inf))
+    return out
+
+
 #: Suffix of the rows that score the U-Net's probability mass instead of its pixel count.
 SOFT_SUFFIX = " (soft area)"
 #: Suffix of the rows that score a method's frames after the session rule of ``calibrate``
