@@ -7,6 +7,7 @@ import json
 import math
 from pathlib import Path
 
+import cv2
 import numpy as np
 import pytest
 
@@ -21,6 +22,7 @@ from contactcal.infer.pipeline.boundary import (
     fit_offset,
     load_boundary_offset,
     offset_area,
+    offset_contour,
 )
 
 EXAMPLE = Path(__file__).resolve().parents[1] / "examples" / "session"
@@ -79,6 +81,29 @@ def test_apply_offset_moves_area_soft_area_and_interval_and_says_so() -> None:
     assert not gone.contact and gone.area_px == 0.0 and gone.soft_area_px == 0.0
     assert gone.note.startswith(GONE_NOTE) and "-0.400 mm" in gone.note
     assert gone.contour is None and gone.area_interval_px[0] == 0.0
+
+
+def _filled(contour: np.ndarray, size: int = 160) -> np.ndarray:
+    mask = np.zeros((size, size), np.uint8)
+    cv2.drawContours(mask, [contour], -1, 1, thickness=-1)
+    return mask > 0
+
+
+@pytest.mark.parametrize("d", [-6.0, 4.0, 9.5])
+def test_the_outline_moves_with_the_area(d: float) -> None:
+    """The moved outline bounds the disc of the moved radius (its IoU with it ~1), so the IoU
+    `evaluate` takes from it refers to the region whose area is stated."""
+    found, _ = cv2.findContours(
+        _disc(40.0).astype(np.uint8), cv2.RETR_EXTERNAL, cv2.CHAIN_APPROX_SIMPLE
+    )
+    moved = _filled(offset_contour(found[0], d))
+    want = _disc(40.0 + d)
+    iou = (moved & want).sum() / (moved | want).sum()
+    assert iou > 0.98, iou
+    assert offset_contour(found[0], -45.0) is None  # past the middle: nothing left
+    res = AreaResult(True, float(_disc(40.0).sum()), "", found[0], None, None, 2 * math.pi * 40)
+    out = apply_offset(res, d, d * 0.02)
+    assert (_filled(out.contour) == moved).all()
 
 
 def _rig(path: Path, **keys: object) -> Path:

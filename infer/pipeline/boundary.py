@@ -23,6 +23,9 @@ import re
 from dataclasses import dataclass, replace
 from typing import Any
 
+import cv2
+import numpy as np
+
 from contactcal.infer.methods.base import AreaResult
 from contactcal.infer.pipeline.scale import MODEL_KEY, OFFSET_KEY, read_rig_json
 
@@ -113,8 +116,9 @@ def apply_offset(res: AreaResult, d_px: float, mm: float) -> AreaResult:
 
     The area, the soft area and the interval's ends move by :func:`offset_area` (an end's
     perimeter scaled as the square root of its area: a similar shape); the note says so. A
-    result without contact, or without a measured perimeter, is returned unchanged. The overlay
-    outline (``contour``) stays the region as segmented.
+    result without contact, or without a measured perimeter, is returned unchanged. The outline
+    (``contour``: overlays, ``evaluate``'s IoU) moves too (:func:`offset_contour`), so that it
+    bounds the region whose area is stated.
 
     An inward move that leaves no area makes the frame "no contact" (:data:`GONE_NOTE`): area
     and soft area 0, no outline, the interval ``(0, its moved upper end)``.
@@ -141,8 +145,40 @@ def apply_offset(res: AreaResult, d_px: float, mm: float) -> AreaResult:
     return replace(
         res,
         area_px=area,
+        contour=None if res.contour is None else offset_contour(res.contour, d_px),
         note=f"{res.note}; {note}" if res.note else note,
         soft_area_px=None if res.soft_area_px is None else moved(res.soft_area_px),
         area_interval_px=interval,
         perimeter_px=p + 2.0 * math.pi * d_px,
     )
+
+
+def offset_contour(contour: np.ndarray, d_px: float) -> np.ndarray | None:
+    """The filled outline moved ``d_px`` outward (inward when negative), as an outline.
+
+    Pixels within ``d_px`` of the filled region are added (``d_px > 0``), or those within
+    ``|d_px|`` of its outside removed, by an exact Euclidean distance transform in the outline's
+    bounding box; the largest outer boundary of what is left is returned.
+
+    Args:
+        contour: ``(N, 1, 2) int32`` outline, input pixels.
+        d_px: the move, input pixels.
+
+    Returns:
+        ``(M, 1, 2) int32`` outline in the same pixels; None when an inward move leaves nothing.
+    """
+    x, y, w, h = cv2.boundingRect(contour)
+    m = math.ceil(max(d_px, 0.0)) + 2  # room to grow, and a background border
+    mask = np.zeros((h + 2 * m, w + 2 * m), np.uint8)
+    shift = np.array([x - m, y - m], np.int32)
+    cv2.drawContours(mask, [contour.astype(np.int32) - shift], -1, 1, thickness=-1)
+    if d_px >= 0:  # distance of each outside pixel to the region
+        dist = cv2.distanceTransform(1 - mask, cv2.DIST_L2, cv2.DIST_MASK_PRECISE)
+        moved = dist <= d_px
+    else:  # distance of each inside pixel to the outside
+        dist = cv2.distanceTransform(mask, cv2.DIST_L2, cv2.DIST_MASK_PRECISE)
+        moved = dist > -d_px
+    found, _ = cv2.findContours(moved.astype(np.uint8), cv2.RETR_EXTERNAL, cv2.CHAIN_APPROX_SIMPLE)
+    if not found:
+        return None
+    return max(found, key=cv2.contourArea).astype(np.int32) + shift
