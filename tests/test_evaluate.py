@@ -275,3 +275,19 @@ def test_every_labelled_frame_is_in_a_bin(tmp_path: Path) -> None:
     bins = {b["bin_kpa"]: b for b in _record(out)["summary"]["bins"]}
     assert list(bins) == ["0-3", "3-5", "5-10", ">=10"]
     assert sum(b["frames"] for b in bins.values()) == len(rows)
+
+
+def test_printed_table_counts_found_and_false_contacts() -> None:
+    """A false contact below onset shows in the printed table (1/2 kept), not only in the JSON."""
+    from contactcal.infer.bench.scoring import ScoredFrame, bin_table
+    from contactcal.infer.evaluate.report import format_table
+
+    def frame(p: float, true: float, area: float) -> ScoredFrame:
+        return ScoredFrame("unet", "s", f"{p}.png", p, true, area, area > 0, iou=None)
+
+    frames = [frame(1.0, 0.0, 0.0), frame(2.0, 0.0, 40.0), frame(6.0, 100.0, 0.0)]
+    onset = {"labels_onset_kpa": None, "note": "n", "methods": {}}
+    rows = format_table(bin_table(frames), onset).splitlines()
+    assert rows[0].split()[4:9] == ["contact", "found", "no", "contact", "kept"]
+    assert rows[1].split()[:5] == ["unet", "0-3", "2", "–", "1/2"]
+    assert rows[3].split()[:5] == ["unet", "5-10", "1", "0/1", "–"]

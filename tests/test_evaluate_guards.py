@@ -153,6 +153,7 @@ def _contact(name: str = "p10.0kpa.png") -> np.ndarray:
         ("background 50, contact 128", "no pixel is 0 (values 50, 128)"),
         ("all 255", "no pixel is 0 (values 255)"),
         ("inverted", "more than the"),
+        ("alpha only", "in the alpha channel only"),
     ],
 )
 def test_mask_that_cannot_be_a_contact_label_exits_2(
@@ -163,6 +164,7 @@ def test_mask_that_cannot_be_a_contact_label_exits_2(
         "background 50, contact 128": np.where(c, 128, 50),
         "all 255": np.full(c.shape, 255),
         "inverted": np.where(c, 0, 255),
+        "alpha only": np.dstack([np.zeros((*c.shape, 3)), np.where(c, 255, 0)]),  # BGRA
     }[kind].astype(np.uint8)
     masks = _masks_with(tmp_path, "p10.0kpa.png", image)
     out = tmp_path / "out"
@@ -181,11 +183,14 @@ def test_documented_mask_forms_are_still_accepted(tmp_path: Path) -> None:
     red = np.zeros((*c.shape, 3), np.uint8)
     red[..., 2] = np.where(_contact("p15.0kpa.png"), 200, 0)
     cv2.imwrite(str(masks / "p15.0kpa.png"), red)
+    opaque = np.dstack([np.where(_contact("p20.0kpa.png"), 255, 0)] * 3 + [np.full(c.shape, 255)])
+    cv2.imwrite(str(masks / "p20.0kpa.png"), opaque.astype(np.uint8))  # BGRA, alpha uniform
     out = tmp_path / "out"
     assert _evaluate(out, masks, "--method", "classical") == 0
     areas = {f["file"]: f["label_area_px"] for f in _record(out)["frames"]}
     assert areas["p10.0kpa.jpg"] == int(c.sum())
     assert areas["p15.0kpa.jpg"] == int(_contact("p15.0kpa.png").sum())
+    assert areas["p20.0kpa.jpg"] == int(_contact("p20.0kpa.png").sum())
     assert areas["p00.0kpa.jpg"] == 0
 
 

@@ -192,7 +192,7 @@ def _ellipse_labels(path: Path, frames: list[Frame], manifest: Path) -> list[Lab
 
 
 def _read_mask(path: Path) -> np.ndarray:
-    """``(H, W)`` bool: any colour channel > 0 (alpha ignored).
+    """``(H, W)`` bool: any colour channel > 0 (alpha ignored, unless it alone holds a shape).
 
     Raises:
         LabelError: not a decodable image, or no pixel 0 (no background: an inverted mask, or a
@@ -205,8 +205,10 @@ def _read_mask(path: Path) -> np.ndarray:
             f"{path}: not a decodable PNG mask; expected 0 = background, > 0 = contact"
         )
     if img.ndim == 3:
-        img = img[..., : 3 if img.shape[2] >= 3 else 1]
-        mask = np.any(img > 0, axis=2)
+        colour = img[..., : 3 if img.shape[2] >= 3 else 1]
+        mask = np.any(colour > 0, axis=2)
+        _check_alpha(path, img, mask)
+        img = colour
     else:
         mask = img > 0
     if mask.all():
@@ -218,6 +220,26 @@ def _read_mask(path: Path) -> np.ndarray:
             "than 0?)"
         )
     return mask
+
+
+def _check_alpha(path: Path, img: np.ndarray, colour_mask: np.ndarray) -> None:
+    """Refuse a mask whose contact is drawn in its alpha channel only (colour all 0, alpha
+    not uniform): read by colour it would label every frame "no contact".
+
+    Args:
+        path: the mask file, for the message.
+        img: ``(H, W, C)`` the decoded mask, ``C`` 2 (grey + alpha) or 4 (BGRA) with alpha.
+        colour_mask: ``(H, W)`` bool, its colour channels > 0.
+    """
+    if img.shape[2] not in (2, 4) or colour_mask.any():
+        return
+    alpha = img[..., -1]
+    if alpha.min() != alpha.max():
+        raise LabelError(
+            f"{path}: every colour value is 0 and the shape is in the alpha channel only; "
+            "expected 0 = background, > 0 = contact in the colour (grey) values (flatten the "
+            "mask, or export it without transparency)"
+        )
 
 
 def label_mask(label: Label, frame_size: tuple[int, int]) -> LabelMask:
