@@ -126,9 +126,10 @@ def fit_monotone(
     Why a running median before PAVA: PAVA alone averages an outlier spike with the points
     after it, lifting those neighbours (and a false dip drags earlier points down). The
     median of three consecutive points is the identity on monotone data, so a genuine curve
-    is not biased, while an isolated spike or dip is replaced by a neighbour first (`despike`:
-    worst point first, so the spike's neighbours keep their values); PAVA then removes the
-    remaining small non-monotone noise in the least-squares sense.
+    is not biased (but for `despike`'s end rule on the last step), while an isolated spike or
+    dip is replaced by a neighbour first (`despike`: worst point first, so the spike's
+    neighbours keep their values); PAVA then removes the remaining small non-monotone noise in
+    the least-squares sense.
 
     Steps: sort by pressure; contact range by the `estimate_onset` rule; the contact frames in
     that range are despiked (``config.median_window``) and fitted with PAVA; misses inside the

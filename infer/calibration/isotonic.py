@@ -72,10 +72,11 @@ def _pava(y: np.ndarray, w: np.ndarray) -> np.ndarray:
 
 
 def despike(y: ArrayLike, window: int = 3) -> np.ndarray:
-    """Replace isolated outliers by a running median, worst point first; monotone data unchanged.
+    """Replace isolated outliers by a running median, worst point first; monotone data unchanged
+    but for the last value's end rule below.
 
-    The median of a monotone window is its middle value, so on monotone data every point
-    already equals its window median and nothing changes (no bias on a genuine curve). An
+    The median of a monotone window is its middle value, so on monotone data every interior
+    point already equals its window median and nothing changes (no bias on a genuine curve). An
     isolated spike or dip differs from its window median and is replaced by it. Points are
     fixed one at a time, the largest deviation first (interior points win ties), and the
     medians recomputed: a plain one-pass running median would also lift the right neighbour
@@ -85,7 +86,11 @@ def despike(y: ArrayLike, window: int = 3) -> np.ndarray:
     ``min(y0, median(y0, y1, 3 y1 - 2 y2))`` (a high first value is lowered to the trend, a
     low one is kept: it is the start of the curve); the last value's target is Tukey's
     ``median(y[-1], y[-2], 3 y[-2] - 2 y[-3])`` (a last value below the previous one, or more
-    than twice the previous step above it, is pulled back to the trend).
+    than twice the previous step above it, is pulled back to the trend). That end rule also
+    lowers a genuine last value of a monotone curve whose last step is more than twice the one
+    before (steps in samples, not kPa): on a plateau where steps are noise, e.g. +0.2 then
+    +0.6 mm² gives -0.2 mm², so an area measured at the top step can read as above the
+    calibrated maximum.
 
     Args:
         y: ``(N,)`` float values, ordered by the independent variable (e.g. pressure).
