@@ -76,6 +76,10 @@ def test_results_keys(bench: tuple[Path, Path, dict[str, Any]]) -> None:
     for r in res["records"]:
         assert r["true_contact"] == (r["true_area_px"] > 0)
         assert r["contact"] or r["area_px"] == 0.0
+        # an IoU for every frame with true contact, but for the soft area (no outline of its own)
+        has_iou = r["true_contact"] and not r["method"].endswith("(soft area)")
+        assert (r["iou"] is not None) == has_iou, r
+        assert r["iou"] is None or (0.0 <= r["iou"] <= 1.0 and (r["iou"] > 0) <= r["contact"])
     configs = [t["config"] for t in res["timing"]]
     assert configs[:3] == ["classical", "classical@0.25", "unet"]
     assert configs[-1] == "unet network only"

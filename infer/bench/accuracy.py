@@ -18,6 +18,7 @@ from contactcal.infer.bench.scoring import (
     SESSION_SUFFIX,
     SOFT_SUFFIX,
     ScoredFrame,
+    outline_iou,
     session_revised,
 )
 from contactcal.infer.calibration.fit import estimate_onset
@@ -43,6 +44,7 @@ def score_session(
     out: list[ScoredFrame] = []
     for r in rows:
         res = method.measure(load_image(r.frame, reduce=k))
+        truth = load_image(r.mask) > 0 if r.contact else None
         scored = ScoredFrame(
             method=name,
             session=r.session_key,
@@ -55,6 +57,7 @@ def score_session(
             onset_kpa=r.onset_kpa,
             hard=r.hard,
             area_interval_px=res.area_interval_px,
+            iou=None if truth is None else outline_iou(res, truth),
         )
         out.append(scored)
         if res.soft_area_px is not None or name.startswith("unet"):
@@ -82,14 +85,21 @@ def session_ruled(frames: Sequence[ScoredFrame]) -> list[ScoredFrame]:
     for f, revised in zip(frames, session_revised(frames), strict=True):
         if revised and f.area_interval_px is not None:
             iv = (0.0, f.area_interval_px[1])
-            f = replace(f, area_px=0.0, contact=False, area_interval_px=iv)
+            iou = None if f.iou is None else 0.0  # no region left to overlap the truth
+            f = replace(f, area_px=0.0, contact=False, area_interval_px=iv, iou=iou)
         out.append(replace(f, method=f.method + SESSION_SUFFIX))
     return out
 
 
 def _renamed(frame: ScoredFrame, method: str, area_px: float) -> ScoredFrame:
     return ScoredFrame(
-        **{**asdict(frame), "method": method, "area_px": area_px, "area_interval_px": None}
+        **{
+            **asdict(frame),
+            "method": method,
+            "area_px": area_px,
+            "area_interval_px": None,
+            "iou": None,  # an area without an outline of its own
+        }
     )
 
 
@@ -104,8 +114,11 @@ def evaluate(
     ``variants`` are further U-Net models ``(label, path)``, scored as method ``unet[label]``.
     """
     frames: list[ScoredFrame] = []
-    methods = [(name, make_method(name, model, threads=1)) for name in METHODS]
-    methods += [(variant_name(label), make_method("unet", path, 1)) for label, path in variants]
+    methods = [(name, make_method(name, model, threads=1, outline=True)) for name in METHODS]
+    methods += [
+        (variant_name(label), make_method("unet", path, 1, outline=True))
+        for label, path in variants
+    ]
     for name, method in methods:
         for rows in sessions.values():
             frames.extend(score_session(method, name, rows, use_reference))

@@ -29,6 +29,7 @@ BIN_COLUMNS: Columns = (
     ("mean_rel_error", "mean rel err", True),
     ("sd_rel_error", "sd", True),
     ("median_abs_error_mm2", "median abs. error mm²", False),
+    ("median_iou", "median IoU", False),
     ("contact_recall", "contact recall", True),
     ("no_contact_accuracy", "no-contact acc.", True),
 )
@@ -243,7 +244,8 @@ def report_text(results: Mapping[str, Any]) -> str:
         f"Data: `{results['data']}` — {results['sessions']} sessions, {results['frames']} frames.\n"
         f"Model: `{results['model']}`. Reference frame: {results['reference']}."
         " Areas are compared in input pixels with the exact masks; "
-        "relative\nerrors over frames with true contact. Timing: median of "
+        "relative\nerrors and the IoU of the method's outline with the mask over frames with true "
+        "contact. Timing: median of "
         f"{cfg['repeats']} runs over\n{cfg['timing_frames']} frames upscaled to {w}×{h}, "
         "in one process. Rows `(soft area)`: the same prediction measured by its probability\n"
         "mass; rows `(session rule)`: the same frames after `calibrate`'s session rule (a region "

@@ -11,9 +11,11 @@ import statistics
 from collections.abc import Sequence
 from dataclasses import dataclass
 
+import cv2
 import numpy as np
 
 from contactcal.infer.calibration.rings import frame_revisions
+from contactcal.infer.methods.base import AreaResult
 
 #: Pressure bins of every table, kPa, ``[lo, hi)``; the last bin includes 20 kPa.
 PRESSURE_BINS: tuple[tuple[float, float], ...] = (
@@ -108,6 +110,27 @@ def median_or_none(values: Sequence[float]) -> float | None:
 
 def _fraction(flags: Sequence[bool]) -> float | None:
     return sum(flags) / len(flags) if flags else None
+
+
+def outline_iou(result: AreaResult, truth: np.ndarray) -> float | None:
+    """IoU of the method's outline (filled) with a truth mask that has contact (a hand label
+    in ``evaluate``, a render's exact mask in ``bench``).
+
+    Args:
+        result: the method's outcome; ``contour`` in input pixels (None without contact).
+        truth: ``(H, W)`` bool label mask, not empty.
+
+    Returns:
+        The IoU in [0, 1]; None when the method reports contact without an outline.
+    """
+    pred = np.zeros(truth.shape, dtype=np.uint8)
+    if result.contact:
+        if result.contour is None:
+            return None
+        cv2.drawContours(pred, [result.contour.astype(np.int32)], -1, 1, thickness=-1)
+    inter = np.logical_and(pred > 0, truth).sum()
+    union = np.logical_or(pred > 0, truth).sum()
+    return float(inter / union)
 
 
 def bin_row(frames: Sequence[ScoredFrame]) -> dict[str, float | int | None]:

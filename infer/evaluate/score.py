@@ -12,36 +12,12 @@ from collections.abc import Sequence
 from pathlib import Path
 from typing import Any
 
-import cv2
-import numpy as np
-
-from contactcal.infer.bench.scoring import ScoredFrame, session_revised
+from contactcal.infer.bench.scoring import ScoredFrame, outline_iou, session_revised
 from contactcal.infer.calibration.fit import estimate_onset
 from contactcal.infer.calibration.steps import pool
 from contactcal.infer.evaluate.labels import LabelMask
-from contactcal.infer.methods.base import AreaResult
 from contactcal.infer.pipeline.measure import Measured
 from contactcal.infer.pipeline.scale import PixelScale
-
-
-def iou(result: AreaResult, truth: np.ndarray) -> float | None:
-    """IoU of the method's outline (filled) with a label mask that has contact.
-
-    Args:
-        result: the method's outcome; ``contour`` in input pixels (None without contact).
-        truth: ``(H, W)`` bool label mask, not empty.
-
-    Returns:
-        The IoU in [0, 1]; None when the method reports contact without an outline.
-    """
-    pred = np.zeros(truth.shape, dtype=np.uint8)
-    if result.contact:
-        if result.contour is None:
-            return None
-        cv2.drawContours(pred, [result.contour.astype(np.int32)], -1, 1, thickness=-1)
-    inter = np.logical_and(pred > 0, truth).sum()
-    union = np.logical_or(pred > 0, truth).sum()
-    return float(inter / union)
 
 
 def score_frames(
@@ -72,7 +48,7 @@ def score_frames(
                     true_area_px=float(lab.area_px),
                     area_px=float(m.result.area_px),
                     contact=bool(m.result.contact),
-                    iou=iou(m.result, lab.mask) if lab.area_px > 0 else None,
+                    iou=outline_iou(m.result, lab.mask) if lab.area_px > 0 else None,
                     area_interval_px=m.result.area_interval_px,
                     mm_per_px=None if scale is None else scale.at_width(m.width),
                 )
