@@ -25,6 +25,7 @@ from contactcal.infer.files.interrupt import Terminated, stop_signals_interrupt
 from contactcal.infer.files.stdout import named_stdout
 from contactcal.infer.image.cv_threads import opencv_threads
 from contactcal.infer.pipeline import commands as pipeline_commands
+from contactcal.infer.pipeline.args import check_cpu_count
 
 #: Entry-point group through which other roles add subcommands (see pyproject.toml).
 COMMAND_GROUP = "contactcal.commands"
@@ -98,8 +99,10 @@ def main(argv: Sequence[str] | None = None) -> int:
     parser = build_parser(argv[0] if argv else None)
     args = parser.parse_args(argv)
     args.argv = argv  # recorded in calibration.json
-    if getattr(args, "threads", 1) < 1:  # one line, as every other bad input
-        print(f"contactcal: error: --threads {args.threads}: expected >= 1", file=sys.stderr)
+    try:  # one line, as every other bad input, before any thread is started
+        check_cpu_count("--threads", getattr(args, "threads", 1))
+    except ValueError as exc:
+        print(f"contactcal: error: {exc}", file=sys.stderr)
         return 2
     try:
         threads = getattr(args, "threads", None)  # measure, calibrate (not train: torch_threads)

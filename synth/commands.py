@@ -6,6 +6,7 @@ import argparse
 from pathlib import Path
 
 from contactcal.infer.errors import require_extra
+from contactcal.infer.pipeline.args import check_cpu_count
 
 
 def add_parsers(sub: argparse._SubParsersAction) -> None:
@@ -58,8 +59,7 @@ def _cmd_synth(args: argparse.Namespace) -> int:
     from contactcal.synth.layout import parse_pressures, parse_size
     from contactcal.synth.session import RenderConfig
 
-    if args.workers < 1:
-        raise ValueError(f"--workers must be >= 1, got {args.workers}")
+    check_cpu_count("--workers", args.workers)
     width, height = parse_size(args.size)
     config = DatasetConfig(
         fingers=args.fingers,
@@ -114,8 +114,9 @@ def _cmd_fidelity(args: argparse.Namespace) -> int:
     from contactcal.synth.layout import parse_pressures, parse_size
     from contactcal.synth.session import RenderConfig
 
-    if args.sessions < 1 or args.workers < 1:
-        raise ValueError("--sessions and --workers must be >= 1")
+    if args.sessions < 1:
+        raise ValueError(f"--sessions must be >= 1, got {args.sessions}")
+    check_cpu_count("--workers", args.workers)
     width, height = parse_size(args.size)
     config = FidelityConfig(
         sessions=args.sessions,

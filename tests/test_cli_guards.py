@@ -266,7 +266,12 @@ def test_unet_options_without_a_unet_and_zero_threads_are_one_line(
     assert main(argv) == 2
     assert "--model applies to the U-Net only" in _one_error(capsys)
     assert main(["calibrate", MANIFEST, "--threads", "0", "--out", str(out)]) == 2
-    assert _one_error(capsys) == "contactcal: error: --threads 0: expected >= 1"
+    n = os.cpu_count() or 1
+    want = f"expected 1-{n} (this machine has {n} CPUs)"
+    assert _one_error(capsys) == f"contactcal: error: --threads 0: {want}"
+    # a slip of the finger started 100000 OpenCV threads (16 GB) before: refused first
+    assert main(["calibrate", MANIFEST, "--threads", "100000", "--out", str(out)]) == 2
+    assert _one_error(capsys) == f"contactcal: error: --threads 100000: {want}"
     assert not out.exists()
 
 

@@ -12,6 +12,7 @@ from pathlib import Path
 from typing import Any
 
 from contactcal.infer.errors import require_extra
+from contactcal.infer.pipeline.args import check_cpu_count
 
 
 def add_parsers(sub: Any) -> None:
@@ -138,6 +139,8 @@ def build_config(args: argparse.Namespace) -> Any:
         "ema_decay": args.ema_decay,
         "num_threads": args.torch_threads,
     }
+    if args.torch_threads is not None:
+        check_cpu_count("--threads", args.torch_threads, lowest=0)
     cfg = dataclasses.replace(base, **{k: v for k, v in given.items() if v is not None})
     gain = None if args.contact_gain is None else tuple(args.contact_gain)
     cfg = _with_augment(cfg, "ridgeless", p=args.ridgeless, flatten=args.ridgeless_flatten)

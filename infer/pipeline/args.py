@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import argparse
+import os
 from pathlib import Path
 from typing import TYPE_CHECKING
 
@@ -13,6 +14,28 @@ if TYPE_CHECKING:
     from contactcal.infer.pipeline.measure import Measured
     from contactcal.infer.pipeline.options import MeasureOptions
     from contactcal.infer.pipeline.scale import PixelScale
+
+
+def check_cpu_count(option: str, value: int, lowest: int = 1) -> None:
+    """Refuse a thread or worker count outside ``lowest`` … this machine's CPU count.
+
+    More threads than cores gains nothing and a slip costs the machine: ``--threads 100000``
+    started that many OpenCV threads (16 GB of memory, a load of 600) before it was refused.
+
+    Args:
+        option: the option's name, for the message (e.g. ``"--threads"``).
+        value: the count given.
+        lowest: the smallest valid value (0 where 0 means a library's default).
+
+    Raises:
+        ValueError: ``"<option> <value>: expected <lowest>-<CPUs> (this machine has <CPUs>
+            CPUs)"``.
+    """
+    most = os.cpu_count() or 1
+    if not lowest <= value <= most:
+        raise ValueError(
+            f"{option} {value}: expected {lowest}-{most} (this machine has {most} CPUs)"
+        )
 
 
 def scale_args(p: argparse.ArgumentParser) -> None:
