@@ -124,6 +124,37 @@ def test_in_place_normalisation_equals_the_plain_expression(rng: np.random.Gener
     assert got.dtype == np.float32 and np.array_equal(got, expected)
 
 
+def _contrast(img: np.ndarray, c: float) -> np.ndarray:
+    """The robustness suite's contrast about mid grey, ``128 + c·(g − 128)``, clipped."""
+    return np.clip(np.rint(128.0 + c * (img.astype(np.float64) - 128.0)), 0, 255).astype(np.uint8)
+
+
+def test_dark_floor_makes_the_input_contrast_invariant(rng: np.random.Generator) -> None:
+    """With ``norm_floor_percentile`` the frame channel and the ridge channel of a frame at
+    contrast 0.75 are those of the frame (up to the grey levels' rounding); without, they are
+    not. Bit for bit it is ``unit_to_network(clip((crop - F) / (P - F), 0, 1))``."""
+    img = _frame(rng, noise_sd=0.0)
+    floored = PreprocessConfig(input_size=96, norm_floor_percentile=1.0, ridge_work_px=144)
+    plain = PreprocessConfig(input_size=96, ridge_work_px=144)
+    diffs = {}
+    for name, cfg in (("floor", floored), ("plain", plain)):
+        a = prepare(img, session_reference(img, cfg), cfg, 3).x
+        low = _contrast(img, 0.75)
+        b = prepare(low, session_reference(low, cfg), cfg, 3).x
+        # frame channel: median |difference|; ridge channel: its total energy's ratio
+        diffs[name] = (float(np.median(np.abs(a[0] - b[0]))), float(b[2].sum() / a[2].sum()))
+    assert diffs["floor"][0] < 1e-3 and diffs["plain"][0] > 0.3, diffs
+    assert abs(diffs["floor"][1] - 1.0) < 0.02 and diffs["plain"][1] < 0.9, diffs
+    box = crop_box(locate_ring(img, floored), img.shape, floored)
+    crop = crop_resize(img, box, floored.input_size)
+    inside = crop[valid_window(box, img.shape, floored.input_size)]
+    f, p = (float(v) for v in np.percentile(inside, [1.0, floored.norm_percentile]))
+    expected = unit_to_network(np.clip((crop - f) / (p - f), 0.0, 1.0), floored)
+    np.testing.assert_allclose(to_network(img, box, floored), expected, atol=1e-6)
+    with pytest.raises(ValueError, match="norm_floor_percentile"):
+        PreprocessConfig(norm_floor_percentile=99.5)
+
+
 def test_sigmoid_equals_the_plain_expression(rng: np.random.Generator) -> None:
     logits = rng.normal(0.0, 20.0, (64, 64)).astype(np.float32)
     before = logits.copy()
@@ -165,3 +196,25 @@ def test_ring_radius_is_bounded() -> None:
     img = np.where(np.abs(r - 5000.0) < 6, 220, 20).astype(np.uint8)
     ring = locate_ring(img)
     assert not ring.found and ring.radius <= max(h, w)
+
+
+def test_metadata_without_the_floor_reads_as_none_and_with_it_round_trips() -> None:
+    """The shipped model predates ``norm_floor_percentile``: read as 0 (what it was deployed
+    with); a restated value reads back; an unknown preprocess key is still an error."""
+    import dataclasses
+    import json
+
+    from contactcal.infer.methods.unet.runner import OnnxSegmenter
+    from contactcal.infer.methods.unet.spec import ModelError, read_spec
+
+    meta = dict(OnnxSegmenter().metadata)
+    assert "norm_floor_percentile" not in json.loads(meta["preprocess"])
+    spec = read_spec(meta, "m.onnx")
+    assert spec.preprocess.norm_floor_percentile == 0.0
+    floored = dataclasses.replace(
+        spec, preprocess=dataclasses.replace(spec.preprocess, norm_floor_percentile=1.0)
+    )
+    assert read_spec({**meta, **floored.to_metadata()}, "m.onnx") == floored
+    extra = {**json.loads(meta["preprocess"]), "norm_floor": 1.0}
+    with pytest.raises(ModelError, match="unknown key"):
+        read_spec({**meta, "preprocess": json.dumps(extra)}, "m.onnx")

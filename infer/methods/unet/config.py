@@ -16,6 +16,10 @@ class PreprocessConfig:
     #   the margin keeps the whole ring (context + scale cue) in view; larger wastes resolution
     norm_percentile: float = 99.5  # %, brightness reference P; lower is less sparkle-sensitive
     #   but saturates larger bright areas (big contacts)
+    norm_floor_percentile: float = 0.0  # %, dark level F subtracted first: u = (g - F)/(P - F);
+    #   0 = none (F = 0, every model before it existed). A floor makes the input invariant to a
+    #   camera's black level and contrast setting, but moves every frame whose surround is not
+    #   black; a higher percentile is steadier against noise and tracks a brighter surround
     norm_mean: float = 0.25  # fixed offset after dividing by P (typical mean of u); no effect
     #   on the optimum, only on conditioning
     norm_std: float = 0.25  # fixed scale after dividing by P (typical spread of u); idem
@@ -64,6 +68,11 @@ class PreprocessConfig:
         for name in ("norm_percentile", "ring_percentile"):
             if not 0.0 < getattr(self, name) <= 100.0:
                 raise ValueError(f"{name} must be in (0, 100], got {getattr(self, name)}")
+        if not 0.0 <= self.norm_floor_percentile < self.norm_percentile:
+            raise ValueError(
+                "norm_floor_percentile must be in [0, norm_percentile "
+                f"({self.norm_percentile})), got {self.norm_floor_percentile}"
+            )
         if not self.norm_std > 0.0:
             raise ValueError(f"norm_std must be > 0, got {self.norm_std}")
         if not 0.0 < self.ring_threshold_fraction < 1.0:

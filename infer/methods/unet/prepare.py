@@ -12,8 +12,10 @@ mapping ``cv2.resize`` uses).
 
 Normalisation: ``u = clip(crop / P, 0, 1)`` with ``P`` the ``norm_percentile``-th percentile of
 the crop's in-image pixels (exposure/gain invariance: the brightest structure, the outer ring,
-is in every crop), then ``x = (u - norm_mean) / norm_std`` with FIXED constants (not the
-image's own mean/std, which would depend on the contact size, i.e. on the signal).
+is in every crop); with ``norm_floor_percentile`` > 0, ``u = clip((crop - F) / (P - F), 0, 1)``,
+``F`` that lower percentile (black level and contrast invariance too); then
+``x = (u - norm_mean) / norm_std`` with FIXED constants (not the image's own mean/std, which
+would depend on the contact size, i.e. on the signal).
 """
 
 from __future__ import annotations
@@ -166,19 +168,28 @@ def to_network(
 def _to_network(
     gray: np.ndarray, box: CropBox, config: PreprocessConfig
 ) -> tuple[np.ndarray, float]:
-    """:func:`to_network` of a ``(H, W) uint8`` frame, and the bright level P it divided by."""
+    """:func:`to_network` of a ``(H, W) uint8`` frame, and the span ``P - F`` it divided by
+    (bright level less dark level; ``F`` is 0 without ``config.norm_floor_percentile``)."""
     s = config.input_size
     crop = crop_resize(gray, box, s)
     inside = crop[valid_window(box, gray.shape, s)]
+    floor, level = 0.0, 1.0
     # No network pixel inside the image: nothing to normalise to; postprocess then reports no
     # contact (it ignores every network pixel outside the image), so the scale is immaterial.
-    level = max(percentiles(inside, (config.norm_percentile,))[0] if inside.size else 1.0, 1.0)
-    # unit_to_network(clip(crop / level, 0, 1)) in place on the crop (a new float32 array).
-    np.divide(crop, level, out=crop)
+    if inside.size and config.norm_floor_percentile > 0.0:
+        qs = (config.norm_floor_percentile, config.norm_percentile)
+        floor, level = (float(v) for v in percentiles(inside, qs))
+    elif inside.size:
+        level = float(percentiles(inside, (config.norm_percentile,))[0])
+    span = max(level - floor, 1.0)
+    # unit_to_network(clip((crop - F) / span, 0, 1)) in place on the crop (a new float32 array).
+    if floor > 0.0:
+        crop -= floor
+    np.divide(crop, span, out=crop)
     np.clip(crop, 0.0, 1.0, out=crop)
     crop -= config.norm_mean
     crop /= config.norm_std
-    return crop, level
+    return crop, span
 
 
 def from_network(prob: np.ndarray, box: CropBox, out_shape: tuple[int, ...]) -> np.ndarray:
@@ -284,7 +295,7 @@ def prepare(
         own = locate_ring(gray, config)
         ring = own if own.found or ring is None else ring
         box = crop_box(ring, gray.shape, config)
-    x, level = _to_network(gray, box, config)
+    x, span = _to_network(gray, box, config)
     chans = [x]
     ridge = config.ridge_work_px > 0
     if channels - ridge not in (1, 2):
@@ -300,7 +311,7 @@ def prepare(
         chans.append(ref_x)
     if ridge:
         work = crop_resize(gray, box, config.ridge_work_px)
-        chans.append(ridge_energy(work, config, level))
+        chans.append(ridge_energy(work, config, span))
     return Prepared(np.stack(chans), box, ring)
 
 

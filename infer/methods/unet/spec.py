@@ -163,8 +163,16 @@ def _fields(key: str, text: str, cls: type) -> dict[str, Any]:
     return values
 
 
+#: Preprocessing fields a model exported before they existed lacks, with the value it was
+#: deployed with (its metadata's ``preprocess`` may omit exactly these).
+LEGACY_PREPROCESS: dict[str, Any] = {"norm_floor_percentile": 0.0}
+
+
 def _preprocess(text: str) -> PreprocessConfig:
-    return PreprocessConfig(**_fields("preprocess", text, PreprocessConfig))
+    values = json.loads(text)
+    if isinstance(values, dict):
+        values = {**{k: v for k, v in LEGACY_PREPROCESS.items() if k not in values}, **values}
+    return PreprocessConfig(**_fields("preprocess", json.dumps(values), PreprocessConfig))
 
 
 def _interval(text: str) -> IntervalSpec:
