@@ -1,0 +1,31 @@
+"""``python -m contactcal.train.floor``: a model's dark floor restated, weights untouched."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import pytest
+
+from contactcal.infer.methods.unet.runner import DEFAULT_MODEL, OnnxSegmenter
+
+
+def test_floor_is_restated_and_read_back(tmp_path: Path) -> None:
+    onnx = pytest.importorskip("onnx")
+    from contactcal.train.floor import floor_model, main
+
+    out = tmp_path / "f1.onnx"
+    assert floor_model(DEFAULT_MODEL, 1.0, out) == {"norm_floor_percentile": 1.0, "before": 0.0}
+    seg = OnnxSegmenter(out)
+    assert seg.spec.preprocess.norm_floor_percentile == 1.0
+    base = OnnxSegmenter().spec
+    assert seg.spec.preprocess.input_size == base.preprocess.input_size
+    assert seg.spec.min_change == base.min_change and seg.spec.interval == base.interval
+    weights = [
+        {i.name: i.raw_data for i in onnx.load(str(p)).graph.initializer}
+        for p in (DEFAULT_MODEL, out)
+    ]
+    assert weights[0] == weights[1]
+    with pytest.raises(ValueError, match="must not be the input"):
+        floor_model(out, 5.0, out)
+    assert main([str(DEFAULT_MODEL), "--percentile", "99.5", "--out", str(tmp_path / "x.onnx")])
+    assert not (tmp_path / "x.onnx").exists()
