@@ -227,3 +227,16 @@ def test_window_bound_and_its_absence(tmp_path: Path) -> None:
     check_label_area(label, LabelMask(big.mask, 36_000, None), (400, 300), Window(blank, 100.0))
     with pytest.raises(LabelError, match="labels all 400×300 px"):
         check_label_area(label, LabelMask(big.mask, 120_000, None), (400, 300), None)
+
+
+def test_the_rig_config_is_never_overwritten(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """A --rig named like evaluate's own output in --out: refused, kept byte for byte."""
+    out = tmp_path / "out"
+    out.mkdir()
+    rig = out / "evaluation.json"
+    rig.write_text('{"mm_per_px": 0.1, "image_width_px": 400}', encoding="utf-8")
+    before = rig.read_bytes()
+    assert _evaluate(out, MASKS, "--method", "classical", "--rig", str(rig)) == 2
+    assert "is an input of this run" in _one_line(capsys) and rig.read_bytes() == before

@@ -328,3 +328,5 @@ def test_missing_camera_is_one_line(capfd: pytest.CaptureFixture[str]) -> None:
     err = capfd.readouterr().err
     assert "WARN" not in err and "[ERROR" not in err  # OpenCV's backend messages held back
     assert cv2.utils.logging.getLogLevel() == level
+    with pytest.raises(ValueError, match=r"--camera -1: expected a camera index >= 0"):
+        open_camera(-1)  # OpenCV's "any camera": a segmentation fault with OpenCV 5.0

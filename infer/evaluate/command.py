@@ -11,6 +11,7 @@ from contactcal.infer.pipeline.args import (
     check_change_gate,
     check_out_folder,
     measure_options,
+    rig_file,
     scale_args,
 )
 
@@ -54,7 +55,10 @@ def _cmd_evaluate(args: argparse.Namespace) -> int:
     check_change_gate(args)
     check_out_folder(args.out, "evaluate")
     measure = measure_options(args, args.manifest.parent / "rig.json")
-    rep = evaluate_session(args.manifest, args.labels, args.out, args.method, measure)
+    rig = rig_file(args, args.manifest.parent / "rig.json")
+    rep = evaluate_session(
+        args.manifest, args.labels, args.out, args.method, measure, also_read=[rig] if rig else []
+    )
     print(rep.table)
     print(f"evaluation: {rep.files['json']}, {rep.files['png']}")
     return 0

@@ -8,6 +8,7 @@ frame (``inputs``), by which ``contactcal boundary-offset`` pools each session o
 from __future__ import annotations
 
 import os
+from collections.abc import Sequence
 from dataclasses import dataclass, replace
 from pathlib import Path
 from typing import Any
@@ -144,6 +145,7 @@ def evaluate_session(
     method: str = METHODS[0],
     measure: MeasureOptions | None = None,
     outputs: OutputSet | None = None,
+    also_read: Sequence[Path] = (),
 ) -> Evaluation:
     """Score ``method`` on the frames of ``manifest`` labelled in ``labels``.
 
@@ -164,6 +166,7 @@ def evaluate_session(
         measure: how the frames are measured (model, scale: the boundary offset in mm, the
             rig's offset, bit depth, change gate); None: the defaults (pixels only).
         outputs: the enclosing run's outputs to stage into (None: this call is the run).
+        also_read: further files the run reads (the rig config): no output may replace them.
 
     Returns:
         The :class:`Evaluation`.
@@ -182,7 +185,8 @@ def evaluate_session(
     base = manifest.resolve().parent
     labs = read_labels(labels, frames, manifest)
     labelled, labs, unlabelled = _labelled(frames, labs, labels, base)
-    protect = [manifest, measure.model, *(f.file for f in frames), *{lab.source for lab in labs}]
+    protect = [manifest, measure.model, *also_read, *(f.file for f in frames)]
+    protect += list({lab.source for lab in labs})
     with run_outputs(protect, join=outputs) as outs:
         paths = {"png": out / "evaluation.png", "json": out / "evaluation.json"}
         staged = {k: outs.stage(p) for k, p in paths.items()}  # refused here, before work

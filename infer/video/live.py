@@ -38,8 +38,11 @@ def open_camera(index: int) -> cv2.VideoCapture:
     one line below instead.
 
     Raises:
-        ValueError: the camera cannot be opened.
+        ValueError: a negative index (OpenCV's "any camera", which crashed the process with
+            OpenCV 5.0), or the camera cannot be opened.
     """
+    if index < 0:
+        raise ValueError(f"--camera {index}: expected a camera index >= 0 (0 is the first camera)")
     level = cv2.utils.logging.getLogLevel()
     cv2.utils.logging.setLogLevel(cv2.utils.logging.LOG_LEVEL_SILENT)
     try:
