@@ -295,3 +295,35 @@ def test_a_failing_standard_output_is_named(
     line = _one_error(capsys)
     assert "writing to standard output failed (No space left on device)" in line
     assert "[Errno" not in line
+
+
+def test_a_linked_manifest_reads_the_rig_json_of_its_frames(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """Frames are found beside the manifest file a link points to; so is its rig.json (not a
+    rig.json beside the link). Without any scale, the run says its areas are in px, and
+    load_curve refuses to take them as mm²."""
+    from contactcal.infer.calibration.load import load_curve
+
+    linked = tmp_path / "elsewhere"
+    linked.mkdir()
+    (linked / "rig.json").write_text('{"mm_per_px": 0.05, "image_width_px": 400}')
+    (linked / "manifest.csv").symlink_to(EXAMPLE / "manifest.csv")
+    direct, via_link = tmp_path / "direct", tmp_path / "link"
+    assert main(["calibrate", MANIFEST, "--method", "classical", "--out", str(direct)]) == 0
+    argv = ["calibrate", str(linked / "manifest.csv"), "--method", "classical"]
+    assert main([*argv, "--out", str(via_link)]) == 0
+    assert "no pixel scale" not in capsys.readouterr().out
+    a, b = (json.loads((d / "calibration.json").read_text()) for d in (direct, via_link))
+    assert b["area_unit"] == "mm²" and a["steps"] == b["steps"]
+    bare = tmp_path / "bare"
+    bare.mkdir()
+    frames = [f"{EXAMPLE / n},{p}" for n, p in (("p00.0kpa.jpg", 0), ("p10.0kpa.jpg", 10))]
+    frames += [f"{EXAMPLE / f'p{k:04.1f}kpa.jpg'},{k}" for k in (4, 6, 8, 12, 16, 20)]
+    (bare / "m.csv").write_text("file,pressure_kpa\n" + "\n".join(frames) + "\n")
+    out = tmp_path / "px"
+    assert main(["calibrate", str(bare / "m.csv"), "--method", "classical", "--out", str(out)]) == 0
+    assert "note: no pixel scale" in capsys.readouterr().out
+    assert load_curve(out / "calibration.json", area_unit="px").area_unit == "px"
+    with pytest.raises(ValueError, match="its areas are in px, expected mm²"):
+        load_curve(out / "calibration.json", area_unit="mm²")

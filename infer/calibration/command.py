@@ -8,6 +8,7 @@ from pathlib import Path
 from typing import TYPE_CHECKING
 
 from contactcal.infer.pipeline.args import (
+    NO_SCALE_NOTE,
     check_change_gate,
     check_out_folder,
     measure_options,
@@ -58,6 +59,7 @@ def _cmd_calibrate(args: argparse.Namespace) -> int:
     from contactcal.infer.calibration.calibrate import calibrate_session
     from contactcal.infer.calibration.provenance import Provenance
     from contactcal.infer.files.atomic import run_outputs
+    from contactcal.infer.pipeline.manifest import beside_manifest
     from contactcal.infer.pipeline.overlay import earlier_overlays_note, write_overlays
     from contactcal.infer.video.args import is_video_run
     from contactcal.infer.video.command import calibrate_video
@@ -67,7 +69,7 @@ def _cmd_calibrate(args: argparse.Namespace) -> int:
     check_out_folder(args.out, "calibrate")
     if is_video_run(args):  # --video / --camera: contactcal.infer.video.command
         return calibrate_video(args, measure_options(args), provenance)
-    measure = measure_options(args, args.manifest.parent / "rig.json")
+    measure = measure_options(args, beside_manifest(args.manifest))
     written: list[Path] = []
     with run_outputs(run_inputs(args)) as outs:
         rep = calibrate_session(
@@ -87,6 +89,8 @@ def _cmd_calibrate(args: argparse.Namespace) -> int:
                 runs, args.overlay, titles, outputs=outs, bit_depth=args.bit_depth
             )
     print(rep.table)
+    if measure.scale is None:
+        print(NO_SCALE_NOTE)
     note = earlier_overlays_note(written)
     if note is not None:
         print(note)

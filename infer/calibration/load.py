@@ -65,7 +65,10 @@ class UnresolvedCurveError(ValueError):
 
 
 def load_curve(
-    path: str | os.PathLike[str], phase: str | None = None, allow_unresolved: bool = False
+    path: str | os.PathLike[str],
+    phase: str | None = None,
+    allow_unresolved: bool = False,
+    area_unit: str | None = None,
 ) -> Curve:
     """Read a fitted `Curve` back from a ``calibration.json`` (for the controller).
 
@@ -78,11 +81,28 @@ def load_curve(
         allow_unresolved: read a curve the record says does not resolve pressures (its rise
             over the contact steps no larger than its cross-validated error; ``calibrate``
             warned); by default that is an error, not a silently flat curve.
+        area_unit: the unit the caller's areas are in (``"mm²"`` or ``"px"``): a record in
+            another unit is refused (a session calibrated without a pixel scale holds px, and
+            an area in mm² looked up in it would be wrong by the scale squared, silently).
+            None: not checked (``Curve.area_unit`` says which).
 
     Raises:
         UnresolvedCurveError: the curve does not resolve pressures (and not allowed).
-        ValueError: unreadable file, not a contactcal calibration, or no such phase.
+        ValueError: unreadable file, not a contactcal calibration, no such phase, or another
+            unit than ``area_unit``.
     """
+    curve = _read_curve(path, phase, allow_unresolved)
+    if area_unit is not None and curve.area_unit != area_unit:
+        raise ValueError(
+            f"{path}: its areas are in {curve.area_unit}, expected {area_unit} (a session "
+            "calibrated without a pixel scale is in px: put a rig.json beside its manifest, or "
+            "give --mm-per-px or --rig, and calibrate it again)"
+        )
+    return curve
+
+
+def _read_curve(path: str | os.PathLike[str], phase: str | None, allow_unresolved: bool) -> Curve:
+    """:func:`load_curve` without the unit check."""
     try:
         data = json.loads(Path(path).read_text(encoding="utf-8"))
         if data.get("format") != FORMAT:

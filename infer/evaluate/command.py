@@ -51,11 +51,12 @@ def add_parsers(sub: argparse._SubParsersAction) -> None:
 
 def _cmd_evaluate(args: argparse.Namespace) -> int:
     from contactcal.infer.evaluate.run import evaluate_session
+    from contactcal.infer.pipeline.manifest import beside_manifest
 
     check_change_gate(args)
     check_out_folder(args.out, "evaluate")
-    measure = measure_options(args, args.manifest.parent / "rig.json")
-    rig = rig_file(args, args.manifest.parent / "rig.json")
+    measure = measure_options(args, beside_manifest(args.manifest))
+    rig = rig_file(args, beside_manifest(args.manifest))
     rep = evaluate_session(
         args.manifest, args.labels, args.out, args.method, measure, also_read=[rig] if rig else []
     )

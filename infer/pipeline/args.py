@@ -146,6 +146,13 @@ def resolve_rig(
     return (None if data is None else rig_scale(data, rig)), boundary
 
 
+#: The line a run without a pixel scale prints (its areas, curve and inverse are in px).
+NO_SCALE_NOTE = (
+    "note: no pixel scale (no rig.json beside the manifest, no --mm-per-px or --rig): areas are "
+    'in px; a controller must look px up in this curve (load_curve(..., area_unit="px"))'
+)
+
+
 def check_out_folder(out: Path, command: str) -> None:
     """Refuse ``--out -`` for a command whose outputs are a folder of files.
 

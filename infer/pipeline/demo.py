@@ -17,6 +17,7 @@ from contactcal.infer.image.write import write_image
 from contactcal.infer.methods.registry import METHODS
 from contactcal.infer.pipeline.boundary import rig_boundary
 from contactcal.infer.pipeline.examples import example_manifest
+from contactcal.infer.pipeline.manifest import beside_manifest
 from contactcal.infer.pipeline.options import MeasureOptions
 from contactcal.infer.pipeline.overlay import draw_overlay, montage
 from contactcal.infer.pipeline.scale import read_rig_json, rig_scale
@@ -45,7 +46,7 @@ def run_demo(
     """
     out = Path(out_dir)
     manifest = Path(manifest) if manifest is not None else example_manifest()
-    rig = manifest.parent / "rig.json"
+    rig = beside_manifest(manifest)
     measure = MeasureOptions(outline=True)
     if rig.is_file():  # as `calibrate` reads the rig.json beside a manifest (once)
         data = read_rig_json(rig)

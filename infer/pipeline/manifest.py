@@ -84,6 +84,13 @@ class Session:
     phase_source: str  # phases.FROM_COLUMN, FROM_ORDER or SINGLE_PASS
 
 
+def beside_manifest(path: str | os.PathLike[str], name: str = "rig.json") -> Path:
+    """The file ``name`` in the folder the manifest's frame paths are resolved against: the
+    manifest file's own folder, a link's target's (so a linked manifest finds the ``rig.json``
+    of its frames, not of the link's folder)."""
+    return Path(path).resolve().parent / name
+
+
 def read_manifest(path: str | os.PathLike[str]) -> list[Frame]:
     """The frames of a session manifest (see `read_session`); ``frames[0]`` is the reference."""
     return read_session(path).frames

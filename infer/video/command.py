@@ -113,6 +113,7 @@ def calibrate_video(
     from contactcal.infer.calibration.calibrate import calibrate_session
     from contactcal.infer.calibration.command import session_options
     from contactcal.infer.files.atomic import run_outputs, write_synced
+    from contactcal.infer.pipeline.args import NO_SCALE_NOTE
     from contactcal.infer.video import extract, live
 
     cfg = StepConfig(args.tolerance_kpa, args.settle_s)
@@ -150,5 +151,7 @@ def calibrate_video(
             manifest_as=final_manifest,
         )
     print(rep.table)
+    if measure.scale is None:
+        print(NO_SCALE_NOTE)
     print(ex.summary())
     return 0
