@@ -236,7 +236,11 @@ def test_calibration_records_provenance(tmp_path: Path) -> None:
     assert cfg["spec"]["channels"] == int(meta["channels"]) and cfg["spec"]["threshold"] == float(
         meta["threshold"]
     )
-    assert cfg["spec"]["preprocess"] == json.loads(meta["preprocess"])
+    # the record states the resolved config: the metadata, plus the fields the model predates
+    # with the values it runs with
+    from contactcal.infer.methods.unet.spec import LEGACY_PREPROCESS
+
+    assert cfg["spec"]["preprocess"] == {**LEGACY_PREPROCESS, **json.loads(meta["preprocess"])}
     assert cfg["spec"]["min_contact_area_px"] == float(meta["min_contact_area_px"])
     assert cfg["spec"]["region"] == meta.get("region", "largest")
     digests = {f["file"]: f["sha256"] for f in rec["inputs"]["frames"]}
