@@ -327,3 +327,25 @@ def test_a_linked_manifest_reads_the_rig_json_of_its_frames(
     assert load_curve(out / "calibration.json", area_unit="px").area_unit == "px"
     with pytest.raises(ValueError, match="its areas are in px, expected mm²"):
         load_curve(out / "calibration.json", area_unit="mm²")
+
+
+@pytest.mark.parametrize("method", ["classical", "unet"])
+def test_a_dark_reference_frame_is_refused(
+    method: str, tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """A black 0 kPa frame (lights off, lens cap) in a lit session: one line naming it, exit 2,
+    instead of a run whose change gate compares with black and whose ROIs come from each frame."""
+    import shutil
+
+    import cv2
+    import numpy as np
+
+    session = tmp_path / "s"
+    shutil.copytree(EXAMPLE, session)
+    cv2.imwrite(str(session / "p00.0kpa.jpg"), np.zeros((300, 400), np.uint8))
+    out = tmp_path / "out"
+    argv = ["calibrate", str(session / "manifest.csv"), "--method", method, "--out", str(out)]
+    assert main(argv) == 2
+    line = _one_error(capsys)
+    assert str(session / "p00.0kpa.jpg") in line and "shows no window ring" in line
+    assert not out.exists()

@@ -95,11 +95,18 @@ def _coarse_ring(img: np.ndarray) -> RingFit:
 
 
 def _check_frame(ref: _Reference, path: Path, img: np.ndarray, size: tuple[int, int]) -> str:
-    """Raise unless the frame matches the reference; return a note when unchecked, else ""."""
+    """Raise unless the frame matches the reference (size and ring; a reference without a ring
+    while the frame has one is a dark reference); return a note when unchecked, else ""."""
     what = ""
     if size != ref.size:
         what = f"{size[0]}×{size[1]} px, the reference {ref.size[0]}×{ref.size[1]} px"
     elif not ref.ring.found:
+        if _coarse_ring(img).found:  # the rig was lit, its reference frame was not
+            raise ImageError(
+                f"{ref.path}: the reference frame shows no window ring while {path.name} does "
+                "(a dark reference: lights off, lens cap?); expected the session's 0 kPa frame "
+                "of the lit rig, framed as its other frames"
+            )
         return f"ring position not checked: no ring found in the reference {ref.path.name}"
     else:
         ring = _coarse_ring(img)
