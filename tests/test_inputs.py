@@ -157,6 +157,9 @@ def test_cli_manifest_errors(tmp_path: Path, capsys: pytest.CaptureFixture[str])
     _exit_2(capsys, argv, "rows 2", "and 3", "same image file")
     manifest.write_text("file,pressure_kpa\np00.0kpa.jpg,0\np10.0kpa.jpg,1e308\n")
     _exit_2(capsys, argv, "row 2", "above the plausible 100 kPa")
+    rows = [f"p{k:04.1f}kpa.jpg,{k * 0.001:g}" for k in (0, 4, 8, 12, 16, 20)]  # MPa
+    manifest.write_text("file,pressure_kpa\n" + "\n".join(rows) + "\n")
+    _exit_2(capsys, argv, "highest pressure_kpa is 0.02, below 1 kPa", "not bar or MPa")
 
 
 def test_cli_no_rig_frame(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:

@@ -30,7 +30,7 @@ from contactcal.infer.errors import RunError
 from contactcal.infer.files.atomic import OutputSet, run_outputs
 from contactcal.infer.methods.base import UNCHANGED_NOTE
 from contactcal.infer.pipeline.boundary import GONE_NOTE
-from contactcal.infer.pipeline.manifest import Frame, read_session
+from contactcal.infer.pipeline.manifest import Frame, check_sweep_unit, read_session
 from contactcal.infer.pipeline.measure import Measured
 from contactcal.infer.pipeline.options import MeasureOptions
 from contactcal.infer.pipeline.scale import PixelScale
@@ -110,6 +110,7 @@ def calibrate_session(
     measure = measure if measure is not None else MeasureOptions()
     options = options if options is not None else SessionOptions()
     session = read_session(manifest)
+    check_sweep_unit(manifest, session.frames)
     frames, files = session.frames, [f.file for f in session.frames]
     method = measure.method(method_name)
     measured = measure.measure(files, method, frames[0].file)

@@ -26,6 +26,7 @@ from __future__ import annotations
 import csv
 import math
 import os
+from collections.abc import Sequence
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -82,6 +83,27 @@ class Session:
 
     frames: list[Frame]  # sorted by phase (loading first), pressure, row; [0] is the reference
     phase_source: str  # phases.FROM_COLUMN, FROM_ORDER or SINGLE_PASS
+
+
+#: kPa: a session whose highest pressure is below this cannot be a calibration sweep of the
+#: display (contact starts at ~3 kPa): its pressures are in another unit (bar: 20 kPa is 0.2;
+#: MPa: 0.02), refused by :func:`check_sweep_unit`.
+MIN_SWEEP_TOP_KPA = 1.0
+
+
+def check_sweep_unit(where: str | os.PathLike[str], frames: Sequence[Frame]) -> None:
+    """Refuse a session whose pressures all lie below :data:`MIN_SWEEP_TOP_KPA` (and not all
+    0: those get the "no contact" answer): the calibration would read bar or MPa as kPa.
+
+    Raises:
+        ManifestError: naming the manifest, its highest pressure and the units it may be in.
+    """
+    top = max((f.pressure_kpa for f in frames), default=0.0)
+    if 0.0 < top < MIN_SWEEP_TOP_KPA:
+        raise ManifestError(
+            f"{where}: the highest pressure_kpa is {top:g}, below {MIN_SWEEP_TOP_KPA:g} kPa; "
+            "expected kPa (the display works at 0-20 kPa, contact from ~3 kPa), not bar or MPa"
+        )
 
 
 def beside_manifest(path: str | os.PathLike[str], name: str = "rig.json") -> Path:
