@@ -152,3 +152,27 @@ def test_a_reference_at_rest_is_not_flagged() -> None:
 
     for p, flagged in ((0.0, False), (0.01, False), (REST_KPA, False), (1.0, True)):
         assert flag_gated_reference([ref(p)])[1] is flagged
+
+
+@pytest.mark.parametrize("method", ["classical", "unet"])
+def test_a_reference_above_rest_is_said_with_or_without_the_gate(
+    tmp_path: Path, method: str
+) -> None:
+    """A session from 1 kPa whose reference has no contact (so nothing was gated): still a
+    warning and extra.reference_above_rest_kpa, for either method (both compare with it)."""
+    from contactcal.infer.calibration.calibrate import calibrate_session
+
+    example = Path(__file__).resolve().parents[1] / "examples" / "session"
+    rows = [f"{example}/p{p:04.1f}kpa.jpg,{p}" for p in range(1, 21)]
+    manifest = tmp_path / "from1.csv"
+    manifest.write_text("file,pressure_kpa\n" + "\n".join(rows) + "\n")
+    rep = calibrate_session(manifest, tmp_path / "cal", method)
+    assert "reference frame (its lowest loading frame, p01.0kpa.jpg) is at 1 kPa" in rep.table
+    assert "compared with itself" not in rep.table
+    record = json.loads((tmp_path / "cal" / "calibration.json").read_text())
+    assert record["extra"]["reference_above_rest_kpa"] == 1.0
+    full = calibrate_session(example / "manifest.csv", tmp_path / "full", method)
+    assert "not at rest" not in full.table
+    assert json.loads((tmp_path / "full" / "calibration.json").read_text())["extra"][
+        "reference_above_rest_kpa"
+    ] is None

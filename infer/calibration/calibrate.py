@@ -10,9 +10,12 @@ from pathlib import Path
 from contactcal.infer.calibration.curve import MM2, PX, Curve
 from contactcal.infer.calibration.fit import CurveConfig
 from contactcal.infer.calibration.gate_check import (
+    NOT_AT_REST_WARNING,
     REFERENCE_NOTE,
+    REST_KPA,
     flag_gated_above_contact,
     flag_gated_reference,
+    reference_above_rest,
 )
 from contactcal.infer.calibration.phases import LOADING
 from contactcal.infer.calibration.points import CalibrationPoint
@@ -137,6 +140,11 @@ def calibrate_session(
     table = format_table(results, fit, provenance.device_id)
     if checks["reference_gated_above_zero"]:
         table += "\nwarning: " + REFERENCE_NOTE.format(p=results[0].pressure_kpa)
+    elif checks["reference_above_rest_kpa"] is not None:
+        name = os.path.basename(results[0].file)
+        table += "\n" + NOT_AT_REST_WARNING.format(
+            name=name, p=results[0].pressure_kpa, rest=REST_KPA
+        )
     if same:
         table += "\n" + identical_frames_warning(same)
     return CalibrationReport(table, frames, measured, fit.curve, paths, fit)
@@ -153,7 +161,8 @@ def _session_points(
     _check_contact(manifest, points, results, name)
     results, above = flag_gated_above_contact(results)
     results, reference = flag_gated_reference(results)
-    return results, {"gated_above_contact": above, "reference_gated_above_zero": reference}
+    checks = {"gated_above_contact": above, "reference_gated_above_zero": reference}
+    return results, checks | {"reference_above_rest_kpa": reference_above_rest(results)}
 
 
 def _check_contact(

@@ -82,3 +82,24 @@ def flag_gated_reference(points: Sequence[CalibrationPoint]) -> tuple[list[Calib
         return list(points), False
     noted = replace(ref, note=f"{ref.note}; {REFERENCE_NOTE.format(p=ref.pressure_kpa)}")
     return [noted, *points[1:]], True
+
+
+#: The warning of a session whose reference frame is above :data:`REST_KPA` (any method, gated
+#: or not): every frame is compared with it.
+NOT_AT_REST_WARNING = (
+    "warning: the session's reference frame (its lowest loading frame, {name}) is at {p:g} kPa, "
+    "not at rest (<= {rest:g} kPa): every frame is compared with a frame that may already touch "
+    "the finger (the U-Net's reference and change gate, the classical routine's region of "
+    "interest); record a 0 kPa frame first"
+)
+
+
+def reference_above_rest(points: Sequence[CalibrationPoint]) -> float | None:
+    """The reference frame's pressure, kPa, when it is above :data:`REST_KPA`; else None.
+
+    Args:
+        points: the session's frames, the reference first.
+    """
+    if points and points[0].pressure_kpa > REST_KPA:
+        return points[0].pressure_kpa
+    return None
