@@ -86,8 +86,11 @@ def test_the_example_session_matches_its_reference() -> None:
 
 def test_unchecked_ring_position_is_said(tmp_path: Path) -> None:
     dark = _png(tmp_path / "dark.png", np.full((300, 400), 12, np.uint8))
-    unlit_ref = measure_files([FRAME], ClassicalMethod(), dark)[0]
+    darker = _png(tmp_path / "darker.png", np.full((300, 400), 8, np.uint8))
+    unlit_ref = measure_files([darker], ClassicalMethod(), dark)[0]  # no ring anywhere: noted
     assert "no ring found in the reference dark.png" in unlit_ref.result.note
+    with pytest.raises(ImageError, match="dark.png: the reference frame shows no window ring"):
+        measure_files([FRAME], ClassicalMethod(), dark)  # a lit frame, a dark reference
     with pytest.raises(ImageError, match="400×300 px, the reference 40×30"):  # size still checked
         measure_files([FRAME], ClassicalMethod(), _png(tmp_path / "s.png", np.zeros((30, 40))))
     unlit_frame = measure_files([dark], ClassicalMethod(), REF)[0]
