@@ -173,6 +173,9 @@ def test_a_reference_above_rest_is_said_with_or_without_the_gate(
     assert record["extra"]["reference_above_rest_kpa"] == 1.0
     full = calibrate_session(example / "manifest.csv", tmp_path / "full", method)
     assert "not at rest" not in full.table
-    assert json.loads((tmp_path / "full" / "calibration.json").read_text())["extra"][
-        "reference_above_rest_kpa"
-    ] is None
+    assert (
+        json.loads((tmp_path / "full" / "calibration.json").read_text())["extra"][
+            "reference_above_rest_kpa"
+        ]
+        is None
+    )

@@ -283,3 +283,26 @@ def test_calibrate_is_all_or_nothing(
     assert main(["measure", "--overlay", str(ov), "--out", str(out), *frames]) == 2
     assert not out.exists() and not ov.exists()
     assert sorted(p.name for p in tmp_path.iterdir()) == ["cal", "file", "s"]
+
+
+def test_a_full_disk_names_the_output_folder(tmp_path: Path) -> None:
+    """A write that finds no room raises errno 28 without a file name: the error then names the
+    folder the run was writing into, and the run leaves nothing there."""
+    import errno
+
+    def full(path: Path) -> None:
+        raise OSError(errno.ENOSPC, os.strerror(errno.ENOSPC))
+
+    out = tmp_path / "out"
+    with pytest.raises(OSError) as caught:
+        with run_outputs() as outs:
+            full(outs.stage(out / "a.json"))
+    assert caught.value.errno == errno.ENOSPC and "[Errno" not in str(caught.value)
+    assert str(caught.value) == (
+        f"{out}: No space left on device while writing this run's outputs there"
+    )
+    assert not out.exists()
+    with pytest.raises(OSError, match=r"^\[Errno 2\]"):  # another error is left as it is
+        with run_outputs() as outs:
+            outs.stage(out / "b.json")
+            raise FileNotFoundError(errno.ENOENT, "No such file or directory")

@@ -18,6 +18,7 @@ longer run (:func:`remove_stale_temporaries`); those of running processes are ke
 from __future__ import annotations
 
 import contextlib
+import errno
 import os
 import re
 import shutil
@@ -165,6 +166,10 @@ class OutputSet:
         self._staged[final] = stage / final.name
         return self._staged[final]
 
+    def folders(self) -> list[Path]:
+        """The folders the staged outputs go to, in staging order."""
+        return list(self._stages)
+
     def _make_folder(self, folder: Path) -> None:
         missing = [p for p in (folder, *folder.parents) if not p.exists()][::-1]
         for p in missing:
@@ -232,8 +237,26 @@ def run_outputs(
     try:
         yield outputs
         outputs.commit()
+    except OSError as exc:
+        raise _named(exc, outputs.folders()) from exc
     finally:
         outputs.discard()
+
+
+#: errno values of a write that did not fit: the message gets the output folders, which a bare
+#: ``[Errno 28] No space left on device`` does not name.
+_NO_ROOM = {getattr(errno, n) for n in ("ENOSPC", "EDQUOT", "EFBIG") if hasattr(errno, n)}
+
+
+def _named(exc: OSError, folders: list[Path]) -> OSError:
+    """``exc``, or, for a write that found no room and names no file, an error naming the
+    output folders (same ``errno``; the run's staged outputs are discarded)."""
+    if exc.errno not in _NO_ROOM or exc.filename is not None or not folders:
+        return exc
+    where = ", ".join(str(f) for f in folders)
+    named = OSError(f"{where}: {exc.strerror} while writing this run's outputs there")
+    named.errno = exc.errno
+    return named
 
 
 @contextlib.contextmanager
