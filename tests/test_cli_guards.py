@@ -349,3 +349,15 @@ def test_a_dark_reference_frame_is_refused(
     line = _one_error(capsys)
     assert str(session / "p00.0kpa.jpg") in line and "shows no window ring" in line
     assert not out.exists()
+
+
+def test_bit_depth_out_of_range_and_an_empty_manifest_are_one_line(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    frame = str(EXAMPLE / "p05.0kpa.jpg")
+    assert main(["measure", frame, "--bit-depth", "17", "--out", str(tmp_path / "m.json")]) == 2
+    assert _one_error(capsys).startswith("contactcal: error: --bit-depth 17: expected 1-16")
+    empty = tmp_path / "m.csv"
+    empty.write_text("file,pressure_kpa\n")
+    assert main(["calibrate", str(empty), "--out", str(tmp_path / "c")]) == 2
+    assert "under the header 'file,pressure_kpa'" in _one_error(capsys)

@@ -173,6 +173,11 @@ def measure_options(args: argparse.Namespace, default_rig: Path | None = None) -
     ``--bit-depth``, ``--no-change-gate``, ``--threads`` and ``--overlay`` (outlines)."""
     from contactcal.infer.pipeline.options import MeasureOptions
 
+    if args.bit_depth is not None and not 1 <= args.bit_depth <= 16:
+        raise ValueError(
+            f"--bit-depth {args.bit_depth}: expected 1-16 significant bits per sample (e.g. 12 "
+            "for a 12-bit camera's PNGs, 16 for full range)"
+        )
     scale, boundary = resolve_rig(args, default_rig)
     return MeasureOptions(
         model=args.model,

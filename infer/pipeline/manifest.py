@@ -144,7 +144,8 @@ def read_session(path: str | os.PathLike[str]) -> Session:
     if not data:
         raise ManifestError(
             f"{where}: the manifest has a header but no frames; add one row "
-            "'image,pressure_kpa' per frame (a calibration needs >= 2 pressure steps)"
+            "'<image file>,<pressure in kPa>' per frame under the header 'file,pressure_kpa' "
+            "(a calibration needs >= 2 pressure steps)"
         )
     frames = [
         _parse_row(where, mpath, names, row_no, line_no, cells)

@@ -218,7 +218,8 @@ def check_coverage(extractor: Extractor, video: Path | None) -> None:
             raise ValueError(
                 f"{source} ends at {extractor.last_time_s:.2f} s, before step {s.label()} of "
                 f"{where}; expected frames covering every step of the log: is the video cut "
-                "short (a truncated copy), or the log another recording's?"
+                "short (a truncated copy), the log another recording's, or its time_s not in "
+                "seconds (ms)?"
             )
         raise ValueError(
             f"{where}: step {s.label()} has no frame in {source} (frames from 0 to "
