@@ -20,6 +20,7 @@ import pytest
 torch = pytest.importorskip("torch")
 
 from contactcal.infer.bench.dataset import REQUIRED_COLUMNS, IndexRow, read_index, sessions_of  # noqa: E402
+from contactcal.infer.image.gray import ImageError  # noqa: E402
 from contactcal.infer.image.read import load_image  # noqa: E402
 from contactcal.infer.methods.unet.method import UnetMethod  # noqa: E402
 from contactcal.infer.methods.unet.prepare import prepare, session_reference  # noqa: E402
@@ -87,6 +88,15 @@ def _deployed(unet: UnetMethod, rows: list[IndexRow], reference: Path | None):
         return run(x)
 
     unet.segmenter.probabilities = spy  # type: ignore[method-assign]
+    if reference is not None and not locate_ring(load_image(reference)).found:
+        # measure_files refuses a dark reference beside lit frames; the method itself (as
+        # bench and the robustness suite call it) still runs the one path
+        with pytest.raises(ImageError, match="shows no window ring"):
+            measure_files([r.frame for r in rows], unet, reference)
+        seen.clear()
+        unet.start([r.frame for r in rows], reference)
+        areas = [unet.measure(load_image(r.frame)).area_px for r in rows]
+        return np.stack(seen), areas
     measured = measure_files([r.frame for r in rows], unet, reference)
     return np.stack(seen), [m.result.area_px for m in measured]
 
