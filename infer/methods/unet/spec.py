@@ -151,11 +151,15 @@ class ModelSpec:
         }
 
 
-def _fields(key: str, text: str, cls: type) -> dict[str, Any]:
-    """The JSON object of metadata ``key``, with exactly the fields of dataclass ``cls``."""
+def _fields(
+    key: str, text: str, cls: type, legacy: Mapping[str, Any] | None = None
+) -> dict[str, Any]:
+    """The JSON object of metadata ``key``, with exactly the fields of dataclass ``cls``; the
+    ``legacy`` fields (those a model may predate) filled in with their values where absent."""
     values = json.loads(text)
     if not isinstance(values, dict):
         raise ValueError(f"{key}: expected a JSON object")
+    values = {**(legacy or {}), **values}
     names = {f.name for f in dataclasses.fields(cls)}
     unknown, missing = sorted(set(values) - names), sorted(names - set(values))
     if unknown or missing:
@@ -169,10 +173,7 @@ LEGACY_PREPROCESS: dict[str, Any] = {"norm_floor_percentile": 0.0}
 
 
 def _preprocess(text: str) -> PreprocessConfig:
-    values = json.loads(text)
-    if isinstance(values, dict):
-        values = {**{k: v for k, v in LEGACY_PREPROCESS.items() if k not in values}, **values}
-    return PreprocessConfig(**_fields("preprocess", json.dumps(values), PreprocessConfig))
+    return PreprocessConfig(**_fields("preprocess", text, PreprocessConfig, LEGACY_PREPROCESS))
 
 
 def _interval(text: str) -> IntervalSpec:
