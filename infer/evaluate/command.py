@@ -55,8 +55,9 @@ def _cmd_evaluate(args: argparse.Namespace) -> int:
 
     check_change_gate(args)
     check_out_folder(args.out, "evaluate")
-    measure = measure_options(args, beside_manifest(args.manifest))
-    rig = rig_file(args, beside_manifest(args.manifest))
+    default_rig = beside_manifest(args.manifest)
+    measure = measure_options(args, default_rig)
+    rig = rig_file(args, default_rig)  # the file measure_options read, protected from --out
     rep = evaluate_session(
         args.manifest, args.labels, args.out, args.method, measure, also_read=[rig] if rig else []
     )
