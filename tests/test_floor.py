@@ -29,3 +29,22 @@ def test_floor_is_restated_and_read_back(tmp_path: Path) -> None:
         floor_model(out, 5.0, out)
     assert main([str(DEFAULT_MODEL), "--percentile", "99.5", "--out", str(tmp_path / "x.onnx")])
     assert not (tmp_path / "x.onnx").exists()
+
+
+def test_train_option_sets_the_floor_the_cache_and_the_export_use() -> None:
+    """``contactcal train --norm-floor F`` trains on floored inputs: the spec that the cache,
+    validation and export read carries F; an out-of-range F is refused before training."""
+    import argparse
+
+    pytest.importorskip("torch")
+    from contactcal.train.commands import add_parsers, build_config
+
+    parser = argparse.ArgumentParser(prog="contactcal")
+    add_parsers(parser.add_subparsers(dest="command", required=True))
+    base = ["train", "--data", "a", "--out", "r", "--input-size", "64"]
+    assert build_config(parser.parse_args(base)).spec().preprocess.norm_floor_percentile == 0.0
+    spec = build_config(parser.parse_args([*base, "--norm-floor", "1"])).spec()
+    assert spec.preprocess.norm_floor_percentile == 1.0
+    assert spec.preprocess.input_size == 64
+    with pytest.raises(ValueError, match="norm_floor_percentile must be in"):
+        build_config(parser.parse_args([*base, "--norm-floor", "99.5"]))

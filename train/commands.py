@@ -37,6 +37,13 @@ def add_parsers(sub: Any) -> None:
     t.add_argument(
         "--input-size", type=int, metavar="S", help="network input side, px (default 256)"
     )
+    t.add_argument(
+        "--norm-floor",
+        type=float,
+        metavar="F",
+        help="percentile of the crop subtracted before the normalisation, as deployment will "
+        "(u = (g - F)/(P - F): invariant to black level and contrast; default 0: none)",
+    )
     _add_reference_args(t)
     _add_ridge_args(t)
     _add_look_args(t)
@@ -150,6 +157,9 @@ def build_config(args: argparse.Namespace) -> Any:
     camera = {k: tuple(v) if isinstance(v, list) else v for k, v in camera.items() if v is not None}
     if camera:
         cfg = dataclasses.replace(cfg, augment=dataclasses.replace(cfg.augment, **camera))
+    if args.norm_floor is not None:
+        pre = dataclasses.replace(cfg.preprocess, norm_floor_percentile=args.norm_floor)
+        cfg = dataclasses.replace(cfg, preprocess=pre)
     arch = {"base": args.base, "levels": args.levels}
     arch = {k: v for k, v in arch.items() if v is not None}
     return dataclasses.replace(cfg, model=dataclasses.replace(cfg.model, **arch)) if arch else cfg
