@@ -297,6 +297,36 @@ def test_a_failing_standard_output_is_named(
     assert "[Errno" not in line
 
 
+def test_no_standard_output_at_all_is_not_an_error(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """Started with stdout closed (``>&-``: ``sys.stdout is None``), a run writes its outputs
+    and exits 0, as ``print`` does nothing then; it used to end in an AttributeError."""
+    monkeypatch.setattr(sys, "stdout", None)
+    out = tmp_path / "m.json"
+    argv = ["measure", str(EXAMPLE / "p05.0kpa.jpg"), "--method", "classical", "--out", str(out)]
+    assert main(argv) == 0
+    assert json.loads(out.read_text())[0]["contact"] is True
+
+
+def test_a_full_standard_output_inside_a_run_keeps_its_own_message(tmp_path: Path) -> None:
+    """A :class:`StdoutError` raised while a run's outputs are staged is not renamed to the
+    output folders' "no room" message (it names standard output already), and an OSError that
+    is not renamed is re-raised as it was (it was made its own cause)."""
+    from contactcal.infer.files.atomic import run_outputs
+    from contactcal.infer.files.stdout import StdoutError
+
+    with pytest.raises(StdoutError, match="writing to standard output failed"):
+        with run_outputs() as outs:
+            outs.stage(tmp_path / "a.json").write_text("{}")
+            raise StdoutError(errno.ENOSPC, os.strerror(errno.ENOSPC))
+    assert not (tmp_path / "a.json").exists()
+    with pytest.raises(FileNotFoundError) as caught:
+        with run_outputs():
+            raise FileNotFoundError(errno.ENOENT, "gone", "x.png")
+    assert caught.value.__cause__ is None  # not itself
+
+
 def test_a_linked_manifest_reads_the_rig_json_of_its_frames(
     tmp_path: Path, capsys: pytest.CaptureFixture[str]
 ) -> None:

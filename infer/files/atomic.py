@@ -30,6 +30,7 @@ from typing import IO, Any
 
 from contactcal.infer.files.interrupt import deferred_interrupt
 from contactcal.infer.files.jsonable import json_text
+from contactcal.infer.files.stdout import StdoutError
 
 #: Names of this module's temporaries: ``.<name>.<pid>.<random>.tmp``.
 TEMP_NAME = re.compile(r"^\..+\.(?P<pid>[0-9]+)\.[A-Za-z0-9_]+\.tmp$")
@@ -238,7 +239,10 @@ def run_outputs(
         yield outputs
         outputs.commit()
     except OSError as exc:
-        raise _named(exc, outputs.folders()) from exc
+        named = _named(exc, outputs.folders())
+        if named is exc:
+            raise
+        raise named from exc
     finally:
         outputs.discard()
 
@@ -252,6 +256,8 @@ def _named(exc: OSError, folders: list[Path]) -> OSError:
     """``exc``, or, for a write that found no room and names no file, an error naming the
     output folders (same ``errno``; the run's staged outputs are discarded)."""
     if exc.errno not in _NO_ROOM or exc.filename is not None or not folders:
+        return exc
+    if isinstance(exc, StdoutError):  # already names where it failed: standard output
         return exc
     where = ", ".join(str(f) for f in folders)
     named = OSError(f"{where}: {exc.strerror} while writing this run's outputs there")

@@ -49,9 +49,14 @@ def named_stdout() -> Iterator[None]:
     stdout is flushed, so that the last lines' failure surfaces here and not at exit.
 
     On a :class:`StdoutError` the stdout file descriptor is pointed at the null device, so that
-    the interpreter's own flush at exit does not print a second, unnamed error.
+    the interpreter's own flush at exit does not print a second, unnamed error. Without a
+    stdout (``sys.stdout is None``: the process was started with it closed) nothing is wrapped
+    and ``print`` stays the no-op it is then.
     """
     before = sys.stdout
+    if before is None:  # no stdout at all (closed, or a pythonw-like host): print() is a no-op
+        yield
+        return
     sys.stdout = _Named(before)  # type: ignore[assignment]
     try:
         yield
