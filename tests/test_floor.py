@@ -27,8 +27,29 @@ def test_floor_is_restated_and_read_back(tmp_path: Path) -> None:
     assert weights[0] == weights[1]
     with pytest.raises(ValueError, match="must not be the input"):
         floor_model(out, 5.0, out)
-    assert main([str(DEFAULT_MODEL), "--percentile", "99.5", "--out", str(tmp_path / "x.onnx")])
+    assert (
+        main([str(DEFAULT_MODEL), "--percentile", "99.5", "--out", str(tmp_path / "x.onnx")]) == 2
+    )
     assert not (tmp_path / "x.onnx").exists()
+
+
+def test_floor_refuses_a_file_that_is_not_a_model(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """Not an ONNX file: one line on stderr naming it, exit 2, nothing written (it was a
+    protobuf DecodeError traceback)."""
+    pytest.importorskip("onnx")
+    from contactcal.train.floor import main
+
+    bad = tmp_path / "bad.onnx"
+    bad.write_bytes(b"garbage")
+    out = tmp_path / "f1.onnx"
+    assert main([str(bad), "--percentile", "1", "--out", str(out)]) == 2
+    captured = capsys.readouterr()
+    assert captured.out == ""
+    assert captured.err.startswith(f"error: {bad}: not a readable ONNX model")
+    assert captured.err.count("\n") == 1
+    assert not out.exists()
 
 
 def test_train_option_sets_the_floor_the_cache_and_the_export_use() -> None:

@@ -35,6 +35,7 @@ from contactcal.infer.methods.unet.method import UnetMethod
 from contactcal.infer.methods.unet.ring import locate_ring
 from contactcal.train.restate import (
     check_paths,
+    load_proto,
     restating_parser,
     run_restating,
     save_restated,
@@ -166,7 +167,6 @@ def gate_model(
         ValueError: bad output name, a model without a reference channel, or data without a
             region in contact.
     """
-    import onnx
 
     src, dst = check_paths(model, out)
     base = UnetMethod(src).segmenter.spec
@@ -175,7 +175,7 @@ def gate_model(
     change, contact, frames = collect_changes(src, data_dirs, specks, draws, seed)
     t, summary = margin_threshold(change, contact)
     spec = dataclasses.replace(base, min_change=t)
-    save_restated(onnx.load(str(src)), {"min_change": repr(t)}, spec, dst)
+    save_restated(load_proto(src), {"min_change": repr(t)}, spec, dst)
     return {**summary, "frames": frames, "specks": list(specks), "draws": draws, "seed": seed}
 
 

@@ -15,7 +15,13 @@ import os
 from collections.abc import Sequence
 from typing import Any
 
-from contactcal.train.restate import check_paths, metadata_of, run_restating, save_restated
+from contactcal.train.restate import (
+    check_paths,
+    load_proto,
+    metadata_of,
+    run_restating,
+    save_restated,
+)
 
 
 def floor_model(
@@ -34,12 +40,11 @@ def floor_model(
     Raises:
         ValueError: bad output name, or a percentile outside ``[0, norm_percentile)``.
     """
-    import onnx
 
     from contactcal.infer.methods.unet.spec import read_spec
 
     src, dst = check_paths(model, out)
-    proto = onnx.load(str(src))
+    proto = load_proto(src)
     spec = read_spec(metadata_of(proto), src)
     pre = dataclasses.replace(spec.preprocess, norm_floor_percentile=percentile)
     new = dataclasses.replace(spec, preprocess=pre)

@@ -39,6 +39,7 @@ from contactcal.infer.methods.unet.postprocess import Band, Segmentation, bounda
 from contactcal.infer.methods.unet.spec import REGIONS, IntervalSpec, ModelSpec
 from contactcal.train.restate import (
     check_paths,
+    load_proto,
     metadata_of,
     restating_parser,
     run_restating,
@@ -176,7 +177,7 @@ def _segment_dataset(
     from contactcal.infer.methods.unet.runner import OnnxSegmenter
     from contactcal.train.sessions import session_inputs
 
-    proto = onnx.load(str(model))
+    proto = load_proto(Path(model))
     meta = metadata_of(proto)
     # Any valid interval lets the strict reader accept a model exported before intervals.
     meta["interval"] = json.dumps(dataclasses.asdict(IntervalSpec(LEVEL, 1e-6, 1 - 1e-6, 1.0, 1)))
@@ -219,7 +220,6 @@ def recalibrate_model(
     Raises:
         ValueError: bad output name, an unknown region, or data the calibration cannot use.
     """
-    import onnx
 
     src, dst = check_paths(model, out)
     if region is not None and region not in REGIONS:
@@ -229,7 +229,7 @@ def recalibrate_model(
     spec = dataclasses.replace(base, interval=interval)
     new = spec.to_metadata()
     updates = {"interval": new["interval"], "region": new["region"]}
-    save_restated(onnx.load(str(src)), updates, spec, dst)
+    save_restated(load_proto(src), updates, spec, dst)
     return {**summary, "region": spec.region}
 
 

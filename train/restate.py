@@ -11,6 +11,7 @@ from __future__ import annotations
 import argparse
 import json
 import os
+import sys
 from collections.abc import Callable, Mapping
 from pathlib import Path
 from typing import Any
@@ -31,6 +32,24 @@ def check_paths(model: str | os.PathLike[str], out: str | os.PathLike[str]) -> t
     if dst.exists() and dst.resolve() == src.resolve():
         raise ValueError(f"{dst}: the output must not be the input model {src}")
     return src, dst
+
+
+def load_proto(model: Path) -> Any:
+    """The ONNX ``ModelProto`` of ``model``.
+
+    Raises:
+        ValueError: the file cannot be read or is not an ONNX model (the message names it).
+    """
+    import onnx
+    from google.protobuf.message import DecodeError
+
+    try:
+        return onnx.load(str(model))
+    except (DecodeError, OSError, ValueError) as exc:
+        raise ValueError(
+            f"{model}: not a readable ONNX model ({exc}); expected a .onnx file written by "
+            "contactcal export"
+        ) from None
 
 
 def metadata_of(proto: Any) -> dict[str, str]:
@@ -79,7 +98,7 @@ def run_restating(restate: Callable[[], dict[str, Any]], out: Path) -> int:
     try:
         summary = restate()
     except (ValueError, OSError) as exc:
-        print(f"error: {exc}")
+        print(f"error: {exc}", file=sys.stderr)
         return 2
     print(json.dumps(summary, indent=1))
     print(f"wrote {out}")
