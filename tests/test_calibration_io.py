@@ -165,8 +165,15 @@ def test_load_curve_reads_versions_1_and_2(tmp_path: Path) -> None:
     del v1["inputs"]
     (tmp_path / "v1.json").write_text(json.dumps(v1), encoding="utf-8")
     np.testing.assert_allclose(load_curve(tmp_path / "v1.json").fit_area, fit.curve.fit_area)
-    with pytest.raises(ValueError, match="no unloading phase"):
+    with pytest.raises(ValueError, match="no unloading pass: the record has loading") as exc:
         load_curve(paths["json"], phase="unloading")
+    assert "not a readable" not in str(exc.value)  # it is readable; the pass is not in it
+    assert load_curve(paths["json"], area_unit="mm²").area_unit == "mm²"
+    assert load_curve(paths["json"], area_unit="mm2").area_unit == "mm²"
+    with pytest.raises(ValueError, match="expected px \\(give area_unit='mm²'"):
+        load_curve(paths["json"], area_unit="px")
+    with pytest.raises(ValueError, match="area_unit 'mm\\^2': expected 'mm²'"):
+        load_curve(paths["json"], area_unit="mm^2")
     (tmp_path / "v4.json").write_text(json.dumps({**data, "format_version": 4}), encoding="utf-8")
     with pytest.raises(ValueError, match="format_version 4"):
         load_curve(tmp_path / "v4.json")

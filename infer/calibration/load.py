@@ -10,7 +10,7 @@ from typing import Any
 import numpy as np
 
 from contactcal.infer.calibration.band import Band
-from contactcal.infer.calibration.curve import Curve
+from contactcal.infer.calibration.curve import MM2, PX, Curve
 from contactcal.infer.calibration.parametric import Saturating
 from contactcal.infer.calibration.phases import LOADING
 
@@ -36,7 +36,9 @@ def _phase_curve(data: dict[str, Any], phase: str | None, allow_unresolved: bool
     """The curve of ``phase`` (None: the recorded inverse phase) from a version 3 record."""
     name = (phase or data["inverse_phase"]).lower()
     if name not in data["phases"]:
-        raise ValueError(f"no {name} phase (the record has {', '.join(data['phases'])})")
+        raise _NoSuchPhase(
+            f"no {name} pass: the record has {', '.join(data['phases'])}; give phase= one of them"
+        )
     ph = data["phases"][name]
     res = ph.get("resolution") or {}
     if res.get("resolves") is False and not allow_unresolved:
@@ -64,6 +66,10 @@ class UnresolvedCurveError(ValueError):
     """The record says the curve does not resolve pressures (``phases.*.resolution``)."""
 
 
+class _NoSuchPhase(ValueError):
+    """A readable record without the pass asked for."""
+
+
 def load_curve(
     path: str | os.PathLike[str],
     phase: str | None = None,
@@ -81,24 +87,41 @@ def load_curve(
         allow_unresolved: read a curve the record says does not resolve pressures (its rise
             over the contact steps no larger than its cross-validated error; ``calibrate``
             warned); by default that is an error, not a silently flat curve.
-        area_unit: the unit the caller's areas are in (``"mm²"`` or ``"px"``): a record in
+        area_unit: the unit the caller's areas are in (``"mm²"``, also written ``"mm2"``, or
+            ``"px"``): a record in
             another unit is refused (a session calibrated without a pixel scale holds px, and
             an area in mm² looked up in it would be wrong by the scale squared, silently).
             None: not checked (``Curve.area_unit`` says which).
 
     Raises:
         UnresolvedCurveError: the curve does not resolve pressures (and not allowed).
-        ValueError: unreadable file, not a contactcal calibration, no such phase, or another
-            unit than ``area_unit``.
+        ValueError: unreadable file, not a contactcal calibration, no such phase, an unknown
+            ``area_unit``, or another unit than ``area_unit``.
     """
+    unit = _check_unit(area_unit)
     curve = _read_curve(path, phase, allow_unresolved)
-    if area_unit is not None and curve.area_unit != area_unit:
-        raise ValueError(
-            f"{path}: its areas are in {curve.area_unit}, expected {area_unit} (a session "
-            "calibrated without a pixel scale is in px: put a rig.json beside its manifest, or "
-            "give --mm-per-px or --rig, and calibrate it again)"
+    if unit is not None and curve.area_unit != unit:
+        fix = (
+            "a session calibrated without a pixel scale is in px: put a rig.json beside its "
+            "manifest, or give --mm-per-px or --rig, and calibrate it again"
+            if unit == MM2
+            else f"give area_unit={MM2!r} and areas in mm², or leave area_unit out"
         )
+        raise ValueError(f"{path}: its areas are in {curve.area_unit}, expected {unit} ({fix})")
     return curve
+
+
+def _check_unit(area_unit: str | None) -> str | None:
+    """``area_unit`` as a curve states it (``"mm2"``, the ASCII spelling, is ``"mm²"``).
+
+    Raises:
+        ValueError: any other unit.
+    """
+    if area_unit is None or area_unit in (MM2, PX):
+        return area_unit
+    if area_unit == "mm2":
+        return MM2
+    raise ValueError(f"area_unit {area_unit!r}: expected {MM2!r} (or 'mm2'), {PX!r} or None")
 
 
 def _read_curve(path: str | os.PathLike[str], phase: str | None, allow_unresolved: bool) -> Curve:
@@ -116,9 +139,9 @@ def _read_curve(path: str | os.PathLike[str], phase: str | None, allow_unresolve
         if version == 3:
             return _phase_curve(data, phase, allow_unresolved)
         if phase is not None and phase.lower() != LOADING:
-            raise ValueError(f"format_version {version} holds the loading pass only, not {phase}")
+            raise _NoSuchPhase(f"format_version {version} holds the loading pass only, not {phase}")
         return _curve(data["fit"], data["onset_kpa"], data["area_unit"], data.get("inverse"))
-    except UnresolvedCurveError as exc:
-        raise UnresolvedCurveError(f"{path}: {exc}") from exc
+    except (UnresolvedCurveError, _NoSuchPhase) as exc:
+        raise type(exc)(f"{path}: {exc}") from exc
     except (OSError, ValueError, KeyError, TypeError, AttributeError) as exc:
         raise ValueError(f"{path}: not a readable contactcal calibration ({exc})") from exc
