@@ -238,6 +238,16 @@ def test_bad_inputs_exit_2(
         code, err = _run([*argv, "--out", str(out), "--method", "classical"], capsys)
         assert code == 2 and expected in err and err.count("\n") == 1, err
         assert not out.exists()
+    bar = [lines[0]] + [
+        f"{t},{float(p) / 100:.6f},{s}" for t, p, s in (r.split(",") for r in lines[1:])
+    ]
+    (tmp_path / "bar.csv").write_text("\n".join(bar) + "\n")  # the log in bar, not kPa
+    argv = ["calibrate", "--video", str(tmp_path / "v.avi"), "--pressure-log"]
+    argv += [str(tmp_path / "bar.csv"), "--tolerance-kpa", "0.001", "--out", str(out)]
+    code, err = _run([*argv, "--method", "classical"], capsys)
+    expected = f"{tmp_path / 'bar.csv'}: the highest pressure_kpa is 0.1, below 1 kPa"
+    assert code == 2 and expected in err and err.count("\n") == 1, err  # the log, not a temp file
+    assert not out.exists()
     for argv in (
         ["calibrate", str(EXAMPLE / "manifest.csv"), "--video", str(tmp_path / "v.avi")],
         ["calibrate", "--video", str(tmp_path / "v.avi")],

@@ -8,6 +8,7 @@ from pathlib import Path
 from typing import TYPE_CHECKING
 
 from contactcal.infer.pipeline.args import (
+    MANIFEST_SCALE,
     NO_SCALE_NOTE,
     check_change_gate,
     check_out_folder,
@@ -90,7 +91,7 @@ def _cmd_calibrate(args: argparse.Namespace) -> int:
             )
     print(rep.table)
     if measure.scale is None:
-        print(NO_SCALE_NOTE)
+        print(NO_SCALE_NOTE.format(looked=MANIFEST_SCALE))
     note = earlier_overlays_note(written)
     if note is not None:
         print(note)

@@ -146,11 +146,16 @@ def resolve_rig(
     return (None if data is None else rig_scale(data, rig)), boundary
 
 
-#: The line a run without a pixel scale prints (its areas, curve and inverse are in px).
+#: The line a run without a pixel scale prints (its areas, curve and inverse are in px);
+#: ``{looked}``: where a scale was looked for (:data:`MANIFEST_SCALE`, :data:`VIDEO_SCALE`).
 NO_SCALE_NOTE = (
-    "note: no pixel scale (no rig.json beside the manifest, no --mm-per-px or --rig): areas are "
-    'in px; a controller must look px up in this curve (load_curve(..., area_unit="px"))'
+    "note: no pixel scale ({looked}): areas are in px; a controller must look px up in this "
+    'curve (load_curve(..., area_unit="px"))'
 )
+#: Where a manifest run looks for a scale.
+MANIFEST_SCALE = "no rig.json beside the manifest, no --mm-per-px or --rig"
+#: Where a video or camera run looks for one (its manifest is written by the run).
+VIDEO_SCALE = "no --mm-per-px or --rig; a video or camera run reads no rig.json"
 
 
 def check_out_folder(out: Path, command: str) -> None:

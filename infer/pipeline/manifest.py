@@ -98,7 +98,16 @@ def check_sweep_unit(where: str | os.PathLike[str], frames: Sequence[Frame]) -> 
     Raises:
         ManifestError: naming the manifest, its highest pressure and the units it may be in.
     """
-    top = max((f.pressure_kpa for f in frames), default=0.0)
+    check_sweep_top(where, max((f.pressure_kpa for f in frames), default=0.0))
+
+
+def check_sweep_top(where: str | os.PathLike[str], top: float) -> None:
+    """:func:`check_sweep_unit` on the sweep's highest pressure ``top`` (kPa as read) from the
+    file ``where`` (a manifest, or a video run's pressure log).
+
+    Raises:
+        ManifestError: naming ``where``, ``top`` and the units it may be in.
+    """
     if 0.0 < top < MIN_SWEEP_TOP_KPA:
         raise ManifestError(
             f"{where}: the highest pressure_kpa is {top:g}, below {MIN_SWEEP_TOP_KPA:g} kPa; "

@@ -113,7 +113,8 @@ def calibrate_video(
     from contactcal.infer.calibration.calibrate import calibrate_session
     from contactcal.infer.calibration.command import session_options
     from contactcal.infer.files.atomic import run_outputs, write_synced
-    from contactcal.infer.pipeline.args import NO_SCALE_NOTE
+    from contactcal.infer.pipeline.args import NO_SCALE_NOTE, VIDEO_SCALE
+    from contactcal.infer.pipeline.manifest import check_sweep_top
     from contactcal.infer.video import extract, live
 
     cfg = StepConfig(args.tolerance_kpa, args.settle_s)
@@ -137,6 +138,10 @@ def calibrate_video(
                 "curve (its frames stay in frames/, outside the manifest)",
                 file=sys.stderr,
             )
+        # the log's unit, named as the log (the manifest below is this run's own)
+        check_sweep_top(
+            args.pressure_log, max((s.pressure_kpa for s in ex.used_steps()), default=0.0)
+        )
         final_manifest = args.out / "frames" / "manifest.csv"
         manifest = outs.stage(final_manifest)
         write_synced(manifest, ex.manifest_text())
@@ -152,6 +157,6 @@ def calibrate_video(
         )
     print(rep.table)
     if measure.scale is None:
-        print(NO_SCALE_NOTE)
+        print(NO_SCALE_NOTE.format(looked=VIDEO_SCALE))
     print(ex.summary())
     return 0
