@@ -67,5 +67,5 @@ def test_train_option_sets_the_floor_the_cache_and_the_export_use() -> None:
     spec = build_config(parser.parse_args([*base, "--norm-floor", "1"])).spec()
     assert spec.preprocess.norm_floor_percentile == 1.0
     assert spec.preprocess.input_size == 64
-    with pytest.raises(ValueError, match="norm_floor_percentile must be in"):
+    with pytest.raises(ValueError, match="--norm-floor 99.5: norm_floor_percentile must be in"):
         build_config(parser.parse_args([*base, "--norm-floor", "99.5"]))

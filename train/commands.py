@@ -158,7 +158,10 @@ def build_config(args: argparse.Namespace) -> Any:
     if camera:
         cfg = dataclasses.replace(cfg, augment=dataclasses.replace(cfg.augment, **camera))
     if args.norm_floor is not None:
-        pre = dataclasses.replace(cfg.preprocess, norm_floor_percentile=args.norm_floor)
+        try:
+            pre = dataclasses.replace(cfg.preprocess, norm_floor_percentile=args.norm_floor)
+        except ValueError as exc:
+            raise ValueError(f"--norm-floor {args.norm_floor:g}: {exc}") from None
         cfg = dataclasses.replace(cfg, preprocess=pre)
     arch = {"base": args.base, "levels": args.levels}
     arch = {k: v for k, v in arch.items() if v is not None}

@@ -36,8 +36,9 @@ def ridge_energy(work: np.ndarray, config: PreprocessConfig, reference_level: fl
         work: ``(W, W) float32`` the frame's crop resampled to ``W = config.ridge_work_px``
             (``prepare.crop_resize``), grey levels.
         config: ``ridge_work_px`` (> 0), the band and the normalisation.
-        reference_level: the crop's bright level ``P`` (grey levels) the frame channel was
-            divided by; energies are relative to it.
+        reference_level: the span the frame channel was divided by, grey levels: the crop's
+            bright level ``P``, less its dark floor ``F`` with ``config.norm_floor_percentile``
+            (``P − F``); energies are relative to it.
 
     Returns:
         ``(S, S) float32`` ridge energy in network units (≥ 0), ``S = config.input_size``.
