@@ -252,6 +252,15 @@ def test_bad_inputs_exit_2(
         ["calibrate", str(EXAMPLE / "manifest.csv"), "--video", str(tmp_path / "v.avi")],
         ["calibrate", "--video", str(tmp_path / "v.avi")],
         ["calibrate", "--pressure-log", str(tmp_path / "log.csv")],
+        [
+            "calibrate",
+            "--video",
+            str(tmp_path / "v.avi"),
+            "--pressure-log",
+            str(tmp_path / "log.csv"),
+            "--step-tolerance-kpa",
+            "0.2",
+        ],
     ):
         code, err = _run([*argv, "--out", str(out)], capsys)
         assert code == 2 and err.startswith("contactcal: error: calibrate:"), err

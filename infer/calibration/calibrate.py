@@ -36,6 +36,7 @@ from contactcal.infer.pipeline.boundary import GONE_NOTE
 from contactcal.infer.pipeline.manifest import Frame, check_sweep_unit, read_session
 from contactcal.infer.pipeline.measure import Measured
 from contactcal.infer.pipeline.options import MeasureOptions
+from contactcal.infer.pipeline.readings import DEFAULT_STEP_TOLERANCE_KPA
 from contactcal.infer.pipeline.scale import PixelScale
 
 
@@ -49,6 +50,14 @@ class CalibrationReport:
     curve: Curve  # the inverted phase's curve (fit.curve)
     files: dict[str, Path]  # "json", "csv", "png"
     fit: SessionFit  # every phase's steps, curve and band; hysteresis
+
+
+#: The table's line when readings were pooled into steps (``{n}`` frames, ``{t}`` kPa).
+GROUPED_NOTE = (
+    "note: {n} frame(s) read as their step's pressure (manifest readings less than {t:g} kPa "
+    "apart are one step; each keeps its reading as pressure_kpa_read; --step-tolerance-kpa 0 "
+    "reads every distinct value as a step)"
+)
 
 
 @dataclass(frozen=True)
@@ -66,6 +75,11 @@ class SessionOptions:
     #: become "no contact", each with a note saying so. False: ``--per-frame-contact`` keeps
     #: each frame's own contact flag. Recorded in ``extra``.
     session_rule: bool = True
+    #: kPa: manifest readings less than this apart are one step (``--step-tolerance-kpa``;
+    #: :mod:`~contactcal.infer.pipeline.readings`): a logger's readings of one held pressure
+    #: are pooled as a step's repeats. 0: every distinct value is a step (a video run's
+    #: manifest, whose steps are already found). Recorded in ``extra``.
+    step_tolerance_kpa: float = DEFAULT_STEP_TOLERANCE_KPA
 
 
 def calibrate_session(
@@ -112,7 +126,7 @@ def calibrate_session(
     manifest = Path(manifest)
     measure = measure if measure is not None else MeasureOptions()
     options = options if options is not None else SessionOptions()
-    session = read_session(manifest)
+    session = read_session(manifest, options.step_tolerance_kpa)
     check_sweep_unit(manifest, session.frames)
     frames, files = session.frames, [f.file for f in session.frames]
     method = measure.method(method_name)
@@ -132,6 +146,8 @@ def calibrate_session(
     extra = {
         **_extra(recorded, listed, measure.scale, measured),
         "session_rule": options.session_rule,
+        "step_tolerance_kpa": options.step_tolerance_kpa,
+        "readings_grouped": session.grouped,
     }
     extra |= checks | {"identical_frames": same}
     model = None if measure.model is None else str(measure.model)
@@ -147,6 +163,8 @@ def calibrate_session(
         )
     if same:
         table += "\n" + identical_frames_warning(same)
+    if session.grouped:
+        table += "\n" + GROUPED_NOTE.format(n=session.grouped, t=options.step_tolerance_kpa)
     return CalibrationReport(table, frames, measured, fit.curve, paths, fit)
 
 

@@ -4,6 +4,7 @@ through :mod:`contactcal.infer.video.command`)."""
 from __future__ import annotations
 
 import argparse
+import math
 from pathlib import Path
 from typing import TYPE_CHECKING
 
@@ -18,6 +19,7 @@ from contactcal.infer.pipeline.args import (
     run_inputs,
     scale_args,
 )
+from contactcal.infer.pipeline.readings import DEFAULT_STEP_TOLERANCE_KPA
 
 if TYPE_CHECKING:
     from contactcal.infer.calibration.calibrate import SessionOptions
@@ -43,6 +45,14 @@ def add_parsers(sub: argparse._SubParsersAction) -> None:
         help="keep every frame's contact flag as measured: no session rule revising regions "
         "that shrink at the next pressure (the inner ring before contact) to no contact",
     )
+    c.add_argument(
+        "--step-tolerance-kpa",
+        type=float,
+        metavar="T",
+        help="manifest pressures less than T kPa apart are one step, its frames pooled (gauge "
+        "readings of one held pressure); 0: every distinct value is a step (default "
+        f"{DEFAULT_STEP_TOLERANCE_KPA:g}; a video run's steps come from --tolerance-kpa)",
+    )
     scale_args(c)
     add_video_args(c)
     c.set_defaults(func=_cmd_calibrate)
@@ -53,7 +63,16 @@ def session_options(args: argparse.Namespace) -> SessionOptions:
     ``--inverse-phase`` and ``--per-frame-contact`` (the fit's settings: their defaults)."""
     from contactcal.infer.calibration.calibrate import SessionOptions
 
-    return SessionOptions(inverse_phase=args.inverse_phase, session_rule=not args.per_frame_contact)
+    t = args.step_tolerance_kpa
+    if t is None:
+        t = DEFAULT_STEP_TOLERANCE_KPA
+    elif not (math.isfinite(t) and t >= 0.0):
+        raise ValueError(f"--step-tolerance-kpa {t:g}: expected a finite value >= 0 kPa")
+    return SessionOptions(
+        inverse_phase=args.inverse_phase,
+        session_rule=not args.per_frame_contact,
+        step_tolerance_kpa=t,
+    )
 
 
 def _cmd_calibrate(args: argparse.Namespace) -> int:

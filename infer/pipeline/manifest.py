@@ -13,7 +13,9 @@ Required columns: ``file`` (an image path, relative to the manifest's folder or 
 image on one row only) and ``pressure_kpa`` (chamber gauge pressure, kPa, 0 to
 :data:`MAX_PRESSURE_KPA`). Optional ``phase``: ``loading`` or ``unloading`` (case-insensitive).
 Any other column (e.g. ``timestamp``) is kept per frame (:attr:`Frame.extras`). A pressure may
-repeat: the frames of one phase at one pressure are one pressure *step*. Without a ``phase``
+repeat: the frames of one phase at one pressure are one pressure *step*; readings less than a
+tolerance apart (a gauge's, of one held pressure) are read as one step
+(:mod:`~contactcal.infer.pipeline.readings`). Without a ``phase``
 column the passes are read from the row order (rising then falling: the rows after the maximum
 are the unloading pass; see :func:`~contactcal.infer.calibration.phases.phases_from_order`).
 Blank lines are skipped. `read_manifest` returns the frames sorted by phase (loading first), then
@@ -37,8 +39,11 @@ from contactcal.infer.calibration.phases import (
     parse_phase,
     phases_from_order,
 )
+from contactcal.infer.pipeline.readings import DEFAULT_STEP_TOLERANCE_KPA, step_pressures
 
 REQUIRED_COLUMNS: tuple[str, ...] = ("file", "pressure_kpa")
+#: The extra a frame gets when its reading is read as its step's pressure: the reading.
+READING_COLUMN = "pressure_kpa_read"
 PHASE_COLUMN = "phase"
 _KNOWN = (*REQUIRED_COLUMNS, PHASE_COLUMN)
 _HEADER = ",".join(REQUIRED_COLUMNS)
@@ -83,6 +88,7 @@ class Session:
 
     frames: list[Frame]  # sorted by phase (loading first), pressure, row; [0] is the reference
     phase_source: str  # phases.FROM_COLUMN, FROM_ORDER or SINGLE_PASS
+    grouped: int = 0  # frames whose reading was read as its step's pressure (readings.py)
 
 
 #: kPa: a session whose highest pressure is below this cannot be a calibration sweep of the
@@ -122,16 +128,24 @@ def beside_manifest(path: str | os.PathLike[str], name: str = "rig.json") -> Pat
     return Path(path).resolve().parent / name
 
 
-def read_manifest(path: str | os.PathLike[str]) -> list[Frame]:
+def read_manifest(
+    path: str | os.PathLike[str], step_tolerance_kpa: float = DEFAULT_STEP_TOLERANCE_KPA
+) -> list[Frame]:
     """The frames of a session manifest (see `read_session`); ``frames[0]`` is the reference."""
-    return read_session(path).frames
+    return read_session(path, step_tolerance_kpa).frames
 
 
-def read_session(path: str | os.PathLike[str]) -> Session:
+def read_session(
+    path: str | os.PathLike[str], step_tolerance_kpa: float = DEFAULT_STEP_TOLERANCE_KPA
+) -> Session:
     """Read and validate a session manifest.
 
     Args:
         path: the manifest CSV.
+        step_tolerance_kpa: readings less than this apart are one step
+            (:func:`~contactcal.infer.pipeline.readings.step_pressures`): such a frame's
+            ``pressure_kpa`` is its step's, and its reading is kept in ``extras`` as
+            :data:`READING_COLUMN`. 0: every distinct value is a step.
 
     Returns:
         The :class:`Session`: frames sorted by phase (loading first), pressure and row.
@@ -160,17 +174,34 @@ def read_session(path: str | os.PathLike[str]) -> Session:
         _parse_row(where, mpath, names, row_no, line_no, cells)
         for row_no, (line_no, cells) in enumerate(data, start=1)
     ]
+    frames, grouped = _as_steps(frames, step_tolerance_kpa)
     source = FROM_COLUMN
     if PHASE_COLUMN not in names:
         phases, source = phases_from_order([f.pressure_kpa for f in frames])
         frames = [_with(f, phase=ph) for f, ph in zip(frames, phases, strict=True)]
     frames = _number_steps(where, frames)
     _check_files(where, frames, mpath.resolve().parent)
-    return Session(frames, source)
+    return Session(frames, source, grouped)
 
 
 def _with(frame: Frame, **changes: object) -> Frame:
     return Frame(**{**frame.__dict__, **changes})  # type: ignore[arg-type]
+
+
+def _as_steps(frames: list[Frame], tolerance_kpa: float) -> tuple[list[Frame], int]:
+    """The frames with their step's pressure, and how many were moved (their reading kept as
+    the extra :data:`READING_COLUMN`, unless the manifest has such a column)."""
+    levels = step_pressures([f.pressure_kpa for f in frames], tolerance_kpa)
+    out, moved = [], 0
+    for f, level in zip(frames, levels, strict=True):
+        if level != f.pressure_kpa:
+            kept = dict(f.extras)
+            extras = f.extras
+            if READING_COLUMN not in kept:
+                extras = (*extras, (READING_COLUMN, f"{f.pressure_kpa:g}"))
+            f, moved = _with(f, pressure_kpa=level, extras=extras), moved + 1
+        out.append(f)
+    return out, moved
 
 
 def _read_rows(mpath: Path) -> list[tuple[int, list[str]]]:

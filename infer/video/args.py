@@ -76,6 +76,11 @@ def is_video_run(args: argparse.Namespace) -> bool:
         raise ValueError("calibrate: --video/--camera need --pressure-log LOG.csv")
     if args.overlay is not None:
         raise ValueError("calibrate: --overlay is for MANIFEST.csv; with a video use --preview")
+    if getattr(args, "step_tolerance_kpa", None) is not None:
+        raise ValueError(
+            "calibrate: --step-tolerance-kpa is for MANIFEST.csv; a video run finds its steps "
+            "with --tolerance-kpa"
+        )
     if args.duration_s is not None and (args.camera is None or not args.duration_s > 0):
         raise ValueError("calibrate: --duration-s is for --camera and must be > 0")
     if args.show and sys.platform.startswith("linux") and not os.environ.get("DISPLAY"):

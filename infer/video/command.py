@@ -12,6 +12,7 @@ from __future__ import annotations
 import argparse
 import sys
 from collections.abc import Callable, Iterator
+from dataclasses import replace
 from pathlib import Path
 from typing import TYPE_CHECKING
 
@@ -150,7 +151,7 @@ def calibrate_video(
             args.out,
             args.method,
             measure,
-            session_options(args),
+            replace(session_options(args), step_tolerance_kpa=0.0),  # steps found already
             provenance,
             outputs=outs,
             manifest_as=final_manifest,
