@@ -155,6 +155,18 @@ def test_phase_column(tmp_path: Path) -> None:
     _fails(_session(tmp_path, text), "unloading pass has 1 frame", ">= 2 pressure steps")
 
 
+@pytest.mark.parametrize("name", ["phases", "pass", "Direction"])
+def test_passes_in_a_column_of_another_name_are_refused(tmp_path: Path, name: str) -> None:
+    """A misspelt or renamed phase column was an extra column: the passes it states were
+    silently read from the row order (here: one pass, merging loading and unloading)."""
+    names = ("a.png", "b.png", "c.png", "d.png")
+    text = f"file,pressure_kpa,{name}\na.png,0,loading\nb.png,2,unloading\n"
+    text += "c.png,2,loading\nd.png,0,Unloading\n"
+    _fails(_session(tmp_path, text, names), f"column '{name}' holds loading/unloading", "'phase'")
+    other = "file,pressure_kpa,note\na.png,0,loading\nb.png,2,dusty\nc.png,4,\n"
+    assert [f.pressure_kpa for f in read_manifest(_session(tmp_path, other))] == [0, 2, 4]
+
+
 def test_phases_from_row_order(tmp_path: Path) -> None:
     names = ("a.png", "b.png", "c.png", "d.png", "e.png", "f.png")
     text = "file,pressure_kpa\na.png,0\nb.png,2\nc.png,4\nd.png,4\ne.png,2\nf.png,0\n"

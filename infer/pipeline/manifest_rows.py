@@ -1,0 +1,168 @@
+"""A session manifest's text → :class:`Frame` rows: the header, the cells, the pressures.
+
+The format and what :func:`~contactcal.infer.pipeline.manifest.read_session` makes of the rows
+(phases, steps, files): :mod:`contactcal.infer.pipeline.manifest`.
+"""
+
+from __future__ import annotations
+
+import csv
+import math
+from dataclasses import dataclass
+from pathlib import Path
+
+from contactcal.infer.calibration.phases import LOADING, PHASES, parse_phase
+
+REQUIRED_COLUMNS: tuple[str, ...] = ("file", "pressure_kpa")
+PHASE_COLUMN = "phase"
+KNOWN_COLUMNS = (*REQUIRED_COLUMNS, PHASE_COLUMN)
+HEADER = ",".join(REQUIRED_COLUMNS)
+#: Highest plausible chamber gauge pressure, kPa. The display works at 0-20 kPa; 100 kPa (1 bar
+#: above the atmosphere on a 70 µm membrane) is five times that, so a larger value is a unit slip
+#: or a typo, not a calibration step: mbar for kPa turns a 0-20 kPa sweep's top into 200, Pa into
+#: 20000. (A 0-10 kPa sweep in mbar tops out at the bound itself and passes: no bound tells it
+#: from a 100 kPa display.) Negative gauge pressure, suction, is no calibration step either: the
+#: lower bound is 0.
+MAX_PRESSURE_KPA = 100.0
+
+
+class ManifestError(ValueError):
+    """A session manifest is missing or malformed; the message names the file and the row."""
+
+
+@dataclass(frozen=True)
+class Frame:
+    """One manifest row.
+
+    Attributes:
+        file: absolute image path (relative paths are resolved against the manifest's folder).
+        pressure_kpa: chamber gauge pressure, kPa, >= 0.
+        row: 1-based data row number in the manifest (header and blank lines not counted).
+        phase: ``"loading"`` or ``"unloading"``.
+        step: 0-based index of the frame's pressure step within its phase (ascending pressure).
+        extras: the row's other columns as ``(name, cell)`` pairs, in header order.
+    """
+
+    file: Path
+    pressure_kpa: float
+    row: int
+    phase: str = LOADING
+    step: int = 0
+    extras: tuple[tuple[str, str], ...] = ()
+
+
+def read_rows(mpath: Path) -> list[tuple[int, list[str]]]:
+    """Non-blank CSV rows as ``(line number, cells)``."""
+    try:
+        with open(mpath, encoding="utf-8-sig", newline="") as fh:
+            reader = csv.reader(fh)
+            rows = []
+            for cells in reader:
+                if any(c.strip() for c in cells):
+                    rows.append((reader.line_num, cells))
+    except FileNotFoundError:
+        raise ManifestError(
+            f"{mpath}: manifest not found; expected a CSV file '{HEADER}' listing the "
+            "session's images (check the path)"
+        ) from None
+    except IsADirectoryError:
+        raise ManifestError(
+            f"{mpath}: is a folder; expected the manifest CSV file inside it (e.g. manifest.csv)"
+        ) from None
+    except OSError as exc:
+        raise ManifestError(
+            f"{mpath}: cannot read the manifest ({exc.strerror or exc}); "
+            "check the file's permissions"
+        ) from None
+    except UnicodeDecodeError as exc:
+        raise ManifestError(
+            f"{mpath}: not UTF-8 text ({exc.reason} at byte {exc.start}); "
+            "save the manifest as a UTF-8 CSV"
+        ) from None
+    except csv.Error as exc:
+        raise ManifestError(f"{mpath}: malformed CSV ({exc}); expected '{HEADER}' rows") from None
+    return rows
+
+
+def check_header(where: str, line_no: int, header: list[str]) -> list[str]:
+    """The stripped column names; required columns present, no name twice or empty."""
+    names = [h.strip() for h in header]
+    at = f"{where}: header (line {line_no})"
+    hint = ""
+    if len(names) == 1 and any(sep in names[0] for sep in (";", "\t")):
+        hint = "; the manifest must be comma-separated"
+    dups = sorted({n for n in names if names.count(n) > 1})
+    if dups:
+        raise ManifestError(
+            f"{at}: column(s) {dups} appear twice; expected each column once (required: '{HEADER}')"
+        )
+    for i, name in enumerate(names, start=1):
+        near = [k for k in KNOWN_COLUMNS if k.lower() == name.lower() and k != name]
+        if not name or near:
+            what = f"column {i} has no name" if not name else f"column '{name}'"
+            did = f" (did you mean '{near[0]}'? names are case-sensitive)" if near else ""
+            raise ManifestError(
+                f"{at}: {what}{did}; expected the columns {list(REQUIRED_COLUMNS)}, optionally "
+                f"'{PHASE_COLUMN}' and other named columns{hint}"
+            )
+    for name in REQUIRED_COLUMNS:
+        if name not in names:
+            raise ManifestError(
+                f"{at}: missing required column '{name}'; the header must name '{HEADER}' "
+                f"(other columns are kept), got {','.join(names)!r}{hint}"
+            )
+    return names
+
+
+def _parse_pressure(at: str, cell: str) -> float:
+    try:
+        value = float(cell)
+    except ValueError:
+        raise ManifestError(
+            f"{at}: pressure_kpa {cell!r} is not a number; expected the gauge pressure in kPa, "
+            "e.g. 4.0 (decimal point, no unit)"
+        ) from None
+    if not math.isfinite(value):
+        raise ManifestError(f"{at}: pressure_kpa {cell!r} is not finite; expected a number of kPa")
+    if value < 0:
+        raise ManifestError(
+            f"{at}: pressure_kpa {value:g} is negative; expected a gauge pressure >= 0 kPa"
+        )
+    if value > MAX_PRESSURE_KPA:
+        raise ManifestError(
+            f"{at}: pressure_kpa {cell.strip()} is above the plausible {MAX_PRESSURE_KPA:g} kPa "
+            "(the display works at 0-20 kPa); expected kPa, not mbar, Pa or another unit"
+        )
+    return value
+
+
+def parse_row(
+    where: str, mpath: Path, names: list[str], row_no: int, line_no: int, cells: list[str]
+) -> Frame:
+    """One data row → a :class:`Frame` (path resolved against the manifest's folder)."""
+    at = f"{where}: row {row_no} (line {line_no})"
+    if len(cells) != len(names):
+        raise ManifestError(
+            f"{at}: expected {len(names)} cells ({','.join(names)}), got {len(cells)}: "
+            f"{cells!r}; quote cells that contain commas"
+        )
+    row = dict(zip(names, (c.strip() for c in cells), strict=True))
+    if not row["file"]:
+        raise ManifestError(
+            f"{at}: empty 'file' cell; expected an image path relative to the manifest's folder"
+        )
+    pressure = _parse_pressure(at, row["pressure_kpa"])
+    phase = LOADING
+    if PHASE_COLUMN in row:
+        parsed = parse_phase(row[PHASE_COLUMN])
+        if parsed is None:
+            raise ManifestError(
+                f"{at}: phase {row[PHASE_COLUMN]!r}; expected one of {', '.join(PHASES)} "
+                "(case-insensitive)"
+            )
+        phase = parsed
+    file = Path(row["file"]).expanduser()
+    if not file.is_absolute():
+        file = mpath.resolve().parent / file
+    extras = tuple((n, row[n]) for n in names if n not in KNOWN_COLUMNS)
+    return Frame(file.resolve(), pressure, row_no, phase, 0, extras)
