@@ -297,6 +297,21 @@ def test_a_failing_standard_output_is_named(
     assert "[Errno" not in line
 
 
+def test_measure_writes_only_a_json_name(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """``measure --out`` must end in .json (or be -): a manifest's name was replaced by JSON."""
+    manifest = tmp_path / "manifest.csv"
+    manifest.write_text("file,pressure_kpa\n")
+    frame = str(EXAMPLE / "p05.0kpa.jpg")
+    for out, why in ((manifest, "a name like a manifest's"), (tmp_path / "x.png", "an image name")):
+        assert main(["measure", "--method", "classical", "--out", str(out), frame]) == 2
+        line = _one_error(capsys)
+        assert f"--out {out}: expected a JSON file name ending in .json" in line and why in line
+    assert manifest.read_text() == "file,pressure_kpa\n"
+    assert not (tmp_path / "x.png").exists()
+
+
 def test_no_standard_output_at_all_is_not_an_error(
     tmp_path: Path, monkeypatch: pytest.MonkeyPatch
 ) -> None:

@@ -44,10 +44,16 @@ def _cmd_measure(args: argparse.Namespace) -> int:
     check_device_id(args.device_id)
     check_change_gate(args)
     to_stdout = str(args.out) == "-"
-    if args.out.suffix.lower() in SUPPORTED_SUFFIXES:
+    if not to_stdout and args.out.suffix.lower() != ".json":
+        image = args.out.suffix.lower() in SUPPORTED_SUFFIXES
         raise ValueError(
-            f"--out {args.out}: expected a JSON file name (results.json) or - for standard "
-            "output, got an image name (did the shell expand a pattern right after --out?)"
+            f"--out {args.out}: expected a JSON file name ending in .json (results.json) or - "
+            "for standard output"
+            + (
+                ", got an image name (did the shell expand a pattern right after --out?)"
+                if image
+                else " (measure writes JSON; a name like a manifest's would replace that file)"
+            )
         )
     with run_outputs([*args.images, *run_inputs(args)]) as outs:
         json_path = None if to_stdout else outs.stage(args.out)  # refused here, before work
