@@ -85,8 +85,9 @@ def _summary(fit: SessionFit) -> list[str]:
         lines += warnings + _resolution(name, ph)
     h = fit.hysteresis
     if h is not None and h["max_abs_difference"] is not None:
+        mean = round(h["mean_difference"], 1) + 0.0  # no "-0.0"
         lines.append(
-            f"hysteresis (unloading - loading): mean {h['mean_difference']:.1f} {unit}, max |.| "
+            f"hysteresis (unloading - loading): mean {mean:.1f} {unit}, max |.| "
             f"{h['max_abs_difference']:.1f} {unit} at {h['max_abs_at_kpa']:g} kPa, over "
             f"{len(h['pressures_kpa'])} common pressure(s)"
         )

@@ -129,7 +129,7 @@ def pool_offsets(paths: Sequence[str | os.PathLike[str]]) -> dict[str, Any]:
     runs, left_out = _sessions(paths)
     if len(runs) < MIN_SESSIONS:
         raise ValueError(
-            f"{len(runs)} of the {len(paths)} evaluations have >= {MIN_FRAMES} frames in contact "
+            f"{len(runs)} of {len(paths)} evaluation(s) have >= {MIN_FRAMES} frames in contact "
             f"by both the labels and the U-Net; pooling needs {MIN_SESSIONS} such sessions (a "
             "90 % interval of a median needs five values)"
         )
