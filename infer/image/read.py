@@ -38,6 +38,10 @@ MIN_FRAME_SIDE_PX = 16
 #: 21:9 (2.3); a more elongated image is a strip or a raw buffer read with the wrong width.
 MAX_ASPECT_RATIO = 4.0
 
+#: Bits per sample of the deepest image read (16-bit PNG or TIFF); ``--bit-depth`` states
+#: 1 to this many significant bits.
+MAX_BIT_DEPTH = 16
+
 
 #: File signatures (first bytes) of the formats read, by name and suffixes.
 _SIGNATURES: tuple[tuple[str, tuple[bytes, ...], tuple[str, ...]], ...] = (
@@ -186,8 +190,8 @@ def load_image(
     """
     if reduce not in (1, 2, 4, 8):
         raise ValueError(f"reduce must be 1, 2, 4 or 8, got {reduce}")
-    if bit_depth is not None and not 1 <= bit_depth <= 16:
-        raise ValueError(f"bit depth must be 1-16 bits per sample, got {bit_depth}")
+    if bit_depth is not None and not 1 <= bit_depth <= MAX_BIT_DEPTH:
+        raise ValueError(f"bit depth must be 1-{MAX_BIT_DEPTH} bits per sample, got {bit_depth}")
     p = Path(path)
     data = read_file_bytes(p)
     buf = np.frombuffer(data, dtype=np.uint8)

@@ -176,12 +176,13 @@ def measure_options(args: argparse.Namespace, default_rig: Path | None = None) -
     line: ``--model``, the scale and boundary offset (:func:`resolve_rig`; ``default_rig``: the
     ``rig.json`` read when no option names one),
     ``--bit-depth``, ``--no-change-gate``, ``--threads`` and ``--overlay`` (outlines)."""
+    from contactcal.infer.image.read import MAX_BIT_DEPTH
     from contactcal.infer.pipeline.options import MeasureOptions
 
-    if args.bit_depth is not None and not 1 <= args.bit_depth <= 16:
+    if args.bit_depth is not None and not 1 <= args.bit_depth <= MAX_BIT_DEPTH:
         raise ValueError(
-            f"--bit-depth {args.bit_depth}: expected 1-16 significant bits per sample (e.g. 12 "
-            "for a 12-bit camera's PNGs, 16 for full range)"
+            f"--bit-depth {args.bit_depth}: expected 1-{MAX_BIT_DEPTH} significant bits per "
+            f"sample (e.g. 12 for a 12-bit camera's PNGs, {MAX_BIT_DEPTH} for full range)"
         )
     scale, boundary = resolve_rig(args, default_rig)
     return MeasureOptions(
