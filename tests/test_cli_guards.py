@@ -322,6 +322,7 @@ def test_no_standard_output_at_all_is_not_an_error(
     argv = ["measure", str(EXAMPLE / "p05.0kpa.jpg"), "--method", "classical", "--out", str(out)]
     assert main(argv) == 0
     assert json.loads(out.read_text())[0]["contact"] is True
+    assert main([*argv[:-1], "-"]) == 2  # --out -: where its JSON would go is closed
 
 
 def test_a_full_standard_output_inside_a_run_keeps_its_own_message(tmp_path: Path) -> None:

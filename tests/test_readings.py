@@ -9,41 +9,98 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from contactcal.infer.calibration.phases import FROM_ORDER
+from contactcal.infer.calibration.phases import FROM_ORDER, PHASES
 from contactcal.infer.cli import main
-from contactcal.infer.pipeline.manifest import READING_COLUMN, read_session
-from contactcal.infer.pipeline.readings import DEFAULT_STEP_TOLERANCE_KPA, step_pressures
+from contactcal.infer.pipeline.manifest import READING_COLUMN, ManifestError, read_session
+from contactcal.infer.pipeline.readings import (
+    DEFAULT_STEP_TOLERANCE_KPA,
+    pooled_pressures,
+    step_labels,
+)
 
 EXAMPLE = Path(__file__).resolve().parents[1] / "examples" / "session"
 
 
 def test_readings_of_one_step_take_its_median() -> None:
-    got = step_pressures([5.02, 0.0, 4.98, 10.01, 5.01, 9.97, 0.01], 0.1)
-    assert got == [5.01, 0.005, 5.01, 9.99, 5.01, 9.99, 0.005]
+    readings = [5.02, 0.0, 4.98, 10.01, 5.01, 9.97, 0.01]
+    labels = step_labels(readings, 0.1)
+    assert labels.tolist() == [1, 0, 1, 2, 1, 2, 0]
+    assert pooled_pressures(readings, labels) == [5.01, 0.005, 5.01, 9.99, 5.01, 9.99, 0.005]
 
 
 def test_setpoints_come_back_unchanged() -> None:
     """Exact repeated setpoints, and setpoints exactly one tolerance apart whatever the
     floating-point rounding of their difference (0.3 - 0.2 < 0.1), stay as they are."""
     fine = [round(0.1 * k, 10) for k in range(31)]
-    assert step_pressures(fine, 0.1) == fine
+    assert step_labels(fine, 0.1).tolist() == list(range(31))
     coarse = [0.0, 0.0, 2.5, 2.5, 2.5, 20.0]
-    assert step_pressures(coarse, DEFAULT_STEP_TOLERANCE_KPA) == coarse
-    assert step_pressures([], 0.1) == []
+    labels = step_labels(coarse, DEFAULT_STEP_TOLERANCE_KPA)
+    assert labels.tolist() == [0, 0, 1, 1, 1, 2]
+    assert pooled_pressures(coarse, labels) == coarse
+    assert step_labels([], 0.1).tolist() == []
 
 
 def test_zero_tolerance_keeps_every_reading_and_bad_tolerances_are_refused() -> None:
-    readings = [5.02, 4.98, 5.01]
-    assert step_pressures(readings, 0.0) == readings
-    for bad in (-0.1, float("nan"), float("inf")):
-        with pytest.raises(ValueError, match="expected a finite value >= 0"):
-            step_pressures(readings, bad)
+    assert step_labels([5.02, 4.98, 5.02], 0.0).tolist() == [1, 0, 1]
+    for bad in (-0.1, float("nan"), float("inf"), 1.5):
+        with pytest.raises(ValueError, match="expected 0 to 1 kPa"):
+            step_labels([5.0], bad)
 
 
-def test_a_step_is_measured_from_its_lowest_reading_not_chained() -> None:
-    """Readings 0.06 kPa apart in a row are not one long step: each step spans < T."""
-    got = step_pressures([0.0, 0.06, 0.12, 0.18], 0.1)
-    assert got == [0.03, 0.03, 0.15, 0.15]
+def test_readings_chain_and_setpoints_closer_than_the_tolerance_merge() -> None:
+    """Sorted readings less than T apart are one step however wide it gets (a held pressure's
+    readings may span more than T); so setpoints 0.06 apart are one step at T = 0.1."""
+    assert step_labels([0.0, 0.06, 0.12, 0.18, 1.0], 0.1).tolist() == [0, 0, 0, 0, 1]
+    assert step_labels([0.0, 0.06, 0.12, 0.18, 1.0], 0.05).tolist() == [0, 1, 2, 3, 4]
+
+
+def _readings_manifest(folder: Path, pressures: list[float], extra: str = "") -> Path:
+    """A manifest of dummy files (``read_session`` only checks that they exist)."""
+    lines = ["file,pressure_kpa" + ("," + extra if extra else "")]
+    for k, p in enumerate(pressures):
+        (folder / f"f{k:03d}.png").write_bytes(b"x")
+        lines.append(f"f{k:03d}.png,{p:.4f}" + (",x" if extra else ""))
+    (folder / "manifest.csv").write_text("\n".join(lines) + "\n", encoding="utf-8")
+    return folder / "manifest.csv"
+
+
+def test_gaussian_gauge_jitter_keeps_both_passes(tmp_path: Path) -> None:
+    """0-20-0 kPa in 1 kPa steps, three frames per step, Gaussian jitter of 0.03 kPa and the
+    unloading pass 0.07 kPa below the loading one (a regulator's hysteresis): every session is
+    read as two passes of 21 and 20 steps, each pass's step at its own readings' median (at
+    a tolerance of 0.1 kPa, about a quarter of such sessions had a step split in two)."""
+    rng = np.random.default_rng(5)
+    setpoints = [*range(21), *range(19, -1, -1)]
+    for n in range(40):
+        folder = tmp_path / str(n)
+        folder.mkdir()
+        readings = [
+            max(0.0, p - 0.07 * (k > 20) + rng.normal(0.0, 0.03))
+            for k, p in enumerate(setpoints)
+            for _ in range(3)
+        ]
+        session = read_session(_readings_manifest(folder, readings))
+        assert session.phase_source == FROM_ORDER
+        by_phase = {ph: [f for f in session.frames if f.phase == ph] for ph in PHASES}
+        assert [len({f.pressure_kpa for f in fs}) for fs in by_phase.values()] == [21, 20]
+        for fs in by_phase.values():
+            for f in fs:
+                same = [g for g in fs if g.pressure_kpa == f.pressure_kpa]
+                mine = [float(dict(g.extras).get(READING_COLUMN, g.pressure_kpa)) for g in same]
+                assert f.pressure_kpa == pytest.approx(float(np.median(mine)), abs=1e-6)
+
+
+def test_a_reading_column_of_the_manifest_is_not_overwritten(tmp_path: Path) -> None:
+    manifest = _readings_manifest(tmp_path, [0.0, 0.02, 4.98, 5.01], extra=READING_COLUMN)
+    with pytest.raises(ManifestError, match=f"the column '{READING_COLUMN}', which the manifest"):
+        read_session(manifest)
+    assert read_session(manifest, 0.0).pooled is None
+
+
+def test_merged_steps_name_the_tolerance(tmp_path: Path) -> None:
+    manifest = _readings_manifest(tmp_path, [0.0, 0.6, 1.2])
+    with pytest.raises(ManifestError, match="at 1 pressure.*--step-tolerance-kpa"):
+        read_session(manifest, 1.0)
 
 
 def _jittered(folder: Path, rng: np.random.Generator, unloading: bool = False) -> Path:
@@ -76,11 +133,11 @@ def test_a_manifest_of_readings_is_read_as_steps(tmp_path: Path) -> None:
     assert len({f.pressure_kpa for f in loading}) == 21 and len(loading) == 63
     assert max(f.step for f in session.frames if f.phase == "unloading") == 19
     moved = [f for f in session.frames if READING_COLUMN in dict(f.extras)]
-    assert session.grouped == len(moved) > 60
+    assert session.pooled is not None and session.pooled.frames == len(moved) > 60
     f = moved[0]
     assert abs(float(dict(f.extras)[READING_COLUMN]) - f.pressure_kpa) < 0.06
     exact = read_session(manifest, 0.0)
-    assert exact.grouped == 0 and exact.phase_source != FROM_ORDER
+    assert exact.pooled is None and exact.phase_source != FROM_ORDER
 
 
 def test_calibrate_pools_readings_and_says_so(
@@ -95,9 +152,12 @@ def test_calibrate_pools_readings_and_says_so(
     steps = record["steps"]
     assert len(steps) == 21 and all(s["n_frames"] == 3 for s in steps)
     assert record["extra"]["step_tolerance_kpa"] == DEFAULT_STEP_TOLERANCE_KPA
-    assert record["extra"]["readings_grouped"] > 0
-    assert f"note: {record['extra']['readings_grouped']} frame(s) read as" in printed
+    pooled = record["extra"]["readings_pooled"]
+    assert pooled["steps"] >= 15 and pooled["frames"] == 3 * pooled["steps"]
+    assert f"note: {pooled['frames']} frame(s) in {pooled['steps']} step(s) pooled" in printed
     argv = ["calibrate", str(manifest), "--out", str(tmp_path / "x"), "--step-tolerance-kpa"]
     assert main([*argv, "-1"]) == 2
-    assert "--step-tolerance-kpa -1: expected a finite value >= 0 kPa" in capsys.readouterr().err
+    assert "--step-tolerance-kpa -1: step tolerance -1.0 kPa: expected 0 to 1 kPa" in (
+        capsys.readouterr().err
+    )
     assert not (tmp_path / "x").exists()

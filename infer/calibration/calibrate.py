@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import os
 from collections.abc import Sequence
-from dataclasses import dataclass, field, replace
+from dataclasses import asdict, dataclass, field, replace
 from pathlib import Path
 
 from contactcal.infer.calibration.curve import MM2, PX, Curve
@@ -52,11 +52,13 @@ class CalibrationReport:
     fit: SessionFit  # every phase's steps, curve and band; hysteresis
 
 
-#: The table's line when readings were pooled into steps (``{n}`` frames, ``{t}`` kPa).
-GROUPED_NOTE = (
-    "note: {n} frame(s) read as their step's pressure (manifest readings less than {t:g} kPa "
-    "apart are one step; each keeps its reading as pressure_kpa_read; --step-tolerance-kpa 0 "
-    "reads every distinct value as a step)"
+#: The table's line when readings were pooled into steps (``{p}``: the session's
+#: :class:`~contactcal.infer.pipeline.manifest.Pooled`, ``{t}``: the tolerance, kPa).
+POOLED_NOTE = (
+    "note: {p.frames} frame(s) in {p.steps} step(s) pooled from differing gauge readings "
+    "(widest {p.widest_kpa[0]:g}-{p.widest_kpa[1]:g} kPa; readings less than {t:g} kPa apart "
+    "are one step at their median, each frame keeping its reading as pressure_kpa_read; "
+    "--step-tolerance-kpa 0 reads every distinct value as a step)"
 )
 
 
@@ -147,7 +149,7 @@ def calibrate_session(
         **_extra(recorded, listed, measure.scale, measured),
         "session_rule": options.session_rule,
         "step_tolerance_kpa": options.step_tolerance_kpa,
-        "readings_grouped": session.grouped,
+        "readings_pooled": None if session.pooled is None else asdict(session.pooled),
     }
     extra |= checks | {"identical_frames": same}
     model = None if measure.model is None else str(measure.model)
@@ -163,8 +165,8 @@ def calibrate_session(
         )
     if same:
         table += "\n" + identical_frames_warning(same)
-    if session.grouped:
-        table += "\n" + GROUPED_NOTE.format(n=session.grouped, t=options.step_tolerance_kpa)
+    if session.pooled is not None:
+        table += "\n" + POOLED_NOTE.format(p=session.pooled, t=options.step_tolerance_kpa)
     return CalibrationReport(table, frames, measured, fit.curve, paths, fit)
 
 

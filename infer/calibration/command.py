@@ -4,7 +4,6 @@ through :mod:`contactcal.infer.video.command`)."""
 from __future__ import annotations
 
 import argparse
-import math
 from pathlib import Path
 from typing import TYPE_CHECKING
 
@@ -19,7 +18,7 @@ from contactcal.infer.pipeline.args import (
     run_inputs,
     scale_args,
 )
-from contactcal.infer.pipeline.readings import DEFAULT_STEP_TOLERANCE_KPA
+from contactcal.infer.pipeline.readings import DEFAULT_STEP_TOLERANCE_KPA, check_tolerance
 
 if TYPE_CHECKING:
     from contactcal.infer.calibration.calibrate import SessionOptions
@@ -63,11 +62,11 @@ def session_options(args: argparse.Namespace) -> SessionOptions:
     ``--inverse-phase`` and ``--per-frame-contact`` (the fit's settings: their defaults)."""
     from contactcal.infer.calibration.calibrate import SessionOptions
 
-    t = args.step_tolerance_kpa
-    if t is None:
-        t = DEFAULT_STEP_TOLERANCE_KPA
-    elif not (math.isfinite(t) and t >= 0.0):
-        raise ValueError(f"--step-tolerance-kpa {t:g}: expected a finite value >= 0 kPa")
+    t = DEFAULT_STEP_TOLERANCE_KPA if args.step_tolerance_kpa is None else args.step_tolerance_kpa
+    try:
+        check_tolerance(t)
+    except ValueError as exc:
+        raise ValueError(f"--step-tolerance-kpa {t:g}: {exc}") from None
     return SessionOptions(
         inverse_phase=args.inverse_phase,
         session_rule=not args.per_frame_contact,

@@ -8,6 +8,7 @@ it, read from the row order (:func:`phases_from_order`).
 from __future__ import annotations
 
 import itertools
+import statistics
 from collections.abc import Sequence
 
 LOADING = "loading"
@@ -25,16 +26,22 @@ def parse_phase(cell: str) -> str | None:
     return value if value in PHASES else None
 
 
-def phases_from_order(pressures_kpa: Sequence[float]) -> tuple[list[str], str]:
+def phases_from_order(
+    pressures_kpa: Sequence[float], slack_kpa: float = 0.0
+) -> tuple[list[str], str]:
     """Each row's phase from the row order, and how it was determined.
 
     Rule: when the pressures rise (non-decreasing, >= 2 distinct values up to the maximum) and
     then fall (non-increasing after the last row at the maximum, at least one row), the rows
     after the last row at the maximum are the unloading pass and the others the loading pass.
     Any other order (e.g. rows in no particular order, or only falling) is one loading pass.
+    With ``slack_kpa`` > 0, "non-decreasing" allows a row up to it below the highest row so
+    far, "non-increasing" up to it above the lowest one, and "at the maximum" up to it below
+    (gauge readings of one held step that straddle a step boundary).
 
     Args:
         pressures_kpa: ``(N,)`` pressures in row order, kPa.
+        slack_kpa: kPa, >= 0 (see above; :func:`order_slack`).
 
     Returns:
         ``(phases, source)``: one phase per row, and :data:`FROM_ORDER` or :data:`SINGLE_PASS`.
@@ -44,10 +51,25 @@ def phases_from_order(pressures_kpa: Sequence[float]) -> tuple[list[str], str]:
     if not p:
         return single, SINGLE_PASS
     top = max(p)
-    last = max(i for i, v in enumerate(p) if v == top)
+    last = max(i for i, v in enumerate(p) if v >= top - slack_kpa)
     rise, fall = p[: last + 1], p[last + 1 :]
-    rising = all(a <= b for a, b in itertools.pairwise(rise)) and len(set(rise)) >= 2
-    falling = all(a >= b for a, b in itertools.pairwise(fall))
+    peaks = list(itertools.accumulate(rise, max))[:-1]  # the highest row before each row
+    rising = all(b >= a - slack_kpa for a, b in zip(peaks, rise[1:], strict=True))
+    rising = rising and len(set(rise)) >= 2
+    lows = list(itertools.accumulate(fall, min))[:-1]
+    falling = all(b <= a + slack_kpa for a, b in zip(lows, fall[1:], strict=True))
     if not (fall and rising and falling):
         return single, SINGLE_PASS
     return [LOADING] * len(rise) + [UNLOADING] * len(fall), FROM_ORDER
+
+
+def order_slack(levels_kpa: Sequence[float]) -> float:
+    """The slack for :func:`phases_from_order` (kPa): half the median gap between the
+    session's consecutive distinct step pressures, so that one step's frames straddling a step
+    boundary (a few hundredths of a kPa) never read as a reversal, and a step back by half a
+    step still does. 0 with fewer than three distinct pressures."""
+    distinct = sorted(set(levels_kpa))
+    if len(distinct) < 3:
+        return 0.0
+    gaps = [b - a for a, b in itertools.pairwise(distinct)]
+    return 0.5 * statistics.median(gaps)

@@ -181,7 +181,7 @@ def evaluate_session(
     measure = measure if measure is not None else MeasureOptions()
     _check_request(method, labels, out)
     names = list(METHODS) if method == "both" else [method]
-    frames = read_manifest(manifest)
+    frames = read_manifest(manifest, 0.0)  # each frame scored at its own pressure
     base = manifest.resolve().parent
     labs = read_labels(labels, frames, manifest)
     labelled, labs, unlabelled = _labelled(frames, labs, labels, base)

@@ -44,6 +44,11 @@ def _cmd_measure(args: argparse.Namespace) -> int:
     check_device_id(args.device_id)
     check_change_gate(args)
     to_stdout = str(args.out) == "-"
+    if to_stdout and sys.stdout is None:
+        raise ValueError(
+            "--out -: standard output is closed (the command was started with it closed); "
+            "give --out results.json, or run it with standard output open"
+        )
     if not to_stdout and args.out.suffix.lower() != ".json":
         image = args.out.suffix.lower() in SUPPORTED_SUFFIXES
         raise ValueError(

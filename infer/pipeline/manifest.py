@@ -30,10 +30,13 @@ from collections.abc import Sequence
 from dataclasses import dataclass
 from pathlib import Path
 
+import numpy as np
+
 from contactcal.infer.calibration.phases import (
     FROM_COLUMN,
     LOADING,
     PHASES,
+    order_slack,
     parse_phase,
     phases_from_order,
 )
@@ -48,7 +51,11 @@ from contactcal.infer.pipeline.manifest_rows import (
     parse_row,
     read_rows,
 )
-from contactcal.infer.pipeline.readings import DEFAULT_STEP_TOLERANCE_KPA, step_pressures
+from contactcal.infer.pipeline.readings import (
+    DEFAULT_STEP_TOLERANCE_KPA,
+    pooled_pressures,
+    step_labels,
+)
 
 __all__ = [
     "MAX_PRESSURE_KPA",
@@ -56,6 +63,7 @@ __all__ = [
     "REQUIRED_COLUMNS",
     "Frame",
     "ManifestError",
+    "Pooled",
     "Session",
     "beside_manifest",
     "check_sweep_top",
@@ -75,7 +83,16 @@ class Session:
 
     frames: list[Frame]  # sorted by phase (loading first), pressure, row; [0] is the reference
     phase_source: str  # phases.FROM_COLUMN, FROM_ORDER or SINGLE_PASS
-    grouped: int = 0  # frames whose reading was read as its step's pressure (readings.py)
+    pooled: Pooled | None = None  # steps pooled from differing readings (readings.py); None: none
+
+
+@dataclass(frozen=True)
+class Pooled:
+    """The steps of a session pooled from differing gauge readings."""
+
+    frames: int  # frames in such steps (each keeps its reading as READING_COLUMN)
+    steps: int  # such steps (per pass)
+    widest_kpa: tuple[float, float]  # the widest such step's lowest and highest reading, kPa
 
 
 #: kPa: a session whose highest pressure is below this cannot be a calibration sweep of the
@@ -129,16 +146,19 @@ def read_session(
 
     Args:
         path: the manifest CSV.
-        step_tolerance_kpa: readings less than this apart are one step
-            (:func:`~contactcal.infer.pipeline.readings.step_pressures`): such a frame's
-            ``pressure_kpa`` is its step's, and its reading is kept in ``extras`` as
-            :data:`READING_COLUMN`. 0: every distinct value is a step.
+        step_tolerance_kpa: kPa, sorted readings less than this apart are one step
+            (:func:`~contactcal.infer.pipeline.readings.step_labels`); the passes are read
+            from the steps' order, and each pass's frames of a step with differing readings
+            get the median of those readings as ``pressure_kpa``, their reading kept in
+            ``extras`` as :data:`READING_COLUMN` (:attr:`Session.pooled` says how many). 0:
+            every distinct value is a step.
 
     Returns:
         The :class:`Session`: frames sorted by phase (loading first), pressure and row.
 
     Raises:
         ManifestError: with the manifest path, the row, what was expected and how to fix it.
+        ValueError: a step tolerance out of range.
     """
     mpath = Path(path)
     where = str(mpath)
@@ -161,15 +181,20 @@ def read_session(
         parse_row(where, mpath, names, row_no, line_no, cells)
         for row_no, (line_no, cells) in enumerate(data, start=1)
     ]
-    frames, grouped = _as_steps(frames, step_tolerance_kpa)
-    source = FROM_COLUMN
     if PHASE_COLUMN not in names:
         _check_phase_elsewhere(where, names, frames)
-        phases, source = phases_from_order([f.pressure_kpa for f in frames])
+    labels = _step_labels(frames, step_tolerance_kpa)
+    source = FROM_COLUMN
+    if PHASE_COLUMN not in names:  # the passes from the steps' order (readings jitter)
+        levels = pooled_pressures([f.pressure_kpa for f in frames], labels)
+        phases, source = phases_from_order(levels, order_slack(levels))
         frames = [_with(f, phase=ph) for f, ph in zip(frames, phases, strict=True)]
-    frames = _number_steps(where, frames)
+    frames, pooled = _pool_readings(where, names, frames, step_tolerance_kpa)
+    hint = "" if pooled is None else f" (readings less than {step_tolerance_kpa:g} kPa apart"
+    hint += "" if pooled is None else " are one step: --step-tolerance-kpa)"
+    frames = _number_steps(where, frames, hint)
     _check_files(where, frames, mpath.resolve().parent)
-    return Session(frames, source, grouped)
+    return Session(frames, source, pooled)
 
 
 def _check_phase_elsewhere(where: str, names: list[str], frames: list[Frame]) -> None:
@@ -190,23 +215,53 @@ def _with(frame: Frame, **changes: object) -> Frame:
     return Frame(**{**frame.__dict__, **changes})  # type: ignore[arg-type]
 
 
-def _as_steps(frames: list[Frame], tolerance_kpa: float) -> tuple[list[Frame], int]:
-    """The frames with their step's pressure, and how many were moved (their reading kept as
-    the extra :data:`READING_COLUMN`, unless the manifest has such a column)."""
-    levels = step_pressures([f.pressure_kpa for f in frames], tolerance_kpa)
-    out, moved = [], 0
-    for f, level in zip(frames, levels, strict=True):
-        if level != f.pressure_kpa:
-            kept = dict(f.extras)
-            extras = f.extras
-            if READING_COLUMN not in kept:
-                extras = (*extras, (READING_COLUMN, f"{f.pressure_kpa:g}"))
-            f, moved = _with(f, pressure_kpa=level, extras=extras), moved + 1
-        out.append(f)
-    return out, moved
+def _step_labels(frames: list[Frame], tolerance_kpa: float) -> np.ndarray:
+    """:func:`~contactcal.infer.pipeline.readings.step_labels` of the frames' readings; every
+    distinct value its own step in a sweep whose top is below :data:`MIN_SWEEP_TOP_KPA` (bar
+    or MPa read as kPa: its steps would merge into one, and :func:`check_sweep_unit` names its
+    unit instead)."""
+    readings = [f.pressure_kpa for f in frames]
+    bar = 0.0 < max(readings, default=0.0) < MIN_SWEEP_TOP_KPA
+    return step_labels(readings, 0.0 if bar else tolerance_kpa)
 
 
-def _number_steps(where: str, frames: list[Frame]) -> list[Frame]:
+def _pool_readings(
+    where: str, names: list[str], frames: list[Frame], tolerance_kpa: float
+) -> tuple[list[Frame], Pooled | None]:
+    """Each pass's steps found again among its own readings and each put at the median of
+    its readings (per pass: a pass's offset from the other stays in the hysteresis, and cannot
+    split a step of one pass in two), every frame of a step pooled from differing readings
+    keeping its reading as :data:`READING_COLUMN`; and what was pooled."""
+    out = list(frames)
+    moved, steps, widest = 0, 0, (0.0, 0.0)
+    for phase in PHASES:
+        idx = [k for k, f in enumerate(frames) if f.phase == phase]
+        labels = np.zeros(len(frames), dtype=np.int64)
+        labels[idx] = _step_labels([frames[k] for k in idx], tolerance_kpa)
+        for step in np.unique(labels[idx]) if idx else []:
+            mine = [k for k in idx if labels[k] == step]
+            values = [frames[k].pressure_kpa for k in mine]
+            lo, hi = min(values), max(values)
+            if lo == hi:
+                continue
+            level = pooled_pressures(values, [0] * len(values))[0]
+            for k in mine:
+                reading = (READING_COLUMN, repr(frames[k].pressure_kpa))
+                out[k] = _with(frames[k], pressure_kpa=level, extras=(*frames[k].extras, reading))
+            moved, steps = moved + len(mine), steps + 1
+            widest = max(widest, (lo, hi), key=lambda r: r[1] - r[0])
+    if not moved:
+        return out, None
+    if READING_COLUMN in names:
+        raise ManifestError(
+            f"{where}: readings less than a step tolerance apart are pooled into steps, and each "
+            f"pooled frame's reading goes to the column '{READING_COLUMN}', which the manifest "
+            "has already; rename that column (or give --step-tolerance-kpa 0)"
+        )
+    return out, Pooled(moved, steps, widest)
+
+
+def _number_steps(where: str, frames: list[Frame], hint: str = "") -> list[Frame]:
     """Sort by phase, pressure and row; number each phase's steps; >= 2 steps per phase."""
     out: list[Frame] = []
     for phase in PHASES:
@@ -224,7 +279,7 @@ def _number_steps(where: str, frames: list[Frame]) -> list[Frame]:
                 f"{where}: the {phase} pass has {len(mine)} frame(s) at {len(levels)} pressure; "
                 f"a calibration needs >= 2 pressure steps per pass (including the 0 kPa "
                 f"reference); rows {', '.join(str(f.row) for f in mine[:_MAX_LISTED])}; give "
-                "each row its pass in a 'phase' column (loading/unloading)"
+                f"each row its pass in a 'phase' column (loading/unloading){hint}"
             )
         out += [_with(f, step=levels.index(f.pressure_kpa)) for f in mine]
     return out

@@ -4,8 +4,10 @@ A manifest written from a pressure logger gives each frame the gauge's reading (
 5.01 kPa for three frames of the 5 kPa step), not the step's setpoint. Read as exact values,
 every frame would be a step of its own: no repeats are pooled, the leave-one-step-out error
 keeps each frame's near-twins in the fit, and the passes are no longer rising then falling.
-:func:`step_pressures` gives each reading its step's pressure instead. A manifest of setpoints
-(exact, repeated values at least the tolerance apart) comes back unchanged.
+:func:`step_labels` finds the steps (single linkage: sorted readings less than the tolerance
+apart are one step, however many), :func:`pooled_pressures` gives each reading its step's
+median. A manifest of setpoints at least the tolerance apart comes back unchanged; setpoints
+closer than that are merged, so a sweep stepped that finely needs a smaller tolerance.
 """
 
 from __future__ import annotations
@@ -14,48 +16,73 @@ from collections.abc import Sequence
 
 import numpy as np
 
-#: kPa. Readings less than this above a step's lowest reading belong to that step: a gauge's
-#: jitter at a held pressure (hundredths of a kPa) is well inside it, and no calibration steps
-#: its setpoints this finely (the finest used here are 0.25-0.5 kPa apart). A sweep stepped more
-#: finely needs ``--step-tolerance-kpa`` below its step (0: every distinct value is a step).
-DEFAULT_STEP_TOLERANCE_KPA = 0.1
+#: kPa. Sorted readings less than this apart belong to one step. A gauge's jitter at a held
+#: pressure is hundredths of a kPa, but three readings with a standard deviation of 0.03 kPa
+#: leave a gap of 0.1 kPa between two of them in 0.7 % of steps (a quarter of 41-step
+#: sessions), which splits the step (and may break the passes' order); at 0.2, none in
+#: 200 000. Setpoints 0.25 kPa or more apart stay apart (exact ones at 0.2); readings of
+#: 0.25-kPa steps that jitter by more than ~0.02 kPa can merge, and need a smaller tolerance.
+#: ``--step-tolerance-kpa``; 0: every distinct value is a step.
+DEFAULT_STEP_TOLERANCE_KPA = 0.2
+#: kPa: the largest tolerance accepted. Onset studies step 0.25-0.5 kPa; a tolerance near a
+#: step would chain whole sweeps into one step.
+MAX_STEP_TOLERANCE_KPA = 1.0
 #: kPa: readings exactly one tolerance apart (0.1-kPa setpoints at tolerance 0.1) stay two steps
 #: whatever the rounding of their difference (``0.3 - 0.2 < 0.1`` in floating point).
 _ROUNDING_KPA = 1e-9
+#: Decimals of a pooled step's pressure (kPa): a median of readings, without float noise.
+_DECIMALS = 6
 
 
-def step_pressures(readings_kpa: Sequence[float], tolerance_kpa: float) -> list[float]:
-    """Each reading's step pressure, in the given order.
+def check_tolerance(tolerance_kpa: float) -> None:
+    """Raise ``ValueError`` unless ``0 <= tolerance_kpa <= MAX_STEP_TOLERANCE_KPA``."""
+    if not 0.0 <= tolerance_kpa <= MAX_STEP_TOLERANCE_KPA:  # False for NaN
+        raise ValueError(
+            f"step tolerance {tolerance_kpa!r} kPa: expected 0 to {MAX_STEP_TOLERANCE_KPA:g} kPa "
+            "(readings less than it apart are one step; 0: every distinct value is a step)"
+        )
 
-    The readings sorted, a step starts at its lowest reading and takes every further reading
-    less than ``tolerance_kpa`` above that one; its pressure is the median of its readings.
+
+def step_labels(readings_kpa: Sequence[float], tolerance_kpa: float) -> np.ndarray:
+    """Each reading's step, numbered from the lowest.
 
     Args:
         readings_kpa: ``(N,)`` gauge readings, kPa, any order.
-        tolerance_kpa: the step width, kPa, >= 0; 0 keeps every distinct reading a step.
+        tolerance_kpa: kPa, see :func:`check_tolerance`; sorted readings less than it apart
+            are one step.
 
     Returns:
-        ``N`` step pressures, kPa (equal to the reading where its step holds one value).
+        ``(N,) int64`` step index per reading, in the given order (0 = lowest step).
 
     Raises:
-        ValueError: a negative or non-finite tolerance.
+        ValueError: a tolerance out of range.
     """
-    if not (np.isfinite(tolerance_kpa) and tolerance_kpa >= 0.0):
-        raise ValueError(
-            f"step tolerance {tolerance_kpa!r} kPa: expected a finite value >= 0 (0: every "
-            "distinct pressure is a step)"
-        )
+    check_tolerance(tolerance_kpa)
     p = np.asarray(readings_kpa, dtype=np.float64)
-    out = p.copy()
-    if tolerance_kpa == 0.0 or p.size == 0:
-        return out.tolist()
     order = np.argsort(p, kind="stable")
-    start = 0
-    for k in range(1, p.size + 1):
-        if k < p.size and p[order[k]] - p[order[start]] < tolerance_kpa - _ROUNDING_KPA:
-            continue
-        members = order[start:k]
+    gaps = np.diff(p[order])
+    new_step = (gaps > 0.0) if tolerance_kpa == 0.0 else gaps >= tolerance_kpa - _ROUNDING_KPA
+    labels = np.empty(p.size, dtype=np.int64)
+    labels[order] = np.concatenate([[0], np.cumsum(new_step)])[: p.size]
+    return labels
+
+
+def pooled_pressures(readings_kpa: Sequence[float], labels: Sequence[int]) -> list[float]:
+    """Each reading's step pressure: the median of its step's readings (rounded to 1e-6 kPa),
+    the reading itself where its step holds one value.
+
+    Args:
+        readings_kpa: ``(N,)`` readings, kPa.
+        labels: ``(N,)`` step per reading (:func:`step_labels`, or a subset's).
+
+    Returns:
+        ``N`` pressures, kPa, in the given order.
+    """
+    p = np.asarray(readings_kpa, dtype=np.float64)
+    lab = np.asarray(labels)
+    out = p.copy()
+    for step in np.unique(lab):
+        members = lab == step
         if np.ptp(p[members]) > 0.0:
-            out[members] = float(np.median(p[members]))
-        start = k
+            out[members] = round(float(np.median(p[members])), _DECIMALS)
     return out.tolist()
