@@ -55,6 +55,7 @@ from contactcal.infer.pipeline.readings import (
     DEFAULT_STEP_TOLERANCE_KPA,
     pooled_pressures,
     step_labels,
+    step_pressure,
 )
 
 __all__ = [
@@ -181,17 +182,16 @@ def read_session(
         parse_row(where, mpath, names, row_no, line_no, cells)
         for row_no, (line_no, cells) in enumerate(data, start=1)
     ]
-    if PHASE_COLUMN not in names:
-        _check_phase_elsewhere(where, names, frames)
-    labels = _step_labels(frames, step_tolerance_kpa)
     source = FROM_COLUMN
     if PHASE_COLUMN not in names:  # the passes from the steps' order (readings jitter)
+        _check_phase_elsewhere(where, names, frames)
+        labels = _step_labels(frames, step_tolerance_kpa)
         levels = pooled_pressures([f.pressure_kpa for f in frames], labels)
         phases, source = phases_from_order(levels, order_slack(levels))
         frames = [_with(f, phase=ph) for f, ph in zip(frames, phases, strict=True)]
     frames, pooled = _pool_readings(where, names, frames, step_tolerance_kpa)
-    hint = "" if pooled is None else f" (readings less than {step_tolerance_kpa:g} kPa apart"
-    hint += "" if pooled is None else " are one step: --step-tolerance-kpa)"
+    merged = f"readings less than {step_tolerance_kpa:g} kPa apart are one step"
+    hint = "" if pooled is None else f" ({merged}: --step-tolerance-kpa)"
     frames = _number_steps(where, frames, hint)
     _check_files(where, frames, mpath.resolve().parent)
     return Session(frames, source, pooled)
@@ -236,15 +236,14 @@ def _pool_readings(
     moved, steps, widest = 0, 0, (0.0, 0.0)
     for phase in PHASES:
         idx = [k for k, f in enumerate(frames) if f.phase == phase]
-        labels = np.zeros(len(frames), dtype=np.int64)
-        labels[idx] = _step_labels([frames[k] for k in idx], tolerance_kpa)
-        for step in np.unique(labels[idx]) if idx else []:
-            mine = [k for k in idx if labels[k] == step]
+        labels = _step_labels([frames[k] for k in idx], tolerance_kpa)
+        for step in np.unique(labels):
+            mine = [k for k, lab in zip(idx, labels, strict=True) if lab == step]
             values = [frames[k].pressure_kpa for k in mine]
             lo, hi = min(values), max(values)
             if lo == hi:
                 continue
-            level = pooled_pressures(values, [0] * len(values))[0]
+            level = step_pressure(values)
             for k in mine:
                 reading = (READING_COLUMN, repr(frames[k].pressure_kpa))
                 out[k] = _with(frames[k], pressure_kpa=level, extras=(*frames[k].extras, reading))

@@ -82,7 +82,12 @@ def pooled_pressures(readings_kpa: Sequence[float], labels: Sequence[int]) -> li
     lab = np.asarray(labels)
     out = p.copy()
     for step in np.unique(lab):
-        members = lab == step
-        if np.ptp(p[members]) > 0.0:
-            out[members] = round(float(np.median(p[members])), _DECIMALS)
+        out[lab == step] = step_pressure(p[lab == step])
     return out.tolist()
+
+
+def step_pressure(readings_kpa: Sequence[float] | np.ndarray) -> float:
+    """One step's pressure from its ``(n,)`` readings (kPa, n >= 1): their median, rounded to
+    1e-6 kPa (no float noise in the records), or the reading itself where all are equal."""
+    p = np.asarray(readings_kpa, dtype=np.float64)
+    return float(p[0]) if np.ptp(p) == 0.0 else round(float(np.median(p)), _DECIMALS)
