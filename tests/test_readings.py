@@ -11,7 +11,13 @@ import pytest
 
 from contactcal.infer.calibration.phases import FROM_ORDER, PHASES
 from contactcal.infer.cli import main
-from contactcal.infer.pipeline.manifest import READING_COLUMN, ManifestError, read_session
+from contactcal.infer.pipeline.manifest import (
+    READING_COLUMN,
+    AtRest,
+    ManifestError,
+    Pooled,
+    read_session,
+)
 from contactcal.infer.pipeline.readings import (
     DEFAULT_STEP_TOLERANCE_KPA,
     pooled_pressures,
@@ -161,3 +167,49 @@ def test_calibrate_pools_readings_and_says_so(
         capsys.readouterr().err
     )
     assert not (tmp_path / "x").exists()
+
+
+def test_a_gauge_offset_at_rest_is_read_as_0_kpa(tmp_path: Path) -> None:
+    """Readings down to -0.5 kPa are accepted: a step whose median is below 0 is given as 0 kPa,
+    each frame keeping its reading; a step straddling 0 keeps its median; one reading alone
+    (tolerance 0) likewise; "-0" is 0 and no reading below 0."""
+    rest = _readings_manifest(tmp_path, [-0.03, 0.01, -0.01, 5.0, 10.0, 20.0])
+    session = read_session(rest)
+    zero = [f for f in session.frames if f.step == 0]
+    assert [f.pressure_kpa for f in zero] == [0.0, 0.0, 0.0]
+    assert sorted(dict(f.extras)[READING_COLUMN] for f in zero) == ["-0.01", "-0.03", "0.01"]
+    assert session.at_rest == AtRest(3, -0.03)
+    assert session.pooled == Pooled(3, 1, (-0.03, 0.01))
+    (tmp_path / "b").mkdir()
+    straddling = _readings_manifest(tmp_path / "b", [-0.02, 0.02, 0.03, 5.0, 10.0])
+    session = read_session(straddling)
+    assert session.frames[0].pressure_kpa == 0.02 and session.at_rest is None
+    alone = read_session(_readings_manifest(tmp_path / "b", [-0.02, 5.0, 10.0]), 0.0)
+    assert alone.frames[0].pressure_kpa == 0.0 and alone.pooled is None
+    assert alone.at_rest == AtRest(1, -0.02)
+    signed = tmp_path / "b" / "manifest.csv"
+    signed.write_text("file,pressure_kpa\nf000.png,-0\nf001.png,5\n", encoding="utf-8")
+    session = read_session(signed)
+    assert session.at_rest is None and dict(session.frames[0].extras) == {}
+    assert str(session.frames[0].pressure_kpa) == "0.0"
+
+
+def test_calibrate_says_which_readings_were_below_0(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    rows = (EXAMPLE / "manifest.csv").read_text(encoding="utf-8").splitlines()
+    lines = [rows[0]] + [
+        r.replace(",0.0", ",-0.04", 1) if r.split(",")[1] == "0.0" else r for r in rows[1:]
+    ]
+    manifest = tmp_path / "manifest.csv"
+    manifest.write_text("\n".join(lines) + "\n", encoding="utf-8")
+    for r in rows[1:]:
+        (tmp_path / r.split(",")[0]).write_bytes((EXAMPLE / r.split(",")[0]).read_bytes())
+    out = tmp_path / "cal"
+    assert main(["calibrate", str(manifest), "--method", "classical", "--out", str(out)]) == 0
+    record = json.loads((out / "calibration.json").read_text(encoding="utf-8"))
+    assert record["extra"]["readings_at_rest"] == {"frames": 1, "lowest_kpa": -0.04}
+    assert record["points"][0]["pressure_kpa"] == 0.0
+    assert "note: 1 frame(s) in steps read below 0 kPa (lowest reading -0.04 kPa" in (
+        capsys.readouterr().out
+    )

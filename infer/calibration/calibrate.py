@@ -60,6 +60,13 @@ POOLED_NOTE = (
     "are one step at their median, each frame keeping its reading as pressure_kpa_read; "
     "--step-tolerance-kpa 0 reads every distinct value as a step)"
 )
+#: The table's line when a step was read below 0 kPa (``{r}``: the session's
+#: :class:`~contactcal.infer.pipeline.manifest.AtRest`).
+AT_REST_NOTE = (
+    "note: {r.frames} frame(s) in steps read below 0 kPa (lowest reading {r.lowest_kpa:g} kPa: "
+    "the gauge's offset at rest) are given as 0 kPa, each keeping its reading as "
+    "pressure_kpa_read"
+)
 
 
 @dataclass(frozen=True)
@@ -150,6 +157,7 @@ def calibrate_session(
         "session_rule": options.session_rule,
         "step_tolerance_kpa": options.step_tolerance_kpa,
         "readings_pooled": None if session.pooled is None else asdict(session.pooled),
+        "readings_at_rest": None if session.at_rest is None else asdict(session.at_rest),
     }
     extra |= checks | {"identical_frames": same}
     model = None if measure.model is None else str(measure.model)
@@ -167,6 +175,8 @@ def calibrate_session(
         table += "\n" + identical_frames_warning(same)
     if session.pooled is not None:
         table += "\n" + POOLED_NOTE.format(p=session.pooled, t=options.step_tolerance_kpa)
+    if session.at_rest is not None:
+        table += "\n" + AT_REST_NOTE.format(r=session.at_rest)
     return CalibrationReport(table, frames, measured, fit.curve, paths, fit)
 
 

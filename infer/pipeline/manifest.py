@@ -11,13 +11,14 @@ around the names is tolerated), then one row per frame::
 
 Required columns: ``file`` (an image path, relative to the manifest's folder or absolute, each
 image on one row only) and ``pressure_kpa`` (chamber gauge pressure, kPa, 0 to
-:data:`MAX_PRESSURE_KPA`). Optional ``phase``: ``loading`` or ``unloading`` (case-insensitive).
-Any other column (e.g. ``timestamp``) is kept per frame (:attr:`Frame.extras`). A pressure may
-repeat: the frames of one phase at one pressure are one pressure *step*; readings less than a
-tolerance apart (a gauge's, of one held pressure) are read as one step
-(:mod:`~contactcal.infer.pipeline.readings`). Without a ``phase``
-column the passes are read from the row order (rising then falling: the rows after the maximum
-are the unloading pass; see :func:`~contactcal.infer.calibration.phases.phases_from_order`).
+:data:`MAX_PRESSURE_KPA`; a gauge's offset at rest down to -:data:`GAUGE_ZERO_NOISE_KPA` is
+accepted, and a step read below 0 is given as 0 kPa). Optional ``phase``: ``loading`` or
+``unloading`` (case-insensitive). Any other column (e.g. ``timestamp``) is kept per frame
+(:attr:`Frame.extras`). A pressure may repeat: the frames of one phase at one pressure are one
+pressure *step*; readings less than a tolerance apart (a gauge's, of one held pressure) are read
+as one step (:mod:`~contactcal.infer.pipeline.readings`). Without a ``phase`` column the passes
+are read from the row order (rising then falling: the rows after the maximum are the unloading
+pass; see :func:`~contactcal.infer.calibration.phases.phases_from_order`).
 Blank lines are skipped. `read_manifest` returns the frames sorted by phase (loading first), then
 pressure, then row; the first one, the lowest-pressure frame of the loading pass, is the session's
 reference frame (normally 0 kPa, membrane at rest, no contact).
@@ -41,6 +42,7 @@ from contactcal.infer.calibration.phases import (
     phases_from_order,
 )
 from contactcal.infer.pipeline.manifest_rows import (
+    GAUGE_ZERO_NOISE_KPA,
     HEADER,
     MAX_PRESSURE_KPA,
     PHASE_COLUMN,
@@ -59,6 +61,7 @@ from contactcal.infer.pipeline.readings import (
 )
 
 __all__ = [
+    "GAUGE_ZERO_NOISE_KPA",
     "MAX_PRESSURE_KPA",
     "READING_COLUMN",
     "REQUIRED_COLUMNS",
@@ -85,6 +88,7 @@ class Session:
     frames: list[Frame]  # sorted by phase (loading first), pressure, row; [0] is the reference
     phase_source: str  # phases.FROM_COLUMN, FROM_ORDER or SINGLE_PASS
     pooled: Pooled | None = None  # steps pooled from differing readings (readings.py); None: none
+    at_rest: AtRest | None = None  # steps read below 0 kPa, given as 0; None: none
 
 
 @dataclass(frozen=True)
@@ -94,6 +98,15 @@ class Pooled:
     frames: int  # frames in such steps (each keeps its reading as READING_COLUMN)
     steps: int  # such steps (per pass)
     widest_kpa: tuple[float, float]  # the widest such step's lowest and highest reading, kPa
+
+
+@dataclass(frozen=True)
+class AtRest:
+    """The steps of a session whose pressure came out below 0 kPa (a gauge's offset at rest,
+    down to -:data:`GAUGE_ZERO_NOISE_KPA`), given as 0 kPa."""
+
+    frames: int  # frames in such steps (each keeps its reading as READING_COLUMN)
+    lowest_kpa: float  # their lowest reading, kPa (< 0)
 
 
 #: kPa: a session whose highest pressure is below this cannot be a calibration sweep of the
@@ -189,12 +202,12 @@ def read_session(
         levels = pooled_pressures([f.pressure_kpa for f in frames], labels)
         phases, source = phases_from_order(levels, order_slack(levels))
         frames = [_with(f, phase=ph) for f, ph in zip(frames, phases, strict=True)]
-    frames, pooled = _pool_readings(where, names, frames, step_tolerance_kpa)
+    frames, pooled, at_rest = _pool_readings(where, names, frames, step_tolerance_kpa)
     merged = f"readings less than {step_tolerance_kpa:g} kPa apart are one step"
     hint = "" if pooled is None else f" ({merged}: --step-tolerance-kpa)"
     frames = _number_steps(where, frames, hint)
     _check_files(where, frames, mpath.resolve().parent)
-    return Session(frames, source, pooled)
+    return Session(frames, source, pooled, at_rest)
 
 
 def _check_phase_elsewhere(where: str, names: list[str], frames: list[Frame]) -> None:
@@ -227,13 +240,15 @@ def _step_labels(frames: list[Frame], tolerance_kpa: float) -> np.ndarray:
 
 def _pool_readings(
     where: str, names: list[str], frames: list[Frame], tolerance_kpa: float
-) -> tuple[list[Frame], Pooled | None]:
+) -> tuple[list[Frame], Pooled | None, AtRest | None]:
     """Each pass's steps found again among its own readings and each put at the median of
     its readings (per pass: a pass's offset from the other stays in the hysteresis, and cannot
-    split a step of one pass in two), every frame of a step pooled from differing readings
-    keeping its reading as :data:`READING_COLUMN`; and what was pooled."""
+    split a step of one pass in two), a step whose median is below 0 kPa (a gauge's offset at
+    rest) at 0 kPa, every frame whose pressure so differs from its reading keeping the reading
+    as :data:`READING_COLUMN`; and what was pooled and what was given as 0 kPa."""
     out = list(frames)
     moved, steps, widest = 0, 0, (0.0, 0.0)
+    rest, lowest = 0, 0.0
     for phase in PHASES:
         idx = [k for k, f in enumerate(frames) if f.phase == phase]
         labels = _step_labels([frames[k] for k in idx], tolerance_kpa)
@@ -241,23 +256,26 @@ def _pool_readings(
             mine = [k for k, lab in zip(idx, labels, strict=True) if lab == step]
             values = [frames[k].pressure_kpa for k in mine]
             lo, hi = min(values), max(values)
-            if lo == hi:
+            median = step_pressure(values)
+            if lo == hi and median >= 0.0:
                 continue
-            level = step_pressure(values)
+            level = max(median, 0.0)
             for k in mine:
                 reading = (READING_COLUMN, repr(frames[k].pressure_kpa))
                 out[k] = _with(frames[k], pressure_kpa=level, extras=(*frames[k].extras, reading))
-            moved, steps = moved + len(mine), steps + 1
-            widest = max(widest, (lo, hi), key=lambda r: r[1] - r[0])
-    if not moved:
-        return out, None
-    if READING_COLUMN in names:
+            if lo != hi:
+                moved, steps = moved + len(mine), steps + 1
+                widest = max(widest, (lo, hi), key=lambda r: r[1] - r[0])
+            if median < 0.0:
+                rest, lowest = rest + len(mine), min(lowest, lo)
+    if (moved or rest) and READING_COLUMN in names:
         raise ManifestError(
-            f"{where}: readings less than a step tolerance apart are pooled into steps, and each "
-            f"pooled frame's reading goes to the column '{READING_COLUMN}', which the manifest "
-            "has already; rename that column (or give --step-tolerance-kpa 0)"
+            f"{where}: readings less than a step tolerance apart are pooled into steps (a step "
+            f"read below 0 kPa is given as 0), and each such frame's reading goes to the column "
+            f"'{READING_COLUMN}', which the manifest has already; rename that column"
         )
-    return out, Pooled(moved, steps, widest)
+    pooled = Pooled(moved, steps, widest) if moved else None
+    return out, pooled, AtRest(rest, lowest) if rest else None
 
 
 def _number_steps(where: str, frames: list[Frame], hint: str = "") -> list[Frame]:

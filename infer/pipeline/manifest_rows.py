@@ -21,9 +21,12 @@ HEADER = ",".join(REQUIRED_COLUMNS)
 #: above the atmosphere on a 70 µm membrane) is five times that, so a larger value is a unit slip
 #: or a typo, not a calibration step: mbar for kPa turns a 0-20 kPa sweep's top into 200, Pa into
 #: 20000. (A 0-10 kPa sweep in mbar tops out at the bound itself and passes: no bound tells it
-#: from a 100 kPa display.) Negative gauge pressure, suction, is no calibration step either: the
-#: lower bound is 0.
+#: from a 100 kPa display.)
 MAX_PRESSURE_KPA = 100.0
+#: kPa below 0 still accepted as a reading. A gauge at rest reads its noise and offset (typically
+#: ±0.05 kPa); 0.5 kPa of suction is no calibration state but a sign error or a bad zero. A step
+#: whose pressure comes out below 0 is given as 0 kPa (``read_session``; a video's step alike).
+GAUGE_ZERO_NOISE_KPA = 0.5
 
 
 class ManifestError(ValueError):
@@ -36,7 +39,8 @@ class Frame:
 
     Attributes:
         file: absolute image path (relative paths are resolved against the manifest's folder).
-        pressure_kpa: chamber gauge pressure, kPa, >= 0.
+        pressure_kpa: chamber gauge pressure, kPa, >= -:data:`GAUGE_ZERO_NOISE_KPA` as read
+            (``read_session`` gives a step below 0 as 0 kPa).
         row: 1-based data row number in the manifest (header and blank lines not counted).
         phase: ``"loading"`` or ``"unloading"``.
         step: 0-based index of the frame's pressure step within its phase (ascending pressure).
@@ -116,7 +120,7 @@ def check_header(where: str, line_no: int, header: list[str]) -> list[str]:
 
 def _parse_pressure(at: str, cell: str) -> float:
     try:
-        value = float(cell)
+        value = float(cell) + 0.0  # "-0" reads as 0.0
     except ValueError:
         raise ManifestError(
             f"{at}: pressure_kpa {cell!r} is not a number; expected the gauge pressure in kPa, "
@@ -124,9 +128,11 @@ def _parse_pressure(at: str, cell: str) -> float:
         ) from None
     if not math.isfinite(value):
         raise ManifestError(f"{at}: pressure_kpa {cell!r} is not finite; expected a number of kPa")
-    if value < 0:
+    if value < -GAUGE_ZERO_NOISE_KPA:
         raise ManifestError(
-            f"{at}: pressure_kpa {value:g} is negative; expected a gauge pressure >= 0 kPa"
+            f"{at}: pressure_kpa {value:g} is below -{GAUGE_ZERO_NOISE_KPA:g} kPa; expected a "
+            f"gauge pressure >= 0 kPa (a gauge at rest may read down to -{GAUGE_ZERO_NOISE_KPA:g}, "
+            "its offset; more suction than that is a sign error or a bad zero: check the gauge)"
         )
     if value > MAX_PRESSURE_KPA:
         raise ManifestError(

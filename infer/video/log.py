@@ -27,13 +27,10 @@ from pathlib import Path
 
 import numpy as np
 
-from contactcal.infer.pipeline.manifest import MAX_PRESSURE_KPA
+from contactcal.infer.pipeline.manifest import GAUGE_ZERO_NOISE_KPA, MAX_PRESSURE_KPA
 
 #: The columns a pressure log must have.
 LOG_COLUMNS = ("time_s", "pressure_kpa")
-#: Lowest accepted sample, kPa below 0. A gauge at rest reads its noise and offset (typically
-#: ±0.05 kPa); 0.5 kPa of suction is no calibration state but a sign error or a bad zero.
-GAUGE_ZERO_NOISE_KPA = 0.5
 
 
 class PressureLogError(ValueError):
