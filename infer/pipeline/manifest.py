@@ -55,6 +55,8 @@ from contactcal.infer.pipeline.manifest_rows import (
 )
 from contactcal.infer.pipeline.readings import (
     DEFAULT_STEP_TOLERANCE_KPA,
+    AtRest,
+    Pooled,
     pooled_pressures,
     step_labels,
     step_pressure,
@@ -65,6 +67,7 @@ __all__ = [
     "MAX_PRESSURE_KPA",
     "READING_COLUMN",
     "REQUIRED_COLUMNS",
+    "AtRest",
     "Frame",
     "ManifestError",
     "Pooled",
@@ -89,24 +92,6 @@ class Session:
     phase_source: str  # phases.FROM_COLUMN, FROM_ORDER or SINGLE_PASS
     pooled: Pooled | None = None  # steps pooled from differing readings (readings.py); None: none
     at_rest: AtRest | None = None  # steps read below 0 kPa, given as 0; None: none
-
-
-@dataclass(frozen=True)
-class Pooled:
-    """The steps of a session pooled from differing gauge readings."""
-
-    frames: int  # frames in such steps (each keeps its reading as READING_COLUMN)
-    steps: int  # such steps (per pass)
-    widest_kpa: tuple[float, float]  # the widest such step's lowest and highest reading, kPa
-
-
-@dataclass(frozen=True)
-class AtRest:
-    """The steps of a session whose pressure came out below 0 kPa (a gauge's offset at rest,
-    down to -:data:`GAUGE_ZERO_NOISE_KPA`), given as 0 kPa."""
-
-    frames: int  # frames in such steps (each keeps its reading as READING_COLUMN)
-    lowest_kpa: float  # their lowest reading, kPa (< 0)
 
 
 #: kPa: a session whose highest pressure is below this cannot be a calibration sweep of the

@@ -8,11 +8,14 @@ keeps each frame's near-twins in the fit, and the passes are no longer rising th
 apart are one step, however many), :func:`pooled_pressures` gives each reading its step's
 median. A manifest of setpoints at least the tolerance apart comes back unchanged; setpoints
 closer than that are merged, so a sweep stepped that finely needs a smaller tolerance.
+:class:`Pooled` and :class:`AtRest` say what reading a manifest made of its steps
+(:func:`~contactcal.infer.pipeline.manifest.read_session`).
 """
 
 from __future__ import annotations
 
 from collections.abc import Sequence
+from dataclasses import dataclass
 
 import numpy as np
 
@@ -91,3 +94,21 @@ def step_pressure(readings_kpa: Sequence[float] | np.ndarray) -> float:
     1e-6 kPa (no float noise in the records), or the reading itself where all are equal."""
     p = np.asarray(readings_kpa, dtype=np.float64)
     return float(p[0]) if np.ptp(p) == 0.0 else round(float(np.median(p)), _DECIMALS)
+
+
+@dataclass(frozen=True)
+class Pooled:
+    """The steps of a session pooled from differing gauge readings."""
+
+    frames: int  # frames in such steps (each keeps its reading, ``pressure_kpa_read``)
+    steps: int  # such steps (per pass)
+    widest_kpa: tuple[float, float]  # the widest such step's lowest and highest reading, kPa
+
+
+@dataclass(frozen=True)
+class AtRest:
+    """The steps of a session whose pressure came out below 0 kPa, given as 0 kPa (a gauge's
+    offset at rest; :data:`~contactcal.infer.pipeline.manifest_rows.GAUGE_ZERO_NOISE_KPA`)."""
+
+    frames: int  # frames in such steps (each keeps its reading, ``pressure_kpa_read``)
+    lowest_kpa: float  # their lowest reading, kPa (< 0)
