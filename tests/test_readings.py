@@ -213,3 +213,18 @@ def test_calibrate_says_which_readings_were_below_0(
     assert "note: 1 frame(s) in steps read below 0 kPa (lowest reading -0.04 kPa" in (
         capsys.readouterr().out
     )
+
+
+def test_a_rest_reading_below_0_is_no_reversal_of_the_passes(tmp_path: Path) -> None:
+    """Rows rising then falling in 0.5 kPa steps with a rest reading of -0.3 kPa (0.3 below the
+    0 kPa row, more than half a step): read as two passes, as with 0.0 in its place; a median
+    rounded to -0.0 is 0.0."""
+    p = [0.0, -0.3, 0.5, 1.0, 1.5, 2.0, 1.5, 1.0, 0.5, 0.0]
+    session = read_session(_readings_manifest(tmp_path, p))
+    assert session.phase_source == FROM_ORDER
+    assert sum(f.phase == "unloading" for f in session.frames) == 4
+    assert session.at_rest == AtRest(1, -0.3)
+    rows = "".join(f"f{k:03d}.png,{v!r}\n" for k, v in enumerate([-3e-7, 1e-7, 5.0, 10.0]))
+    (tmp_path / "manifest.csv").write_text("file,pressure_kpa\n" + rows, encoding="utf-8")
+    tiny = read_session(tmp_path / "manifest.csv")
+    assert str(tiny.frames[0].pressure_kpa) == "0.0" and tiny.at_rest is None

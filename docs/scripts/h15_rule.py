@@ -59,16 +59,35 @@ def worst_ratio(robustness: dict[str, Any]) -> tuple[float, str]:
     return float(w["error_ratio"]), f"{w['perturbation']} {w['label']}"
 
 
+def _both(label: str, s: dict[str, dict[str, Any]], key: str) -> tuple[float, float]:
+    """v2.4's and H15's ``key`` in :func:`scores` output; ValueError naming the condition when
+    a model or its value is missing (no frames of that kind)."""
+    try:
+        b, c = s[BASE][key], s[CANDIDATE][key]
+    except KeyError as e:
+        raise ValueError(f"{label}: no records of {e}; expected {BASE} and {CANDIDATE}") from None
+    if b is None or c is None:
+        raise ValueError(f"{label}: no frames to score ({key}: v2.4 {b}, H15 {c})")
+    return float(b), float(c)
+
+
 def verdicts(
     choose: dict[str, Any], rob_base: dict[str, Any], rob_cand: dict[str, Any]
 ) -> list[str]:
-    """One Markdown table row per condition."""
+    """One Markdown table row per condition.
+
+    Raises:
+        ValueError: a set the rule reads is missing, or a condition has no frames to score.
+    """
     per_set = datasets(choose)
+    needed = {k for _, sets, _ in ERROR_CONDITIONS for k in sets} | set(NO_CONTACT_SETS)
+    if missing := sorted(needed - set(per_set)):
+        raise ValueError(f"no dataset {missing} in the choosing run; it has {sorted(per_set)}")
     lines = []
     for label, sets, excess in ERROR_CONDITIONS:
         s = scores([r for k in sets for r in per_set[k]])
-        b, c = s[BASE]["median_err_ge5_pct"], s[CANDIDATE]["median_err_ge5_pct"]
-        ok = b is not None and c is not None and c <= b + excess
+        b, c = _both(label, s, "median_err_ge5_pct")
+        ok = c <= b + excess
         lines.append(f"| {label} | {b:.2f} % | {c:.2f} % | <= {b + excess:.2f} % | {_v(ok)} |")
     (rb, wb), (rc, wc) = worst_ratio(rob_base), worst_ratio(rob_cand)
     lines.append(
@@ -81,9 +100,9 @@ def verdicts(
         ("(e') no contact, references counted", pooled),
     ):
         s = scores(recs)
-        b, c = s[BASE]["no_contact_pct"], s[CANDIDATE]["no_contact_pct"]
+        b, c = _both(label, s, "no_contact_pct")
         n = s[BASE]["frames_no_contact"]
-        ok = b is not None and c is not None and c >= b - NO_CONTACT_LOSS
+        ok = c >= b - NO_CONTACT_LOSS
         verdict = _v(ok) if recs is not pooled else "reported"
         lines.append(
             f"| {label}, {n} frames | {b:.1f} % | {c:.1f} % | >= {b - NO_CONTACT_LOSS:.1f} % "
@@ -110,7 +129,7 @@ def main(argv: list[str] | None = None) -> int:
         ]
         rows = verdicts(loaded[0], loaded[1]["robustness"], loaded[2]["robustness"])
     except (OSError, ValueError, KeyError, TypeError) as e:
-        print(f"expected the chain's three bench results.json files ({e!r})", file=sys.stderr)
+        print(f"h15_rule: {e}; expected the chain's three bench results.json", file=sys.stderr)
         return 2
     print("| condition | v2.4 | H15 | bound | verdict |\n|---|---|---|---|---|")
     print("\n".join(rows))

@@ -184,7 +184,9 @@ def read_session(
     if PHASE_COLUMN not in names:  # the passes from the steps' order (readings jitter)
         _check_phase_elsewhere(where, names, frames)
         labels = _step_labels(frames, step_tolerance_kpa)
-        levels = pooled_pressures([f.pressure_kpa for f in frames], labels)
+        # A step below 0 kPa is given as 0 (_pool_readings): a rest reading of -0.3 between
+        # 0 and 0.5 kPa steps is no reversal of the passes.
+        levels = [max(v, 0.0) for v in pooled_pressures([f.pressure_kpa for f in frames], labels)]
         phases, source = phases_from_order(levels, order_slack(levels))
         frames = [_with(f, phase=ph) for f, ph in zip(frames, phases, strict=True)]
     frames, pooled, at_rest = _pool_readings(where, names, frames, step_tolerance_kpa)
@@ -241,7 +243,7 @@ def _pool_readings(
             mine = [k for k, lab in zip(idx, labels, strict=True) if lab == step]
             values = [frames[k].pressure_kpa for k in mine]
             lo, hi = min(values), max(values)
-            median = step_pressure(values)
+            median = step_pressure(values) + 0.0  # a median rounded to -0.0 is 0.0
             if lo == hi and median >= 0.0:
                 continue
             level = max(median, 0.0)
@@ -258,6 +260,7 @@ def _pool_readings(
             f"{where}: readings less than a step tolerance apart are pooled into steps (a step "
             f"read below 0 kPa is given as 0), and each such frame's reading goes to the column "
             f"'{READING_COLUMN}', which the manifest has already; rename that column"
+            + ("" if rest else " (or give --step-tolerance-kpa 0)")
         )
     pooled = Pooled(moved, steps, widest) if moved else None
     return out, pooled, AtRest(rest, lowest) if rest else None
