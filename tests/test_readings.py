@@ -104,9 +104,21 @@ def test_a_reading_column_of_the_manifest_is_not_overwritten(tmp_path: Path) -> 
 
 
 def test_merged_steps_name_the_tolerance(tmp_path: Path) -> None:
-    manifest = _readings_manifest(tmp_path, [0.0, 0.6, 1.2])
+    manifest = _readings_manifest(tmp_path, [1.0, 1.6])
     with pytest.raises(ManifestError, match="at 1 pressure.*--step-tolerance-kpa"):
         read_session(manifest, 1.0)
+
+
+def test_setpoints_finer_than_the_tolerance_are_refused_not_merged(tmp_path: Path) -> None:
+    """Setpoints 0.1 kPa apart around the onset (as the guide advises for placing it) would
+    chain into one step 2-3 kPa wide at the default tolerance: refused, naming the option; read
+    as setpoints with tolerance 0, or at a tolerance below their spacing."""
+    fine = [0.0, 1.0, *(round(2.0 + 0.1 * k, 1) for k in range(10)), 3.0, 4.0, 5.0]
+    manifest = _readings_manifest(tmp_path, fine)
+    with pytest.raises(ManifestError, match=r"pressures 2 to 3 kPa \(11 distinct values\) chain"):
+        read_session(manifest)
+    for tolerance in (0.0, 0.05):
+        assert len({f.step for f in read_session(manifest, tolerance).frames}) == len(fine)
 
 
 def _jittered(folder: Path, rng: np.random.Generator, unloading: bool = False) -> Path:

@@ -57,6 +57,7 @@ from contactcal.infer.pipeline.readings import (
     DEFAULT_STEP_TOLERANCE_KPA,
     AtRest,
     Pooled,
+    is_chain,
     pooled_pressures,
     step_labels,
     step_pressure,
@@ -81,6 +82,14 @@ __all__ = [
 
 #: The extra a frame gets when its reading is read as its step's pressure: the reading.
 READING_COLUMN = "pressure_kpa_read"
+#: The refusal of a step whose readings span the step tolerance or more (readings.is_chain).
+CHAINED = (
+    "{where}: the {phase} pass's pressures {lo:g} to {hi:g} kPa ({n} distinct values) chain "
+    "into one step {span:g} kPa wide, as wide as the step tolerance {t:g} kPa or wider (values "
+    "less than it apart are one step): for steps set this finely give --step-tolerance-kpa "
+    "below their spacing (0 reads every distinct value as a step); if they are the readings "
+    "of one held pressure, give a tolerance above {span:g} kPa"
+)
 _MAX_LISTED = 5
 
 
@@ -243,6 +252,13 @@ def _pool_readings(
             mine = [k for k, lab in zip(idx, labels, strict=True) if lab == step]
             values = [frames[k].pressure_kpa for k in mine]
             lo, hi = min(values), max(values)
+            if is_chain(values, tolerance_kpa):
+                n, span = len(set(values)), round(hi - lo, 6)
+                raise ManifestError(
+                    CHAINED.format(
+                        where=where, phase=phase, lo=lo, hi=hi, n=n, span=span, t=tolerance_kpa
+                    )
+                )
             median = step_pressure(values) + 0.0  # a median rounded to -0.0 is 0.0
             if lo == hi and median >= 0.0:
                 continue

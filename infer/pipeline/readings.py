@@ -6,8 +6,10 @@ every frame would be a step of its own: no repeats are pooled, the leave-one-ste
 keeps each frame's near-twins in the fit, and the passes are no longer rising then falling.
 :func:`step_labels` finds the steps (single linkage: sorted readings less than the tolerance
 apart are one step, however many), :func:`pooled_pressures` gives each reading its step's
-median. A manifest of setpoints at least the tolerance apart comes back unchanged; setpoints
-closer than that are merged, so a sweep stepped that finely needs a smaller tolerance.
+median. A manifest of setpoints at least the tolerance apart comes back unchanged. Setpoints
+closer than that would chain into one step as wide as the tolerance or wider, which no held
+pressure's readings are (:func:`is_chain`): ``read_session`` refuses such a step and names the
+option, so a sweep stepped that finely is given a smaller tolerance (or 0, for setpoints).
 :class:`Pooled` and :class:`AtRest` say what reading a manifest made of its steps
 (:func:`~contactcal.infer.pipeline.manifest.read_session`).
 """
@@ -24,7 +26,7 @@ import numpy as np
 #: leave a gap of 0.1 kPa between two of them in 0.7 % of steps (a quarter of 41-step
 #: sessions), which splits the step (and may break the passes' order); at 0.2, none in
 #: 200 000. Setpoints 0.25 kPa or more apart stay apart (exact ones at 0.2); readings of
-#: 0.25-kPa steps that jitter by more than ~0.02 kPa can merge, and need a smaller tolerance.
+#: 0.25-kPa steps that jitter by more than ~0.02 kPa can chain, and are refused (is_chain).
 #: ``--step-tolerance-kpa``; 0: every distinct value is a step.
 DEFAULT_STEP_TOLERANCE_KPA = 0.2
 #: kPa: the largest tolerance accepted. Onset studies step 0.25-0.5 kPa; a tolerance near a
@@ -68,6 +70,16 @@ def step_labels(readings_kpa: Sequence[float], tolerance_kpa: float) -> np.ndarr
     labels = np.empty(p.size, dtype=np.int64)
     labels[order] = np.concatenate([[0], np.cumsum(new_step)])[: p.size]
     return labels
+
+
+def is_chain(readings_kpa: Sequence[float], tolerance_kpa: float) -> bool:
+    """True if one step's ``(n,)`` readings (kPa) span the tolerance or more: single linkage
+    chained readings less than the tolerance apart into a step wider than the tolerance, which
+    the readings of one held pressure are not (three readings with a jitter of 0.03 kPa span
+    ~0.1 kPa) but setpoints finer than the tolerance, or two jittering steps, are. False at
+    tolerance 0 (every distinct value is a step)."""
+    p = np.asarray(readings_kpa, dtype=np.float64)
+    return tolerance_kpa > 0.0 and float(np.ptp(p)) >= tolerance_kpa - _ROUNDING_KPA
 
 
 def pooled_pressures(readings_kpa: Sequence[float], labels: Sequence[int]) -> list[float]:
