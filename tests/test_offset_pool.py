@@ -12,7 +12,7 @@ import numpy as np
 import pytest
 
 from contactcal.infer.cli import main
-from contactcal.infer.evaluate.offset import median_interval, resolved_offset
+from contactcal.infer.evaluate.offset import median_interval, offset_line, resolved_offset
 from contactcal.infer.evaluate.pool import pool_offsets, pooled_text
 from contactcal.infer.pipeline.boundary import MODEL_KEY, OFFSET_KEY
 
@@ -132,3 +132,22 @@ def test_cli(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
     assert main(["boundary-offset", *runs[:2]]) == 2
     err = capsys.readouterr().err.strip().splitlines()
     assert len(err) == 1 and "pooling needs 5" in err[0]
+
+
+def test_one_sessions_keys_are_printed_with_the_pooling_they_need() -> None:
+    """evaluate prints the keys of a resolved offset, but as one session's: a lab that pastes
+    them is told to pool five or more sessions first."""
+    off = {
+        "stale": None,
+        "frames": 18,
+        "median_px": 0.24,
+        "interval_px": [0.16, 0.31],
+        "median_mm": 0.03,
+        "interval_mm": [0.02, 0.039],
+        "rig_config": {"boundary_offset_mm": 0.03, "boundary_offset_model_sha256": "ab"},
+    }
+    text = offset_line(off)
+    assert "one session's: pool five or more sessions' evaluations with `contactcal " in text
+    assert text.endswith(
+        'apply it: "boundary_offset_mm": 0.03, "boundary_offset_model_sha256": "ab"'
+    )

@@ -204,4 +204,7 @@ def _offset_text(off: dict[str, Any]) -> str:
     if off["rig_config"] is None:
         return f"{line}\n  {off['note']}"
     keys = ", ".join(f"{json.dumps(k)}: {json.dumps(v)}" for k, v in off["rig_config"].items())
-    return f"{line}\n  to apply it, add to the rig config: {keys}"
+    return (
+        f"{line}\n  one session's: pool five or more sessions' evaluations with `contactcal "
+        f"boundary-offset` before you apply it; these keys would apply it: {keys}"
+    )
