@@ -89,6 +89,10 @@ def test_bad_columns(tmp_path: Path) -> None:
     _fails(_session(tmp_path, "file,pressure_kpa,PHASE\na.png,0,x\n"), "did you mean 'phase'")
     _fails(_session(tmp_path, "file,pressure_kpa,file\na.png,0,b.png\n"), "['file'] appear twice")
     _fails(_session(tmp_path, "file,pressure_kpa,\na.png,0,\n"), "column 3 has no name")
+    # Two trailing separators (a spreadsheet's export): the same advice, not "appear twice".
+    _fails(
+        _session(tmp_path, "file,pressure_kpa,,\na.png,0,,\n"), "trailing separator (as a spread"
+    )
 
 
 def test_wrong_cell_count(tmp_path: Path) -> None:

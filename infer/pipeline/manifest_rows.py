@@ -95,19 +95,23 @@ def check_header(where: str, line_no: int, header: list[str]) -> list[str]:
     hint = ""
     if len(names) == 1 and any(sep in names[0] for sep in (";", "\t")):
         hint = "; the manifest must be comma-separated"
+    if "" in names:
+        raise ManifestError(
+            f"{at}: column {names.index('') + 1} has no name; an empty column or a trailing "
+            "separator (as a spreadsheet may write): delete it, or name the column"
+        )
     dups = sorted({n for n in names if names.count(n) > 1})
     if dups:
         raise ManifestError(
             f"{at}: column(s) {dups} appear twice; expected each column once (required: '{HEADER}')"
         )
-    for i, name in enumerate(names, start=1):
+    for name in names:
         near = [k for k in KNOWN_COLUMNS if k.lower() == name.lower() and k != name]
-        if not name or near:
-            what = f"column {i} has no name" if not name else f"column '{name}'"
-            did = f" (did you mean '{near[0]}'? names are case-sensitive)" if near else ""
+        if near:
             raise ManifestError(
-                f"{at}: {what}{did}; expected the columns {list(REQUIRED_COLUMNS)}, optionally "
-                f"'{PHASE_COLUMN}' and other named columns{hint}"
+                f"{at}: column '{name}' (did you mean '{near[0]}'? names are case-sensitive); "
+                f"expected the columns {list(REQUIRED_COLUMNS)}, optionally '{PHASE_COLUMN}' and "
+                f"other named columns{hint}"
             )
     for name in REQUIRED_COLUMNS:
         if name not in names:
