@@ -276,6 +276,22 @@ def test_calibration_records_provenance(tmp_path: Path) -> None:
     assert rec["device_id"] is None
 
 
+def test_a_second_run_into_one_out_says_which_calibration_it_replaced(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    s = copy_session(tmp_path)
+    out = tmp_path / "c"
+    argv = ["calibrate", str(s / "manifest.csv"), "--method", "classical", "--out", str(out)]
+    assert main([*argv, "--device-id", "display-07"]) == 0
+    first = json.loads((out / "calibration.json").read_text())
+    assert "replaced" not in capsys.readouterr().out
+    assert main(argv) == 0
+    printed = capsys.readouterr().out
+    held = f"note: replaced the calibration {out} held (created {first['created']}, device id "
+    assert held + "'display-07'); give each run its own --out to keep both" in printed
+    assert json.loads((out / "calibration.json").read_text())["device_id"] is None
+
+
 @pytest.mark.parametrize("bad", ["", "x" * 101, "line\nbreak"])
 def test_bad_device_id_exits_2(
     bad: str, tmp_path: Path, capsys: pytest.CaptureFixture[str]

@@ -77,6 +77,7 @@ def session_options(args: argparse.Namespace) -> SessionOptions:
 def _cmd_calibrate(args: argparse.Namespace) -> int:
     from contactcal.infer.calibration.calibrate import calibrate_session
     from contactcal.infer.calibration.provenance import Provenance
+    from contactcal.infer.calibration.record import earlier_record_note
     from contactcal.infer.files.atomic import run_outputs
     from contactcal.infer.pipeline.manifest import beside_manifest
     from contactcal.infer.pipeline.overlay import earlier_overlays_note, write_overlays
@@ -89,6 +90,7 @@ def _cmd_calibrate(args: argparse.Namespace) -> int:
     if is_video_run(args):  # --video / --camera: contactcal.infer.video.command
         return calibrate_video(args, measure_options(args), provenance)
     measure = measure_options(args, beside_manifest(args.manifest))
+    replaced = earlier_record_note(args.out)
     written: list[Path] = []
     with run_outputs(run_inputs(args)) as outs:
         rep = calibrate_session(
@@ -110,7 +112,7 @@ def _cmd_calibrate(args: argparse.Namespace) -> int:
     print(rep.table)
     if measure.scale is None:
         print(NO_SCALE_NOTE.format(looked=MANIFEST_SCALE))
-    note = earlier_overlays_note(written)
-    if note is not None:
-        print(note)
+    for note in (replaced, earlier_overlays_note(written)):
+        if note is not None:
+            print(note)
     return 0

@@ -19,6 +19,7 @@ from __future__ import annotations
 
 import csv
 import io
+import json
 import os
 from datetime import datetime, timezone
 from pathlib import Path
@@ -243,3 +244,31 @@ def write_calibration(
         write_synced(outs.stage(paths["csv"]), csv_text)
         write_synced(outs.stage(paths["json"]), text)  # staged last, so moved last
     return paths
+
+
+def earlier_record_note(out_dir: str | os.PathLike[str]) -> str | None:
+    """A line naming the calibration ``out_dir`` holds before a run writes its own (None: none).
+
+    A run into the same ``--out`` replaces ``calibration.json``, ``.csv`` and ``curve.png``
+    whole (the earlier files stay until the new ones are complete); the user is told which
+    record went, so that an earlier display's curve is not lost without a word.
+
+    Args:
+        out_dir: the run's output folder, before the run.
+
+    Returns:
+        ``None`` without an earlier ``calibration.json``, else a one-line note naming its
+        creation time and device id as recorded ("unreadable" when it is not a record).
+    """
+    path = Path(out_dir) / "calibration.json"
+    if not path.is_file():
+        return None
+    try:
+        old = json.loads(path.read_text(encoding="utf-8"))
+        what = f"created {old['created']}, device id {old.get('device_id')!r}"
+    except (OSError, ValueError, KeyError, TypeError):
+        what = "unreadable as a record"
+    return (
+        f"note: replaced the calibration {out_dir} held ({what}); give each run its own --out "
+        "to keep both"
+    )
