@@ -292,6 +292,22 @@ def test_a_second_run_into_one_out_says_which_calibration_it_replaced(
     assert json.loads((out / "calibration.json").read_text())["device_id"] is None
 
 
+def test_a_sweep_far_above_20_kpa_is_read_with_a_warning(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """A 0-10 kPa sweep logged in mbar reads 0-100 "kPa": calibrated (no bound tells it from a
+    high-pressure display), but said."""
+    s = copy_session(tmp_path)
+    for top, warned in ((95.0, True), (20.0, False)):
+        (s / "manifest.csv").write_text(f"file,pressure_kpa\np00.0kpa.jpg,0\np12.0kpa.jpg,{top}\n")
+        out = tmp_path / f"c{top:g}"
+        argv = ["calibrate", str(s / "manifest.csv"), "--method", "classical", "--out", str(out)]
+        assert main(argv) == 0
+        printed = capsys.readouterr().out
+        assert ("warning: the highest pressure is 95 kPa, far above" in printed) is warned
+        assert ("in mbar" in printed) is warned
+
+
 @pytest.mark.parametrize("bad", ["", "x" * 101, "line\nbreak"])
 def test_bad_device_id_exits_2(
     bad: str, tmp_path: Path, capsys: pytest.CaptureFixture[str]

@@ -33,7 +33,12 @@ from contactcal.infer.errors import RunError
 from contactcal.infer.files.atomic import OutputSet, run_outputs
 from contactcal.infer.methods.base import UNCHANGED_NOTE
 from contactcal.infer.pipeline.boundary import GONE_NOTE
-from contactcal.infer.pipeline.manifest import Frame, check_sweep_unit, read_session
+from contactcal.infer.pipeline.manifest import (
+    Frame,
+    check_sweep_unit,
+    read_session,
+    sweep_top_warning,
+)
 from contactcal.infer.pipeline.measure import Measured
 from contactcal.infer.pipeline.options import MeasureOptions
 from contactcal.infer.pipeline.readings import DEFAULT_STEP_TOLERANCE_KPA
@@ -177,6 +182,9 @@ def calibrate_session(
         table += "\n" + POOLED_NOTE.format(p=session.pooled, t=options.step_tolerance_kpa)
     if session.at_rest is not None:
         table += "\n" + AT_REST_NOTE.format(r=session.at_rest)
+    high = sweep_top_warning(max(f.pressure_kpa for f in frames))
+    if high is not None:
+        table += "\n" + high
     return CalibrationReport(table, frames, measured, fit.curve, paths, fit)
 
 

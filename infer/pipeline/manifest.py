@@ -78,6 +78,7 @@ __all__ = [
     "check_sweep_unit",
     "read_manifest",
     "read_session",
+    "sweep_top_warning",
 ]
 
 #: The extra a frame gets when its reading is read as its step's pressure: the reading.
@@ -131,6 +132,24 @@ def check_sweep_top(where: str | os.PathLike[str], top: float) -> None:
             f"{where}: the highest pressure_kpa is {top:g}, below {MIN_SWEEP_TOP_KPA:g} kPa; "
             "expected kPa (the display works at 0-20 kPa, contact from ~3 kPa), not bar or MPa"
         )
+
+
+#: kPa: a sweep whose highest pressure is above this is read, with a warning: the display works at
+#: 0-20 kPa, so a top of 30-100 kPa is more likely mbar read as kPa (a 0-10 kPa sweep in mbar
+#: tops out at 100) than a display calibrated that high; below :data:`MAX_PRESSURE_KPA` no bound
+#: can tell them apart, so it is said, not refused.
+HIGH_SWEEP_TOP_KPA = 30.0
+
+
+def sweep_top_warning(top: float) -> str | None:
+    """The warning line of a sweep whose highest pressure ``top`` (kPa as read) is above
+    :data:`HIGH_SWEEP_TOP_KPA`; None below it."""
+    if top <= HIGH_SWEEP_TOP_KPA:
+        return None
+    return (
+        f"warning: the highest pressure is {top:g} kPa, far above the display's 0-20 kPa: if the "
+        "pressures are in mbar (or another unit), convert them to kPa and calibrate again"
+    )
 
 
 def beside_manifest(path: str | os.PathLike[str], name: str = "rig.json") -> Path:
