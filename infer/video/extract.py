@@ -26,7 +26,14 @@ from contactcal.infer.calibration.phases import LOADING, UNLOADING
 from contactcal.infer.image.write import write_image
 from contactcal.infer.video.log import PressureLog
 from contactcal.infer.video.step_config import StepConfig
-from contactcal.infer.video.steps import Step, detect_steps, reference_step, step_at
+from contactcal.infer.video.steps import (
+    NOISE_PER_TOLERANCE,
+    Step,
+    detect_steps,
+    log_noise_kpa,
+    reference_step,
+    step_at,
+)
 
 #: The manifest's columns.
 MANIFEST_COLUMNS = ("file", "pressure_kpa", "phase", "time_s")
@@ -103,8 +110,16 @@ class Extractor:
     steps: list[Step] = field(default_factory=list)
     kept: dict[int, list[tuple[str, float]]] = field(default_factory=dict)  # step → (file, t)
     last_time_s: float = -math.inf
+    first_time_s: float = math.inf
+    frames_seen: int = 0
     _log_end: float = -math.inf
     _pending: list[tuple[int, float, np.ndarray]] = field(default_factory=list)
+
+    def frame_interval_s(self) -> float | None:
+        """Mean time between the frames seen so far, s (None before two frames)."""
+        if self.frames_seen < 2:
+            return None
+        return (self.last_time_s - self.first_time_s) / (self.frames_seen - 1)
 
     def update_log(self, log: PressureLog) -> None:
         """Use the log as it is now (the complete log, or a live one read again)."""
@@ -115,7 +130,8 @@ class Extractor:
         """Queue a frame; return the decisions now possible (frames the log has passed)."""
         if time_s <= self.last_time_s:
             raise ValueError(f"frame {index}: time {time_s:g} s is not after the previous frame")
-        self.last_time_s = time_s
+        self.last_time_s, self.first_time_s = time_s, min(self.first_time_s, time_s)
+        self.frames_seen += 1
         self._pending.append((index, time_s, frame))
         return self._decide(lambda t: t < self._log_end)
 
@@ -173,6 +189,22 @@ class Extractor:
         return "\n".join(lines)
 
 
+def _warn_noise(extractor: Extractor, where: str) -> None:
+    """Say on stderr when the log's noise is too large for ``--tolerance-kpa``'s band: a held
+    pressure is then split into steps, or lost, without any other sign."""
+    if extractor.log is None:
+        return
+    noise, tol = log_noise_kpa(extractor.log), extractor.cfg.tolerance_kpa
+    if noise > NOISE_PER_TOLERANCE * tol:
+        print(
+            f"warning: {where}: its samples scatter by ~{noise:.2f} kPa (standard deviation, from "
+            f"sample-to-sample changes), too much for --tolerance-kpa {tol:g}: a held pressure "
+            f"may be split into several steps or lost; give --tolerance-kpa "
+            f"{math.ceil(noise / NOISE_PER_TOLERANCE * 100) / 100:g} or more",
+            file=sys.stderr,
+        )
+
+
 def check_coverage(extractor: Extractor, video: Path | None) -> None:
     """Every step of the log must hold a frame of the video (else the session is incomplete).
 
@@ -187,6 +219,7 @@ def check_coverage(extractor: Extractor, video: Path | None) -> None:
     """
     log = extractor.log
     where = "the log" if log is None else str(log.path)
+    _warn_noise(extractor, where)
     if not extractor.steps:
         density = ""
         if log is not None and len(log.times_s) > 1:
@@ -213,6 +246,15 @@ def check_coverage(extractor: Extractor, video: Path | None) -> None:
             continue
         if video is None and s.start_s > extractor.last_time_s:
             print(f"note: step {s.label()} began after the capture ended", file=sys.stderr)
+            continue
+        gap = extractor.frame_interval_s()
+        if gap is not None and s.end_s - s.start_s < 2 * gap and s.end_s < extractor.last_time_s:
+            print(  # a sliver of the log between two frames (noise inside the band): no hold
+                f"note: step {s.label()} of {where} lasts {s.end_s - s.start_s:.2f} s, less than "
+                f"two frames of {source} ({gap:.3f} s apart): no frame to calibrate it with, "
+                "left out",
+                file=sys.stderr,
+            )
             continue
         if s.start_s > extractor.last_time_s:  # the frames stop before the step begins
             raise ValueError(

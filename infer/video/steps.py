@@ -93,6 +93,24 @@ def detect_steps(log: PressureLog, cfg: StepConfig) -> list[Step]:
     ]
 
 
+#: median |second difference| / σ for white noise of standard deviation σ (0.6745·√6).
+_MEDIAN_DIFF2_PER_SIGMA = 1.652
+#: A settle window's samples of noise σ span about 4.5 σ (50 samples): a band of 2 × tolerance
+#: holds them when tolerance >= 2.25 σ.
+NOISE_PER_TOLERANCE = 1 / 2.25
+
+
+def log_noise_kpa(log: PressureLog) -> float:
+    """The log's noise, kPa: the standard deviation white noise would need for the median
+    |second difference| of consecutive samples. A hold and a steady ramp (and a staircase
+    sampled once per step) have none, so only the corners between them add to it, and the
+    median passes over those. 0.0 with fewer than three samples or exact values."""
+    if len(log.pressures_kpa) < 3:
+        return 0.0
+    d2 = np.abs(np.diff(log.pressures_kpa, n=2))
+    return float(np.median(d2)) / _MEDIAN_DIFF2_PER_SIGMA
+
+
 def step_at(steps: list[Step], time_s: float) -> Step | None:
     """The step a frame taken at ``time_s`` belongs to, or None (ramp, settling, outside)."""
     for s in steps:
