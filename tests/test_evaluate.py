@@ -170,6 +170,11 @@ GOOD = ["p10.0kpa.jpg", "200.5", "150.5", "90", "70", "15"]
     ("header", "row", "expected"),
     [
         (["file", "cx", "cy", "major", "minor"], GOOD[:5], "missing column(s) angle_deg"),
+        (  # ImageJ's own Results export: its columns named, how to rename them
+            ["", "Label", "Area", "X", "Y", "Major", "Minor", "Angle"],
+            ["1", "p10.0kpa.jpg", "5000", *GOOD[1:]],
+            "this looks like ImageJ's Results export: rename its columns Label → file, X → cx",
+        ),
         (None, [*GOOD[:3], "0", *GOOD[4:]], "major 0 is not in (0, 100000]"),
         (None, [*GOOD[:4], "-3", GOOD[5]], "minor -3 is not in (0, 100000]"),
         (None, [*GOOD[:3], "1e308", "1e308", GOOD[5]], "major 1e+308 is not in (0, 100000]"),

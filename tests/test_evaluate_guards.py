@@ -199,6 +199,8 @@ def test_documented_mask_forms_are_still_accepted(tmp_path: Path) -> None:
     [
         ("p10.0kpa.jpg,200,150,1000,1000,0", "labels all 400×300 px of its frame"),
         ("p10.0kpa.jpg,200,150,380,280,0", "inside the window ring (radius 132 px"),
+        # an ellipse in mm (ImageJ's scale left on): a small patch near the frame's corner
+        ("p10.0kpa.jpg,26,21,9,7,0", "lies mostly outside the window ring (centre"),
     ],
 )
 def test_ellipse_larger_than_the_window_exits_2(

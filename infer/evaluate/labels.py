@@ -117,9 +117,32 @@ def _read_rows(path: Path) -> tuple[dict[str, int], list[tuple[int, list[str]]]]
     if missing:
         raise LabelError(
             f"{path}: missing column(s) {', '.join(missing)}; expected the header to contain "
-            f"'{_HEADER}' (got {','.join(names)!r})"
+            f"'{_HEADER}' (got {','.join(names)!r}){_imagej_hint(names)}"
         )
     return {n: names.index(n) for n in LABEL_COLUMNS}, list(enumerate(rows[1:], start=1))
+
+
+#: ImageJ's Results columns (Centroid, Fit ellipse, Display label) → this CSV's.
+IMAGEJ_COLUMNS = {
+    "Label": "file",
+    "X": "cx",
+    "Y": "cy",
+    "Major": "major",
+    "Minor": "minor",
+    "Angle": "angle_deg",
+}
+
+
+def _imagej_hint(names: list[str]) -> str:
+    """How to turn ImageJ's Results export into a label CSV, when ``names`` look like one."""
+    if not {"X", "Y", "Major", "Minor", "Angle"} <= set(names):
+        return ""
+    renames = ", ".join(f"{k} → {v}" for k, v in IMAGEJ_COLUMNS.items())
+    label = "" if "Label" in names else " (no Label column: tick Display label in Set Measurements)"
+    return (
+        f"; this looks like ImageJ's Results export: rename its columns {renames}{label}, with "
+        "the scale removed (pixels; docs/evaluate.md, 'Ellipses in ImageJ')"
+    )
 
 
 def _number(at: str, name: str, cell: str) -> float:

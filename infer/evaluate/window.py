@@ -3,7 +3,8 @@
 The skin touches the window inside the rig's bright outer ring, so a label whose contact covers
 the whole frame, or more pixels than the disc of that ring, cannot be a contact label (an
 inverted mask, a mask of another frame or an ellipse in the wrong unit): it is refused naming
-its file, not scored. The ring is the one the U-Net centres its crop on
+its file, not scored; so is a label lying mostly outside that ring (an ellipse in mm, its centre
+near the frame's corner). The ring is the one the U-Net centres its crop on
 (:func:`~contactcal.infer.methods.unet.ring.locate_ring`), found on the session's reference
 frame; where none is found only the whole-frame check applies.
 """
@@ -13,6 +14,8 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 from pathlib import Path
+
+import numpy as np
 
 from contactcal.infer.evaluate.labels import Label, LabelError, LabelMask
 from contactcal.infer.image.read import load_image
@@ -26,6 +29,8 @@ class Window:
 
     reference: Path  # the frame the ring was found on
     radius_px: float  # px of the frame, the ring's outer edge
+    cx: float = math.nan  # px, the ring's centre (x right)
+    cy: float = math.nan  # px (y down)
 
     @property
     def max_area_px(self) -> float:
@@ -45,7 +50,7 @@ def find_window(reference: Path, bit_depth: int | None = None) -> Window | None:
         ImageError: an unreadable frame (``measure`` refuses it first).
     """
     ring = locate_ring(load_image(reference, bit_depth=bit_depth))
-    return Window(reference, ring.radius) if ring.found else None
+    return Window(reference, ring.radius, ring.cx, ring.cy) if ring.found else None
 
 
 def check_label_area(
@@ -79,3 +84,22 @@ def check_label_area(
             f"+{RING_RADIUS_TOLERANCE:.0%} tolerance); "
             "expected the contact patch only (an inverted mask?)"
         )
+    if window is not None and mask.area_px > 0 and _inside_share(mask.mask, window) < 0.5:
+        ys, xs = np.nonzero(mask.mask)
+        raise LabelError(
+            f"{label.where()}: its contact (centred at {xs.mean():.0f}, {ys.mean():.0f} px) "
+            f"lies mostly outside the window ring (centre {window.cx:.0f}, {window.cy:.0f} px, "
+            f"radius {window.radius_px:.0f} px, found on the reference {window.reference.name}); "
+            "expected a label in pixels of the frame (ImageJ: remove the scale, "
+            "docs/evaluate.md)"
+        )
+
+
+def _inside_share(mask: np.ndarray, window: Window) -> float:
+    """The share of the ``(H, W) bool`` mask's pixels inside the window ring (with the ring's
+    tolerance); 1.0 without a ring centre."""
+    if not (math.isfinite(window.cx) and math.isfinite(window.cy)):
+        return 1.0
+    ys, xs = np.nonzero(mask)
+    reach = window.radius_px * (1.0 + RING_RADIUS_TOLERANCE)
+    return float(np.mean(np.hypot(xs - window.cx, ys - window.cy) <= reach))
