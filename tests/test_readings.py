@@ -240,3 +240,20 @@ def test_a_rest_reading_below_0_is_no_reversal_of_the_passes(tmp_path: Path) -> 
     (tmp_path / "manifest.csv").write_text("file,pressure_kpa\n" + rows, encoding="utf-8")
     tiny = read_session(tmp_path / "manifest.csv")
     assert str(tiny.frames[0].pressure_kpa) == "0.0" and tiny.at_rest is None
+
+
+@pytest.mark.parametrize(("per_step", "sd"), [(3, 0.05), (10, 0.04)])
+def test_jitter_is_never_taken_for_a_chain(tmp_path: Path, per_step: int, sd: float) -> None:
+    """0-20-0 kPa in 1 kPa steps, Gaussian gauge jitter: a step whose readings happen to span
+    the tolerance is no chain (a chain is several times wider than the session's other steps);
+    none of 60 sessions refused."""
+    rng = np.random.default_rng(11)
+    setpoints = [*range(21), *range(19, -1, -1)]
+    n = len(setpoints) * per_step
+    for k in range(n):
+        (tmp_path / f"f{k:04d}.png").write_bytes(b"x")
+    for _ in range(60):  # the rule before refused 17-23 % of such sessions
+        p = np.repeat(setpoints, per_step) + rng.normal(0.0, sd, n)
+        rows = "".join(f"f{k:04d}.png,{v:.3f}\n" for k, v in enumerate(p))
+        (tmp_path / "manifest.csv").write_text("file,pressure_kpa\n" + rows, encoding="utf-8")
+        read_session(tmp_path / "manifest.csv")

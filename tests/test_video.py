@@ -397,3 +397,26 @@ def test_a_sliver_of_the_log_between_two_frames_is_left_out_with_a_note(
     ex = _extract(tmp_path / "v.avi", log, tmp_path / "out", StepConfig(settle_s=0.0))
     assert "note: step 2.2 kPa (loading, 1.43-1.48 s) of " in capsys.readouterr().err
     assert sorted({s.pressure_kpa for s in ex.used_steps()}) == [0.0, 5.0, 10.0]
+
+
+def test_a_frameless_sliver_above_the_top_does_not_split_the_passes(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """A two-sample spike to 10.3 kPa on the way up to the 10 kPa hold is the log's highest
+    step but holds no frame: the passes split at the 10 kPa hold, which stays loading."""
+    kpas = [0, 5, 10, 5, 0]
+    make_video(tmp_path / "v.avi", kpas)
+    t = np.arange(0.025, 8.6, 1 / LOG_HZ)
+    p = np.array([_pressure_at(float(x), kpas, 1.2, 0.5)[0] for x in t])
+    p[(t > 3.1) & (t < 3.2)] = 10.3  # two samples in the ramp from 5 to 10 kPa
+    log = _log_file(tmp_path / "log.csv", t, p)
+    ex = _extract(tmp_path / "v.avi", log, tmp_path / "out", StepConfig(settle_s=0.0))
+    assert "note: step 10.3 kPa (loading" in capsys.readouterr().err
+    used = [(s.pressure_kpa, s.phase) for s in ex.used_steps()]
+    assert used == [
+        (0.0, LOADING),
+        (5.0, LOADING),
+        (10.0, LOADING),
+        (5.0, UNLOADING),
+        (0.0, UNLOADING),
+    ]

@@ -55,6 +55,7 @@ from contactcal.infer.pipeline.manifest_rows import (
 )
 from contactcal.infer.pipeline.readings import (
     DEFAULT_STEP_TOLERANCE_KPA,
+    MAX_STEP_TOLERANCE_KPA,
     AtRest,
     Pooled,
     is_chain,
@@ -86,10 +87,10 @@ READING_COLUMN = "pressure_kpa_read"
 #: The refusal of a step whose readings span the step tolerance or more (readings.is_chain).
 CHAINED = (
     "{where}: the {phase} pass's pressures {lo:g} to {hi:g} kPa ({n} distinct values) chain "
-    "into one step {span:g} kPa wide, as wide as the step tolerance {t:g} kPa or wider (values "
-    "less than it apart are one step): for steps set this finely give --step-tolerance-kpa "
-    "below their spacing (0 reads every distinct value as a step); if they are the readings "
-    "of one held pressure, give a tolerance above {span:g} kPa"
+    "into one step {span:g} kPa wide, as wide as the step tolerance {t:g} kPa or wider and "
+    "wider than the session's other steps (values less than the tolerance apart are one step): "
+    "for steps set this finely give --step-tolerance-kpa below their spacing (0 reads every "
+    "distinct value as a step)"
 )
 _MAX_LISTED = 5
 
@@ -264,32 +265,23 @@ def _pool_readings(
     out = list(frames)
     moved, steps, widest = 0, 0, (0.0, 0.0)
     rest, lowest = 0, 0.0
-    for phase in PHASES:
-        idx = [k for k, f in enumerate(frames) if f.phase == phase]
-        labels = _step_labels([frames[k] for k in idx], tolerance_kpa)
-        for step in np.unique(labels):
-            mine = [k for k, lab in zip(idx, labels, strict=True) if lab == step]
-            values = [frames[k].pressure_kpa for k in mine]
-            lo, hi = min(values), max(values)
-            if is_chain(values, tolerance_kpa):
-                n, span = len(set(values)), round(hi - lo, 6)
-                raise ManifestError(
-                    CHAINED.format(
-                        where=where, phase=phase, lo=lo, hi=hi, n=n, span=span, t=tolerance_kpa
-                    )
-                )
-            median = step_pressure(values) + 0.0  # a median rounded to -0.0 is 0.0
-            if lo == hi and median >= 0.0:
-                continue
-            level = max(median, 0.0)
-            for k in mine:
-                reading = (READING_COLUMN, repr(frames[k].pressure_kpa))
-                out[k] = _with(frames[k], pressure_kpa=level, extras=(*frames[k].extras, reading))
-            if lo != hi:
-                moved, steps = moved + len(mine), steps + 1
-                widest = max(widest, (lo, hi), key=lambda r: r[1] - r[0])
-            if median < 0.0:
-                rest, lowest = rest + len(mine), min(lowest, lo)
+    groups = _steps_per_pass(frames, tolerance_kpa)
+    _check_chains(where, frames, groups, tolerance_kpa)
+    for _, mine in groups:
+        values = [frames[k].pressure_kpa for k in mine]
+        lo, hi = min(values), max(values)
+        median = step_pressure(values) + 0.0  # a median rounded to -0.0 is 0.0
+        if lo == hi and median >= 0.0:
+            continue
+        level = max(median, 0.0)
+        for k in mine:
+            reading = (READING_COLUMN, repr(frames[k].pressure_kpa))
+            out[k] = _with(frames[k], pressure_kpa=level, extras=(*frames[k].extras, reading))
+        if lo != hi:
+            moved, steps = moved + len(mine), steps + 1
+            widest = max(widest, (lo, hi), key=lambda r: r[1] - r[0])
+        if median < 0.0:
+            rest, lowest = rest + len(mine), min(lowest, lo)
     if (moved or rest) and READING_COLUMN in names:
         raise ManifestError(
             f"{where}: readings less than a step tolerance apart are pooled into steps (a step "
@@ -299,6 +291,52 @@ def _pool_readings(
         )
     pooled = Pooled(moved, steps, widest) if moved else None
     return out, pooled, AtRest(rest, lowest) if rest else None
+
+
+def _steps_per_pass(frames: list[Frame], tolerance_kpa: float) -> list[tuple[str, list[int]]]:
+    """``(phase, frame indices)`` of each pass's steps, found among that pass's readings."""
+    groups = []
+    for phase in PHASES:
+        idx = [k for k, f in enumerate(frames) if f.phase == phase]
+        labels = _step_labels([frames[k] for k in idx], tolerance_kpa)
+        for step in np.unique(labels):
+            groups.append((phase, [k for k, lab in zip(idx, labels, strict=True) if lab == step]))
+    return groups
+
+
+def _check_chains(
+    where: str, frames: list[Frame], groups: list[tuple[str, list[int]]], tolerance_kpa: float
+) -> None:
+    """Refuse a step whose values chain (:func:`~contactcal.infer.pipeline.readings.is_chain`:
+    wider than the tolerance and than the session's steps typically are), naming the option."""
+    values = [[frames[k].pressure_kpa for k in mine] for _, mine in groups]
+    typical = float(np.median([max(v) - min(v) for v in values])) if values else 0.0
+    top = max((f.pressure_kpa for f in frames), default=0.0)
+    for (phase, _), v in zip(groups, values, strict=True):
+        if not is_chain(v, tolerance_kpa, typical):
+            continue
+        span = round(max(v) - min(v), 6)
+        held = (
+            f"; if they are the readings of one held pressure, give a tolerance above {span:g} kPa"
+            if span < MAX_STEP_TOLERANCE_KPA
+            else ""
+        )
+        unit = (
+            "" if sweep_top_warning(top) is None else f" (and the sweep tops out at {top:g}: mbar?)"
+        )
+        raise ManifestError(
+            CHAINED.format(
+                where=where,
+                phase=phase,
+                lo=min(v),
+                hi=max(v),
+                n=len(set(v)),
+                span=span,
+                t=tolerance_kpa,
+            )
+            + held
+            + unit
+        )
 
 
 def _number_steps(where: str, frames: list[Frame], hint: str = "") -> list[Frame]:

@@ -7,9 +7,10 @@ keeps each frame's near-twins in the fit, and the passes are no longer rising th
 :func:`step_labels` finds the steps (single linkage: sorted readings less than the tolerance
 apart are one step, however many), :func:`pooled_pressures` gives each reading its step's
 median. A manifest of setpoints at least the tolerance apart comes back unchanged. Setpoints
-closer than that would chain into one step as wide as the tolerance or wider, which no held
-pressure's readings are (:func:`is_chain`): ``read_session`` refuses such a step and names the
-option, so a sweep stepped that finely is given a smaller tolerance (or 0, for setpoints).
+closer than that would chain into one step as wide as the tolerance or wider, and several
+times wider than the session's other steps, which no held pressure's readings are
+(:func:`is_chain`): ``read_session`` refuses such a step and names the option, so a sweep
+stepped that finely is given a smaller tolerance (or 0, for setpoints).
 :class:`Pooled` and :class:`AtRest` say what reading a manifest made of its steps
 (:func:`~contactcal.infer.pipeline.manifest.read_session`).
 """
@@ -72,14 +73,22 @@ def step_labels(readings_kpa: Sequence[float], tolerance_kpa: float) -> np.ndarr
     return labels
 
 
-def is_chain(readings_kpa: Sequence[float], tolerance_kpa: float) -> bool:
-    """True if one step's ``(n,)`` readings (kPa) span the tolerance or more: single linkage
-    chained readings less than the tolerance apart into a step wider than the tolerance, which
-    the readings of one held pressure are not (three readings with a jitter of 0.03 kPa span
-    ~0.1 kPa) but setpoints finer than the tolerance, or two jittering steps, are. False at
-    tolerance 0 (every distinct value is a step)."""
+#: A step is a chain when its readings span this many times a typical step's span (or the
+#: tolerance, if more): jitter widens every step alike (three readings with a jitter of
+#: 0.05 kPa span ~0.085 kPa, and more than 4 × that in ~1 of 10^6 steps), while a chain of
+#: setpoints spans their whole run and the session's other steps span nothing.
+CHAIN_FACTOR = 4.0
+
+
+def is_chain(readings_kpa: Sequence[float], tolerance_kpa: float, typical_span_kpa: float) -> bool:
+    """True if one step's ``(n,)`` readings (kPa) span the tolerance or more *and*
+    :data:`CHAIN_FACTOR` × the session's typical step span (the median over its steps): single
+    linkage chained values less than the tolerance apart into a step wider than the readings
+    of one held pressure are, as setpoints finer than the tolerance, or two jittering steps,
+    do. False at tolerance 0 (every distinct value is a step)."""
     p = np.asarray(readings_kpa, dtype=np.float64)
-    return tolerance_kpa > 0.0 and float(np.ptp(p)) >= tolerance_kpa - _ROUNDING_KPA
+    bound = max(tolerance_kpa - _ROUNDING_KPA, CHAIN_FACTOR * typical_span_kpa)
+    return tolerance_kpa > 0.0 and float(np.ptp(p)) >= bound
 
 
 def pooled_pressures(readings_kpa: Sequence[float], labels: Sequence[int]) -> list[float]:

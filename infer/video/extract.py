@@ -33,6 +33,7 @@ from contactcal.infer.video.steps import (
     log_noise_kpa,
     reference_step,
     step_at,
+    with_phases,
 )
 
 #: The manifest's columns.
@@ -155,7 +156,7 @@ class Extractor:
         """The steps with kept frames that the calibration uses, in time order: all of them,
         except an unloading pass at fewer than two pressures (e.g. a vent straight back to
         0 kPa after the top step), which is no curve (:meth:`left_out`)."""
-        kept = [s for s in self.steps if s.index in self.kept]
+        kept = with_phases([s for s in self.steps if s.index in self.kept])
         unloading = {f"{s.pressure_kpa:g}" for s in kept if s.phase == UNLOADING}
         return kept if len(unloading) >= 2 else [s for s in kept if s.phase != UNLOADING]
 
@@ -163,7 +164,11 @@ class Extractor:
         """Steps with kept frames that :meth:`used_steps` leaves out (their frames stay in
         ``frames/``, outside the manifest)."""
         used = {s.index for s in self.used_steps()}
-        return [s for s in self.steps if s.index in self.kept and s.index not in used]
+        return [
+            s
+            for s in with_phases([s for s in self.steps if s.index in self.kept])
+            if s.index not in used
+        ]
 
     def manifest_text(self) -> str:
         """``frames/manifest.csv``: the reference step first, then the used steps in time order."""
@@ -179,7 +184,8 @@ class Extractor:
         """Per step: pressure, phase, frames kept and their time span (the CLI prints it)."""
         lines = ["step  pressure (kPa)  phase      frames  time (s)"]
         out = {s.index for s in self.left_out()}
-        for s in self.steps:
+        phased = {s.index: s for s in with_phases([s for s in self.steps if s.index in self.kept])}
+        for s in (phased.get(s.index, s) for s in self.steps):
             kept = self.kept.get(s.index, [])
             span = f"{kept[0][1]:.2f}-{kept[-1][1]:.2f}" if kept else "-"
             note = "  (left out: a one-pressure unloading pass is no curve)" * (s.index in out)

@@ -11,7 +11,7 @@ before the highest-pressure step, and that step, are the loading pass; those aft
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 
@@ -80,17 +80,19 @@ def detect_steps(log: PressureLog, cfg: StepConfig) -> list[Step]:
     steady = steady_mask(log, cfg)
     runs = _runs(log, steady, 2 * cfg.tolerance_kpa)
     pressures = [max(float(np.median(log.pressures_kpa[a : b + 1])), 0.0) for a, b in runs]
-    top = int(np.argmax(pressures)) if pressures else 0
-    return [
-        Step(
-            index=k,
-            pressure_kpa=round(pressures[k], 3),
-            start_s=float(log.times_s[a]),
-            end_s=float(log.times_s[b]),
-            phase=LOADING if k <= top else UNLOADING,
-        )
+    steps = [
+        Step(k, round(pressures[k], 3), float(log.times_s[a]), float(log.times_s[b]), LOADING)
         for k, (a, b) in enumerate(runs)
     ]
+    return with_phases(steps)
+
+
+def with_phases(steps: list[Step]) -> list[Step]:
+    """``steps`` (time order) with their phases: loading up to the first highest-pressure
+    step, unloading after it. Given the steps that hold frames, a frameless sliver of the log
+    cannot be the top that splits the passes."""
+    top = int(np.argmax([s.pressure_kpa for s in steps])) if steps else 0
+    return [replace(s, phase=LOADING if k <= top else UNLOADING) for k, s in enumerate(steps)]
 
 
 #: median |second difference| / σ for white noise of standard deviation σ (0.6745·√6).
