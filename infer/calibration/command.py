@@ -87,10 +87,13 @@ def _cmd_calibrate(args: argparse.Namespace) -> int:
     provenance = Provenance(argv=args.argv, device_id=args.device_id)  # refuses a bad id
     check_change_gate(args)
     check_out_folder(args.out, "calibrate")
-    if is_video_run(args):  # --video / --camera: contactcal.infer.video.command
-        return calibrate_video(args, measure_options(args), provenance)
-    measure = measure_options(args, beside_manifest(args.manifest))
     replaced = earlier_record_note(args.out)
+    if is_video_run(args):  # --video / --camera: contactcal.infer.video.command
+        code = calibrate_video(args, measure_options(args), provenance)
+        if code == 0 and replaced is not None:
+            print(replaced)
+        return code
+    measure = measure_options(args, beside_manifest(args.manifest))
     written: list[Path] = []
     with run_outputs(run_inputs(args)) as outs:
         rep = calibrate_session(

@@ -12,6 +12,7 @@ pass at one pressure, whose frames stay in ``frames/``) with columns
 
 from __future__ import annotations
 
+import itertools
 import math
 import os
 import sys
@@ -27,10 +28,9 @@ from contactcal.infer.image.write import write_image
 from contactcal.infer.video.log import PressureLog
 from contactcal.infer.video.step_config import StepConfig
 from contactcal.infer.video.steps import (
-    NOISE_PER_TOLERANCE,
     Step,
     detect_steps,
-    log_noise_kpa,
+    hold_scatter_kpa,
     reference_step,
     step_at,
     with_phases,
@@ -196,19 +196,26 @@ class Extractor:
 
 
 def _warn_noise(extractor: Extractor, where: str) -> None:
-    """Say on stderr when the log's noise is too large for ``--tolerance-kpa``'s band: a held
-    pressure is then split into steps, or lost, without any other sign."""
+    """Say on stderr when the log scatters too much at its holds for ``--tolerance-kpa``'s
+    band (:func:`~contactcal.infer.video.steps.hold_scatter_kpa`), or when two steps in a row
+    lie closer than the band (a hold split by its scatter): else a held pressure is split into
+    steps, or lost, without any other sign."""
     if extractor.log is None:
         return
-    noise, tol = log_noise_kpa(extractor.log), extractor.cfg.tolerance_kpa
-    if noise > NOISE_PER_TOLERANCE * tol:
-        print(
-            f"warning: {where}: its samples scatter by ~{noise:.2f} kPa (standard deviation, from "
-            f"sample-to-sample changes), too much for --tolerance-kpa {tol:g}: a held pressure "
-            f"may be split into several steps or lost; give --tolerance-kpa "
-            f"{math.ceil(noise / NOISE_PER_TOLERANCE * 100) / 100:g} or more",
-            file=sys.stderr,
-        )
+    scatter, tol = hold_scatter_kpa(extractor.log, extractor.cfg), extractor.cfg.tolerance_kpa
+    p = [s.pressure_kpa for s in extractor.steps if s.index in extractor.kept]
+    split = [(a, b) for a, b in itertools.pairwise(p) if abs(b - a) < 2 * tol]
+    if scatter <= 1.5 * tol and not split:
+        return
+    what = f"its holds scatter by ~{scatter:.2f} kPa peak to peak"
+    if split:
+        what += f", and steps {split[0][0]:g} and {split[0][1]:g} kPa in a row are one hold split"
+    print(
+        f"warning: {where}: {what}, too much for --tolerance-kpa {tol:g} (a band of ±{tol:g}): "
+        f"held pressures may be split into several steps or lost; give --tolerance-kpa "
+        f"{max(math.ceil(scatter * 100) / 100, 2 * tol):g} or more",
+        file=sys.stderr,
+    )
 
 
 def check_coverage(extractor: Extractor, video: Path | None) -> None:

@@ -44,15 +44,23 @@ class Step:
         return f"{self.pressure_kpa:g} kPa ({self.phase}, {self.start_s:.2f}-{self.end_s:.2f} s)"
 
 
+def window_spans(log: PressureLog, window_s: float) -> np.ndarray:
+    """``(N,)`` kPa: each sample's peak-to-peak over the ``window_s`` before it (and the last
+    sample at or before that window's start, so the window is covered); NaN where the log does
+    not cover the window."""
+    t, p = log.times_s, log.pressures_kpa
+    starts = np.searchsorted(t, t - window_s, side="right") - 1
+    out = np.full(len(t), np.nan)
+    for i, lo in enumerate(starts):
+        if lo >= 0:
+            out[i] = np.ptp(p[lo : i + 1])
+    return out
+
+
 def steady_mask(log: PressureLog, cfg: StepConfig) -> np.ndarray:
     """``(N,) bool``: whether each sample has been steady for ``cfg.settle_s`` (see module)."""
-    t, p = log.times_s, log.pressures_kpa
-    starts = np.searchsorted(t, t - cfg.settle_s, side="right") - 1
-    out = np.zeros(len(t), bool)
-    for i, lo in enumerate(starts):
-        if lo >= 0:  # the log covers the whole settle window
-            out[i] = np.ptp(p[lo : i + 1]) <= 2 * cfg.tolerance_kpa
-    return out
+    spans = window_spans(log, cfg.settle_s)
+    return np.nan_to_num(spans, nan=np.inf) <= 2 * cfg.tolerance_kpa
 
 
 def _runs(log: PressureLog, steady: np.ndarray, band: float) -> list[tuple[int, int]]:
@@ -95,22 +103,23 @@ def with_phases(steps: list[Step]) -> list[Step]:
     return [replace(s, phase=LOADING if k <= top else UNLOADING) for k, s in enumerate(steps)]
 
 
-#: median |second difference| / σ for white noise of standard deviation σ (0.6745·√6).
-_MEDIAN_DIFF2_PER_SIGMA = 1.652
-#: A settle window's samples of noise σ span about 4.5 σ (50 samples): a band of 2 × tolerance
-#: holds them when tolerance >= 2.25 σ.
-NOISE_PER_TOLERANCE = 1 / 2.25
+#: s: the shortest window :func:`hold_scatter_kpa` looks at a hold through.
+SCATTER_WINDOW_S = 0.5
 
 
-def log_noise_kpa(log: PressureLog) -> float:
-    """The log's noise, kPa: the standard deviation white noise would need for the median
-    |second difference| of consecutive samples. A hold and a steady ramp (and a staircase
-    sampled once per step) have none, so only the corners between them add to it, and the
-    median passes over those. 0.0 with fewer than three samples or exact values."""
-    if len(log.pressures_kpa) < 3:
-        return 0.0
-    d2 = np.abs(np.diff(log.pressures_kpa, n=2))
-    return float(np.median(d2)) / _MEDIAN_DIFF2_PER_SIGMA
+def hold_scatter_kpa(log: PressureLog, cfg: StepConfig) -> float:
+    """kPa: how far the log's samples scatter over a settle window at a hold, as the steadiness
+    test sees it: the lower quartile of every window's peak-to-peak (holds fill most of a
+    sweep's time and have the smallest spans; ramps' windows are above the quartile). A band
+    of ``2 × tolerance`` that this quartile fills by more than three quarters splits or loses
+    holds (their noisier windows exceed it). 0.0 for a log too short for one window, or
+    sampled fewer than three times a window."""
+    window = max(cfg.settle_s, SCATTER_WINDOW_S)
+    if len(log.times_s) < 2 or float(np.median(np.diff(log.times_s))) > window / 3:
+        return 0.0  # too sparse to see a hold through a window (said otherwise)
+    spans = window_spans(log, window)
+    spans = spans[np.isfinite(spans)]
+    return float(np.percentile(spans, 25)) if spans.size else 0.0
 
 
 def step_at(steps: list[Step], time_s: float) -> Step | None:
