@@ -31,8 +31,6 @@ from collections.abc import Sequence
 from dataclasses import dataclass
 from pathlib import Path
 
-import numpy as np
-
 from contactcal.infer.calibration.phases import (
     FROM_COLUMN,
     LOADING,
@@ -44,29 +42,37 @@ from contactcal.infer.calibration.phases import (
 from contactcal.infer.pipeline.manifest_rows import (
     GAUGE_ZERO_NOISE_KPA,
     HEADER,
+    HIGH_SWEEP_TOP_KPA,
     MAX_PRESSURE_KPA,
+    MIN_SWEEP_TOP_KPA,
     PHASE_COLUMN,
     REQUIRED_COLUMNS,
     Frame,
     ManifestError,
     check_header,
+    check_sweep_top,
     parse_row,
     read_rows,
+    sweep_top_warning,
+    with_changes,
+)
+from contactcal.infer.pipeline.manifest_steps import (
+    READING_COLUMN,
+    frame_step_labels,
+    pool_readings,
 )
 from contactcal.infer.pipeline.readings import (
     DEFAULT_STEP_TOLERANCE_KPA,
-    MAX_STEP_TOLERANCE_KPA,
     AtRest,
     Pooled,
-    is_chain,
     pooled_pressures,
-    step_labels,
-    step_pressure,
 )
 
 __all__ = [
     "GAUGE_ZERO_NOISE_KPA",
+    "HIGH_SWEEP_TOP_KPA",
     "MAX_PRESSURE_KPA",
+    "MIN_SWEEP_TOP_KPA",
     "READING_COLUMN",
     "REQUIRED_COLUMNS",
     "AtRest",
@@ -82,16 +88,6 @@ __all__ = [
     "sweep_top_warning",
 ]
 
-#: The extra a frame gets when its reading is read as its step's pressure: the reading.
-READING_COLUMN = "pressure_kpa_read"
-#: The refusal of a step whose readings span the step tolerance or more (readings.is_chain).
-CHAINED = (
-    "{where}: the {phase} pass's pressures {lo:g} to {hi:g} kPa ({n} distinct values) chain "
-    "into one step {span:g} kPa wide, as wide as the step tolerance {t:g} kPa or wider and "
-    "wider than the session's other steps (values less than the tolerance apart are one step): "
-    "for steps set this finely give --step-tolerance-kpa below their spacing (0 reads every "
-    "distinct value as a step)"
-)
 _MAX_LISTED = 5
 
 
@@ -105,12 +101,6 @@ class Session:
     at_rest: AtRest | None = None  # steps read below 0 kPa, given as 0; None: none
 
 
-#: kPa: a session whose highest pressure is below this cannot be a calibration sweep of the
-#: display (contact starts at ~3 kPa): its pressures are in another unit (bar: 20 kPa is 0.2;
-#: MPa: 0.02), refused by :func:`check_sweep_unit`.
-MIN_SWEEP_TOP_KPA = 1.0
-
-
 def check_sweep_unit(where: str | os.PathLike[str], frames: Sequence[Frame]) -> None:
     """Refuse a session whose pressures all lie below :data:`MIN_SWEEP_TOP_KPA` (and not all
     0: those get the "no contact" answer): the calibration would read bar or MPa as kPa.
@@ -119,38 +109,6 @@ def check_sweep_unit(where: str | os.PathLike[str], frames: Sequence[Frame]) -> 
         ManifestError: naming the manifest, its highest pressure and the units it may be in.
     """
     check_sweep_top(where, max((f.pressure_kpa for f in frames), default=0.0))
-
-
-def check_sweep_top(where: str | os.PathLike[str], top: float) -> None:
-    """:func:`check_sweep_unit` on the sweep's highest pressure ``top`` (kPa as read) from the
-    file ``where`` (a manifest, or a video run's pressure log).
-
-    Raises:
-        ManifestError: naming ``where``, ``top`` and the units it may be in.
-    """
-    if 0.0 < top < MIN_SWEEP_TOP_KPA:
-        raise ManifestError(
-            f"{where}: the highest pressure_kpa is {top:g}, below {MIN_SWEEP_TOP_KPA:g} kPa; "
-            "expected kPa (the display works at 0-20 kPa, contact from ~3 kPa), not bar or MPa"
-        )
-
-
-#: kPa: a sweep whose highest pressure is above this is read, with a warning: the display works at
-#: 0-20 kPa, so a top of 30-100 kPa is more likely mbar read as kPa (a 0-10 kPa sweep in mbar
-#: tops out at 100) than a display calibrated that high; below :data:`MAX_PRESSURE_KPA` no bound
-#: can tell them apart, so it is said, not refused.
-HIGH_SWEEP_TOP_KPA = 30.0
-
-
-def sweep_top_warning(top: float) -> str | None:
-    """The warning line of a sweep whose highest pressure ``top`` (kPa as read) is above
-    :data:`HIGH_SWEEP_TOP_KPA`; None below it."""
-    if top <= HIGH_SWEEP_TOP_KPA:
-        return None
-    return (
-        f"warning: the highest pressure is {top:g} kPa, far above the display's 0-20 kPa: if the "
-        "pressures are in mbar (or another unit), convert them to kPa and calibrate again"
-    )
 
 
 def beside_manifest(path: str | os.PathLike[str], name: str = "rig.json") -> Path:
@@ -212,13 +170,13 @@ def read_session(
     source = FROM_COLUMN
     if PHASE_COLUMN not in names:  # the passes from the steps' order (readings jitter)
         _check_phase_elsewhere(where, names, frames)
-        labels = _step_labels(frames, step_tolerance_kpa)
+        labels = frame_step_labels(frames, step_tolerance_kpa)
         # A step below 0 kPa is given as 0 (_pool_readings): a rest reading of -0.3 between
         # 0 and 0.5 kPa steps is no reversal of the passes.
         levels = [max(v, 0.0) for v in pooled_pressures([f.pressure_kpa for f in frames], labels)]
         phases, source = phases_from_order(levels, order_slack(levels))
-        frames = [_with(f, phase=ph) for f, ph in zip(frames, phases, strict=True)]
-    frames, pooled, at_rest = _pool_readings(where, names, frames, step_tolerance_kpa)
+        frames = [with_changes(f, phase=ph) for f, ph in zip(frames, phases, strict=True)]
+    frames, pooled, at_rest = pool_readings(where, names, frames, step_tolerance_kpa)
     merged = f"readings less than {step_tolerance_kpa:g} kPa apart are one step"
     hint = "" if pooled is None else f" ({merged}: --step-tolerance-kpa)"
     frames = _number_steps(where, frames, hint)
@@ -237,105 +195,6 @@ def _check_phase_elsewhere(where: str, names: list[str], frames: list[Frame]) ->
             f"{where}: column '{name}' holds loading/unloading in every row, but the passes are "
             f"read from a column named '{PHASE_COLUMN}'; rename it '{PHASE_COLUMN}' (or the "
             "rows' order, rising then falling, decides the passes)"
-        )
-
-
-def _with(frame: Frame, **changes: object) -> Frame:
-    return Frame(**{**frame.__dict__, **changes})  # type: ignore[arg-type]
-
-
-def _step_labels(frames: list[Frame], tolerance_kpa: float) -> np.ndarray:
-    """:func:`~contactcal.infer.pipeline.readings.step_labels` of the frames' readings; every
-    distinct value its own step in a sweep whose top is below :data:`MIN_SWEEP_TOP_KPA` (bar
-    or MPa read as kPa: its steps would merge into one, and :func:`check_sweep_unit` names its
-    unit instead)."""
-    readings = [f.pressure_kpa for f in frames]
-    bar = 0.0 < max(readings, default=0.0) < MIN_SWEEP_TOP_KPA
-    return step_labels(readings, 0.0 if bar else tolerance_kpa)
-
-
-def _pool_readings(
-    where: str, names: list[str], frames: list[Frame], tolerance_kpa: float
-) -> tuple[list[Frame], Pooled | None, AtRest | None]:
-    """Each pass's steps found again among its own readings and each put at the median of
-    its readings (per pass: a pass's offset from the other stays in the hysteresis, and cannot
-    split a step of one pass in two), a step whose median is below 0 kPa (a gauge's offset at
-    rest) at 0 kPa, every frame whose pressure so differs from its reading keeping the reading
-    as :data:`READING_COLUMN`; and what was pooled and what was given as 0 kPa."""
-    out = list(frames)
-    moved, steps, widest = 0, 0, (0.0, 0.0)
-    rest, lowest = 0, 0.0
-    groups = _steps_per_pass(frames, tolerance_kpa)
-    _check_chains(where, frames, groups, tolerance_kpa)
-    for _, mine in groups:
-        values = [frames[k].pressure_kpa for k in mine]
-        lo, hi = min(values), max(values)
-        median = step_pressure(values) + 0.0  # a median rounded to -0.0 is 0.0
-        if lo == hi and median >= 0.0:
-            continue
-        level = max(median, 0.0)
-        for k in mine:
-            reading = (READING_COLUMN, repr(frames[k].pressure_kpa))
-            out[k] = _with(frames[k], pressure_kpa=level, extras=(*frames[k].extras, reading))
-        if lo != hi:
-            moved, steps = moved + len(mine), steps + 1
-            widest = max(widest, (lo, hi), key=lambda r: r[1] - r[0])
-        if median < 0.0:
-            rest, lowest = rest + len(mine), min(lowest, lo)
-    if (moved or rest) and READING_COLUMN in names:
-        raise ManifestError(
-            f"{where}: readings less than a step tolerance apart are pooled into steps (a step "
-            f"read below 0 kPa is given as 0), and each such frame's reading goes to the column "
-            f"'{READING_COLUMN}', which the manifest has already; rename that column"
-            + ("" if rest else " (or give --step-tolerance-kpa 0)")
-        )
-    pooled = Pooled(moved, steps, widest) if moved else None
-    return out, pooled, AtRest(rest, lowest) if rest else None
-
-
-def _steps_per_pass(frames: list[Frame], tolerance_kpa: float) -> list[tuple[str, list[int]]]:
-    """``(phase, frame indices)`` of each pass's steps, found among that pass's readings."""
-    groups = []
-    for phase in PHASES:
-        idx = [k for k, f in enumerate(frames) if f.phase == phase]
-        labels = _step_labels([frames[k] for k in idx], tolerance_kpa)
-        for step in np.unique(labels):
-            groups.append((phase, [k for k, lab in zip(idx, labels, strict=True) if lab == step]))
-    return groups
-
-
-def _check_chains(
-    where: str, frames: list[Frame], groups: list[tuple[str, list[int]]], tolerance_kpa: float
-) -> None:
-    """Refuse a step whose values chain (:func:`~contactcal.infer.pipeline.readings.is_chain`:
-    wider than the tolerance and than the session's steps typically are), naming the option."""
-    values = [[frames[k].pressure_kpa for k in mine] for _, mine in groups]
-    typical = float(np.median([max(v) - min(v) for v in values])) if values else 0.0
-    top = max((f.pressure_kpa for f in frames), default=0.0)
-    for (phase, _), v in zip(groups, values, strict=True):
-        if not is_chain(v, tolerance_kpa, typical):
-            continue
-        span = round(max(v) - min(v), 6)
-        held = (
-            f"; if they are the readings of one held pressure, give a tolerance above {span:g} kPa"
-            if span < MAX_STEP_TOLERANCE_KPA
-            else ""
-        )
-        unit = (
-            "" if sweep_top_warning(top) is None else f" (and the sweep tops out at {top:g}: mbar?)"
-        )
-        raise ManifestError(
-            CHAINED.format(
-                where=where,
-                phase=phase,
-                lo=min(v),
-                hi=max(v),
-                n=len(set(v)),
-                span=span,
-                t=tolerance_kpa,
-            )
-            + held
-            + unit
         )
 
 
@@ -359,7 +218,7 @@ def _number_steps(where: str, frames: list[Frame], hint: str = "") -> list[Frame
                 f"reference); rows {', '.join(str(f.row) for f in mine[:_MAX_LISTED])}; give "
                 f"each row its pass in a 'phase' column (loading/unloading){hint}"
             )
-        out += [_with(f, step=levels.index(f.pressure_kpa)) for f in mine]
+        out += [with_changes(f, step=levels.index(f.pressure_kpa)) for f in mine]
     return out
 
 

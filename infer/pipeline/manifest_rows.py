@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import csv
 import math
+import os
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -176,3 +177,47 @@ def parse_row(
         file = mpath.resolve().parent / file
     extras = tuple((n, row[n]) for n in names if n not in KNOWN_COLUMNS)
     return Frame(file.resolve(), pressure, row_no, phase, 0, extras)
+
+
+def with_changes(frame: Frame, **changes: object) -> Frame:
+    """``frame`` with some fields changed."""
+    return Frame(**{**frame.__dict__, **changes})  # type: ignore[arg-type]
+
+
+#: kPa: a session whose highest pressure is below this cannot be a calibration sweep of the
+#: display (contact starts at ~3 kPa): its pressures are in another unit (bar: 20 kPa is 0.2;
+#: MPa: 0.02), refused by :func:`check_sweep_top`.
+MIN_SWEEP_TOP_KPA = 1.0
+
+
+def check_sweep_top(where: str | os.PathLike[str], top: float) -> None:
+    """Refuse a sweep whose highest pressure ``top`` (kPa as read) is below
+    :data:`MIN_SWEEP_TOP_KPA` (bar or MPa read as kPa), from the file ``where`` (a manifest,
+    or a video run's pressure log).
+
+    Raises:
+        ManifestError: naming ``where``, ``top`` and the units it may be in.
+    """
+    if 0.0 < top < MIN_SWEEP_TOP_KPA:
+        raise ManifestError(
+            f"{where}: the highest pressure_kpa is {top:g}, below {MIN_SWEEP_TOP_KPA:g} kPa; "
+            "expected kPa (the display works at 0-20 kPa, contact from ~3 kPa), not bar or MPa"
+        )
+
+
+#: kPa: a sweep whose highest pressure is above this is read, with a warning: the display works at
+#: 0-20 kPa, so a top of 30-100 kPa is more likely mbar read as kPa (a 0-10 kPa sweep in mbar
+#: tops out at 100) than a display calibrated that high; below :data:`MAX_PRESSURE_KPA` no bound
+#: can tell them apart, so it is said, not refused.
+HIGH_SWEEP_TOP_KPA = 30.0
+
+
+def sweep_top_warning(top: float) -> str | None:
+    """The warning line of a sweep whose highest pressure ``top`` (kPa as read) is above
+    :data:`HIGH_SWEEP_TOP_KPA`; None below it."""
+    if top <= HIGH_SWEEP_TOP_KPA:
+        return None
+    return (
+        f"warning: the highest pressure is {top:g} kPa, far above the display's 0-20 kPa: if the "
+        "pressures are in mbar (or another unit), convert them to kPa and calibrate again"
+    )
