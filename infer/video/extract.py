@@ -152,11 +152,16 @@ class Extractor:
             out.append(Decision(index, t, frame, step))
         return out
 
+    def kept_steps(self) -> list[Step]:
+        """The steps with kept frames, in time order, their phases split at the highest of them
+        (:func:`~contactcal.infer.video.steps.with_phases`: a frameless sliver is no top)."""
+        return with_phases([s for s in self.steps if s.index in self.kept])
+
     def used_steps(self) -> list[Step]:
         """The steps with kept frames that the calibration uses, in time order: all of them,
         except an unloading pass at fewer than two pressures (e.g. a vent straight back to
         0 kPa after the top step), which is no curve (:meth:`left_out`)."""
-        kept = with_phases([s for s in self.steps if s.index in self.kept])
+        kept = self.kept_steps()
         unloading = {f"{s.pressure_kpa:g}" for s in kept if s.phase == UNLOADING}
         return kept if len(unloading) >= 2 else [s for s in kept if s.phase != UNLOADING]
 
@@ -164,11 +169,7 @@ class Extractor:
         """Steps with kept frames that :meth:`used_steps` leaves out (their frames stay in
         ``frames/``, outside the manifest)."""
         used = {s.index for s in self.used_steps()}
-        return [
-            s
-            for s in with_phases([s for s in self.steps if s.index in self.kept])
-            if s.index not in used
-        ]
+        return [s for s in self.kept_steps() if s.index not in used]
 
     def manifest_text(self) -> str:
         """``frames/manifest.csv``: the reference step first, then the used steps in time order."""
@@ -184,7 +185,7 @@ class Extractor:
         """Per step: pressure, phase, frames kept and their time span (the CLI prints it)."""
         lines = ["step  pressure (kPa)  phase      frames  time (s)"]
         out = {s.index for s in self.left_out()}
-        phased = {s.index: s for s in with_phases([s for s in self.steps if s.index in self.kept])}
+        phased = {s.index: s for s in self.kept_steps()}
         for s in (phased.get(s.index, s) for s in self.steps):
             kept = self.kept.get(s.index, [])
             span = f"{kept[0][1]:.2f}-{kept[-1][1]:.2f}" if kept else "-"
@@ -203,7 +204,7 @@ def _warn_noise(extractor: Extractor, where: str) -> None:
     if extractor.log is None:
         return
     scatter, tol = hold_scatter_kpa(extractor.log, extractor.cfg), extractor.cfg.tolerance_kpa
-    p = [s.pressure_kpa for s in extractor.steps if s.index in extractor.kept]
+    p = [s.pressure_kpa for s in extractor.kept_steps()]
     split = [(a, b) for a, b in itertools.pairwise(p) if abs(b - a) < 2 * tol]
     if scatter <= 1.5 * tol and not split:
         return
