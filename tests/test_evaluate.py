@@ -179,6 +179,7 @@ GOOD = ["p10.0kpa.jpg", "200.5", "150.5", "90", "70", "15"]
         (None, [*GOOD[:4], "-3", GOOD[5]], "minor -3 is not in (0, 100000]"),
         (None, [*GOOD[:3], "1e308", "1e308", GOOD[5]], "major 1e+308 is not in (0, 100000]"),
         (None, ["p99.0kpa.jpg", *GOOD[1:]], "'p99.0kpa.jpg' is not a frame of the manifest"),
+        (None, ["p10.0kpa.jpg:1", *GOOD[1:]], "remove the ':…' suffix ImageJ adds"),
         (None, [*GOOD[:2], "abc", *GOOD[3:]], "cy 'abc' is not a finite number"),
         (None, [GOOD[0], "900", *GOOD[2:]], "lies outside the 400×300 px frame"),
     ],

@@ -6,6 +6,7 @@ import os
 from collections.abc import Sequence
 from dataclasses import asdict, dataclass, field, replace
 from pathlib import Path
+from typing import Any
 
 from contactcal.infer.calibration.curve import MM2, PX, Curve
 from contactcal.infer.calibration.fit import CurveConfig
@@ -35,6 +36,7 @@ from contactcal.infer.methods.base import UNCHANGED_NOTE
 from contactcal.infer.pipeline.boundary import GONE_NOTE
 from contactcal.infer.pipeline.manifest import (
     Frame,
+    Session,
     check_sweep_unit,
     read_session,
     sweep_top_warning,
@@ -169,23 +171,38 @@ def calibrate_session(
     with run_outputs([manifest, model, *files], join=outputs) as outs:
         paths = write_calibration(out_dir, results, fit, method.name, extra, provenance, outs)
     table = format_table(results, fit, provenance.device_id)
+    table += "".join("\n" + line for line in _notes(session, results, checks, same, options))
+    return CalibrationReport(table, frames, measured, fit.curve, paths, fit)
+
+
+def _notes(
+    session: Session,
+    results: list[CalibrationPoint],
+    checks: dict[str, object],
+    same: list[dict[str, Any]],
+    options: SessionOptions,
+) -> list[str]:
+    """The warning and note lines printed under the table, in a fixed order: the reference
+    (gated above 0 kPa, or not at rest), identical frames, pooled readings, readings below
+    0 kPa, a sweep top far above the display's range."""
+    lines = []
     if checks["reference_gated_above_zero"]:
-        table += "\nwarning: " + REFERENCE_NOTE.format(p=results[0].pressure_kpa)
+        lines.append("warning: " + REFERENCE_NOTE.format(p=results[0].pressure_kpa))
     elif checks["reference_above_rest_kpa"] is not None:
         name = os.path.basename(results[0].file)
-        table += "\n" + NOT_AT_REST_WARNING.format(
-            name=name, p=results[0].pressure_kpa, rest=REST_KPA
+        lines.append(
+            NOT_AT_REST_WARNING.format(name=name, p=results[0].pressure_kpa, rest=REST_KPA)
         )
     if same:
-        table += "\n" + identical_frames_warning(same)
+        lines.append(identical_frames_warning(same))
     if session.pooled is not None:
-        table += "\n" + POOLED_NOTE.format(p=session.pooled, t=options.step_tolerance_kpa)
+        lines.append(POOLED_NOTE.format(p=session.pooled, t=options.step_tolerance_kpa))
     if session.at_rest is not None:
-        table += "\n" + AT_REST_NOTE.format(r=session.at_rest)
-    high = sweep_top_warning(max(f.pressure_kpa for f in frames))
+        lines.append(AT_REST_NOTE.format(r=session.at_rest))
+    high = sweep_top_warning(max(f.pressure_kpa for f in session.frames))
     if high is not None:
-        table += "\n" + high
-    return CalibrationReport(table, frames, measured, fit.curve, paths, fit)
+        lines.append(high)
+    return lines
 
 
 def _session_points(

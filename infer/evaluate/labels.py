@@ -189,6 +189,12 @@ def _frame_of(at: str, name: str, frames: list[Frame], base: Path) -> Path:
             f"{at}: file '{name}' matches frames {named[0]} and {named[1]}; give its path "
             "relative to the manifest's folder"
         )
+    stem, colon, _ = name.partition(":")
+    if colon and any(f.file.name == stem for f in frames):  # ImageJ's "image.jpg:ROI" label
+        raise LabelError(
+            f"{at}: file '{name}' is not a frame of the manifest; remove the ':…' suffix "
+            f"ImageJ adds to its labels ('{stem}')"
+        )
     raise LabelError(
         f"{at}: file '{name}' is not a frame of the manifest; expected one of its file names, "
         f"e.g. {frames[-1].file.name}"
