@@ -74,12 +74,19 @@ def test_a_slowly_shrinking_ring_is_revised_whole() -> None:
     assert hit.tolist() == [False, True, True, True, False, False, False]
 
 
-def test_a_dip_inside_the_contact_range_revises_one_step_only() -> None:
-    # an under-segmented frame at 7 kPa: only 6 kPa (larger) is revised, not the growing curve
+def test_a_dip_inside_the_contact_range_is_left_as_measured() -> None:
+    # an under-segmented frame at 7 kPa: steps 1-2 flag 6 kPa (larger) only, not the growing
+    # curve below it, and the whole rule keeps it: it lies inside the contact range (3 kPa on)
     area = np.array([0.0, 0.0, 0.0, 100.0, 200.0, 300.0, 400.0, 50.0, 500.0, 600.0])
     p = np.arange(area.size, dtype=float)
     hit = shrinking_steps(p, area, 0.95 * area, 1.05 * area, area > 0)
     assert np.flatnonzero(hit).tolist() == [6]
+    ring, below = session_revisions(p, area, 0.95 * area, 1.05 * area, area > 0)
+    assert not ring.any() and not below.any()
+    # the same drop below a shorter contact run is a ring's: the steps below it are revised too
+    early = np.array([0.0, 300.0, 400.0, 50.0, 100.0, 200.0, 300.0, 400.0, 500.0, 600.0])
+    ring, below = session_revisions(p, early, 0.95 * early, 1.05 * early, early > 0)
+    assert np.flatnonzero(ring).tolist() == [2] and np.flatnonzero(below).tolist() == [1]
 
 
 def test_a_contact_lost_at_high_pressure_is_not_taken_for_a_ring() -> None:

@@ -22,9 +22,13 @@ in contact):
    curve below;
 2. the run of contact steps just below a revised step whose median areas do not increase
    towards it is revised too: a slowly shrinking ring (less than the intervals' width per step)
-   ends in a drop at its last step only. A lone under-segmented step inside the contact range
-   revises the one step below it, not the growing curve below that;
-3. contacts left below the contact range that the calibration's onset rule
+   ends in a drop at its last step only;
+3. a ring lies below the contact range: revisions of steps 1-2 inside the contact range that
+   the calibration's onset rule (:func:`~contactcal.infer.calibration.onset.onset_index`)
+   finds after them are undone. A lone under-segmented step within the growing curve (a drop
+   the next steps grow out of again) thus leaves the correct step below it in contact, as
+   measured, instead of turning it into a 0 inside the curve;
+4. contacts left below the contact range that the calibration's onset rule
    (:func:`~contactcal.infer.calibration.onset.onset_index`) finds after that are revised (the
    fit counts them as 0 anyway; the record then says so).
 
@@ -49,12 +53,12 @@ RING_NOTE = (
     "larger than the next step in contact beyond both stated intervals; contact area only grows "
     "with pressure, so this is not the contact (before contact: the membrane's inner ring)"
 )
-#: The note of a contact revised by step 3 (``{area}`` filled in, px).
+#: The note of a contact revised by step 4 (``{area}`` filled in, px).
 BELOW_NOTE = (
     "no contact (session rule): its region ({area:.0f} px) lies below the session's contact "
     "range (at least as many frames between them are not in contact), so the fit counts it as 0"
 )
-#: The note of a contact revised by step 3 in a session without any contact range.
+#: The note of a contact revised by step 4 in a session without any contact range.
 NO_RANGE_NOTE = (
     "no contact (session rule): the session has no contact range (at least as many frames above "
     "it are not in contact), so the fit counts it as 0"
@@ -127,14 +131,19 @@ def session_revisions(
 
     Returns:
         ``(ring, below)``, ``(N,) bool`` each, input order: the steps :func:`shrinking_steps`
-        revises, and the steps still in contact below the contact range that
-        :func:`~contactcal.infer.calibration.onset.onset_index` finds after that (all of them
-        when it finds none). A step in neither keeps its flag.
+        revises that lie below the contact range
+        :func:`~contactcal.infer.calibration.onset.onset_index` finds after them (all of them
+        when it finds none), and the steps still in contact below that range (all of them when
+        there is none). A step in neither keeps its flag.
     """
     ring = shrinking_steps(pressures_kpa, areas, lower, upper, contact)
-    c = np.asarray(contact, dtype=bool) & ~ring
+    touch = np.asarray(contact, dtype=bool)
     order = np.argsort(np.asarray(pressures_kpa, dtype=np.float64))
-    s = onset_index(c[order])
+    s = onset_index((touch & ~ring)[order])
+    if s is not None:  # a ring lies below the contact range: a drop inside it is not one
+        ring[order[s:]] = False
+        s = onset_index((touch & ~ring)[order])
+    c = touch & ~ring
     below = np.zeros_like(c)
     below[order[: order.size if s is None else s]] = True
     return ring, below & c
