@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import csv
 import functools
+import hashlib
 import json
 import math
 from dataclasses import replace as dataclasses_replace
@@ -69,6 +70,11 @@ def test_results_keys(bench: tuple[Path, Path, dict[str, Any]]) -> None:
     )
     assert {"bins", "hard"} <= set(res)
     assert res["model"] == "shipped" and res["sessions"] == 4 and res["frames"] == 20
+    from contactcal.infer.methods.unet.runner import DEFAULT_MODEL
+
+    shipped = hashlib.sha256(DEFAULT_MODEL.read_bytes()).hexdigest()
+    assert res["models"] == {"unet": {"path": str(DEFAULT_MODEL), "sha256": shipped}}
+    assert f"(unet sha256 {shipped[:12]}…)" in (out / "report.md").read_text(encoding="utf-8")
     assert res["config"] == {"repeats": 1, "timing_frames": 1, "full_size": [128, 96]}
     methods = {r["method"] for r in res["records"]}
     assert methods == {"classical", "unet", "unet (soft area)", "unet (session rule)"}
@@ -322,6 +328,7 @@ def test_variant_is_scored_and_timed_beside_the_model(
     unet = {f: a for (m, f), a in rows.items() if m == "unet"}
     copy = {f: a for (m, f), a in rows.items() if m == "unet[copy]"}
     assert unet and copy == unet
+    assert res["models"]["unet[copy]"] == res["models"]["unet"]  # the same file, recorded
     assert any(t["config"] == "unet[copy]" for t in res["timing"])
     assert any(b["method"] == "unet[copy]" for b in res["bins"])
     assert any(

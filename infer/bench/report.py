@@ -235,6 +235,15 @@ def md_table(rows: Sequence[Mapping[str, Any]], cols: Columns) -> str:
     return "\n".join([head, sep, *body])
 
 
+def _digests(results: Mapping[str, Any]) -> str:
+    """`` (unet sha256 974304c4…, unet[x] …)``: the measured files, from ``models`` (absent
+    in results written before it was recorded)."""
+    models = results.get("models") or {}
+    if not models:
+        return ""
+    return " (" + ", ".join(f"{k} sha256 {v['sha256'][:12]}…" for k, v in models.items()) + ")"
+
+
 def report_text(results: Mapping[str, Any]) -> str:
     """``report.md`` from the results (with their ``bins``, ``hard`` and ``coverage`` tables)."""
     cfg = results["config"]
@@ -242,8 +251,8 @@ def report_text(results: Mapping[str, Any]) -> str:
     sections = [
         "# contactcal benchmark\n\n"
         f"Data: `{results['data']}` — {results['sessions']} sessions, {results['frames']} frames.\n"
-        f"Model: `{results['model']}`. Reference frame: {results['reference']}."
-        " Areas are compared in input pixels with the exact masks; "
+        f"Model: `{results['model']}`{_digests(results)}. Reference frame: "
+        f"{results['reference']}. Areas are compared in input pixels with the exact masks; "
         "relative\nerrors and the IoU of the method's outline with the mask over frames with true "
         "contact. Timing: median of "
         f"{cfg['repeats']} runs over\n{cfg['timing_frames']} frames upscaled to {w}×{h}, "

@@ -28,6 +28,8 @@ from contactcal.infer.bench.report import write_report
 from contactcal.infer.bench.robustness import run_robustness
 from contactcal.infer.bench.scoring import ScoredFrame
 from contactcal.infer.bench.timing import timing
+from contactcal.infer.files.digest import sha256_file
+from contactcal.infer.methods.unet.runner import DEFAULT_MODEL
 
 
 def run_bench(
@@ -68,6 +70,7 @@ def run_bench(
         "data": str(Path(data).resolve()),
         "model": "shipped" if model is None else os.fspath(model),
         "reference": "session zero-pressure frame" if config.use_reference else "none",
+        "models": model_digests(model, config.variants),
         "sessions": len(sessions),
         "frames": sum(len(v) for v in sessions.values()),
         "config": {
@@ -88,6 +91,16 @@ def run_bench(
         extra = _crosscheck(results, data, frames, crosscheck, others, model, config)
     write_report(out_dir, results, frames, config.bins, extra)
     return results
+
+
+def model_digests(
+    model: str | os.PathLike[str] | None, variants: Sequence[tuple[str, str]]
+) -> dict[str, dict[str, str]]:
+    """Which files were measured: ``{"unet" | "unet[label]": {"path", "sha256"}}``, the
+    method names of the records (the shipped model's path is the installed file's)."""
+    files = {"unet": DEFAULT_MODEL if model is None else Path(model)}
+    files |= {f"unet[{label}]": Path(path) for label, path in variants}
+    return {k: {"path": os.fspath(v), "sha256": sha256_file(v)} for k, v in files.items()}
 
 
 def _crosscheck(
