@@ -23,11 +23,15 @@ in contact):
 2. the run of contact steps just below a revised step whose median areas do not increase
    towards it is revised too: a slowly shrinking ring (less than the intervals' width per step)
    ends in a drop at its last step only;
-3. a ring lies below the contact range: revisions of steps 1-2 inside the contact range that
-   the calibration's onset rule (:func:`~contactcal.infer.calibration.onset.onset_index`)
-   finds after them are undone. A lone under-segmented step within the growing curve (a drop
-   the next steps grow out of again) thus leaves the correct step below it in contact, as
-   measured, instead of turning it into a 0 inside the curve;
+3. a ring lies below the contact range: revisions of steps 1-2 at or above the start of the
+   contact range that the calibration's onset rule
+   (:func:`~contactcal.infer.calibration.onset.onset_index`) finds with all of them applied
+   are undone. A lone under-segmented step within the growing curve (a drop the next steps
+   grow out of again), with more contact steps below the revised ones than revised and
+   no-contact steps down to the first contact, thus leaves the correct step below it in
+   contact, as measured, instead of turning it into a 0 inside the curve. Closer to the onset
+   (a drop at the second or third contact step) the areas alone cannot tell it from a ring,
+   and it is revised as one;
 4. contacts left below the contact range that the calibration's onset rule
    (:func:`~contactcal.infer.calibration.onset.onset_index`) finds after that are revised (the
    fit counts them as 0 anyway; the record then says so).
@@ -131,18 +135,17 @@ def session_revisions(
 
     Returns:
         ``(ring, below)``, ``(N,) bool`` each, input order: the steps :func:`shrinking_steps`
-        revises that lie below the contact range
-        :func:`~contactcal.infer.calibration.onset.onset_index` finds after them (all of them
-        when it finds none), and the steps still in contact below that range (all of them when
-        there is none). A step in neither keeps its flag.
+        revises that lie below the contact range, as
+        :func:`~contactcal.infer.calibration.onset.onset_index` finds it with all of them
+        revised (all of them when it finds none), and the steps still in contact below that
+        range (all of them when there is none). A step in neither keeps its flag.
     """
     ring = shrinking_steps(pressures_kpa, areas, lower, upper, contact)
     touch = np.asarray(contact, dtype=bool)
     order = np.argsort(np.asarray(pressures_kpa, dtype=np.float64))
     s = onset_index((touch & ~ring)[order])
     if s is not None:  # a ring lies below the contact range: a drop inside it is not one
-        ring[order[s:]] = False
-        s = onset_index((touch & ~ring)[order])
+        ring[order[s:]] = False  # contact again at or above s: the onset stays s
     c = touch & ~ring
     below = np.zeros_like(c)
     below[order[: order.size if s is None else s]] = True
