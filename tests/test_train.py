@@ -211,10 +211,13 @@ def test_train_outputs(tmp_path: Path) -> None:
 
 
 @pytest.mark.slow
-@pytest.mark.parametrize("ema_decay", [0.0, 0.9])
-def test_resume_is_exact(tmp_path: Path, ema_decay: float) -> None:
+@pytest.mark.parametrize(("ema_decay", "floor"), [(0.0, 0.0), (0.9, 0.0), (0.0, 1.0)])
+def test_resume_is_exact(tmp_path: Path, ema_decay: float, floor: float) -> None:
+    """A run cut after its first epoch and resumed ends as the whole run (with a dark floor
+    too: the camera augmentation then reads each sample's cached levels)."""
     d = write_dataset(tmp_path / "d", fingers=3)
-    cfg = tiny_config(augment=AugmentConfig(), epochs=2, ema_decay=ema_decay)
+    pre = PreprocessConfig(norm_floor_percentile=floor)
+    cfg = tiny_config(augment=AugmentConfig(), epochs=2, ema_decay=ema_decay, preprocess=pre)
     summary = train([d], tmp_path / "full", cfg, progress=False)
     assert summary["parameters"] == count_parameters(UNet(cfg.resolved().model)) > 0
     # interrupt the second run right after its first epoch's checkpoint, then resume it

@@ -3,7 +3,13 @@
 The cached network inputs are normalised (``contactcal.infer.methods.unet.prepare``);
 augmentation maps them back to ``[0, 1]`` intensities with the same constants
 (``network_to_unit``), so that photometric operations (gamma, contrast, clipping) and zero padding
-mean what they do on a camera image, and then re-applies ``unit_to_network``.
+mean what they do on a camera image, and then re-applies ``unit_to_network``. With a dark floor
+(``norm_floor_percentile`` > 0) the camera operations act on grey levels instead: each image
+channel is mapped back to them with the levels its normalisation used (``CachedSet.levels``) and,
+after brightness, contrast and gamma, normalised again between those levels as the same operations
+moved them, which is what deployment computes on such a frame (the percentiles commute with these
+monotone operations). Blur and noise then change the frame without moving the levels, as they do
+without a floor.
 
 Randomness: the :class:`Augmenter` owns an explicit, seeded ``torch.Generator`` (its
 ``generator``). kornia draws from torch's global generators, so each batch draws one seed from the
@@ -28,6 +34,10 @@ from contactcal.infer.methods.unet.prepare import network_to_unit, unit_to_netwo
 from contactcal.infer.methods.unet.ridge import ridge_band_frequency
 from contactcal.train.contact_look import ContactLookConfig, contact_look
 from contactcal.train.ridgeless import RidgelessConfig, ridgeless
+
+#: The first camera operations, pointwise and increasing (brightness, contrast, gamma): the
+#: levels of a floored normalisation move with them (``Augmenter._floored_camera``).
+TONE_OPS = 3
 
 
 @dataclass(frozen=True)
@@ -123,8 +133,11 @@ class Augmenter(torch.nn.Module):
         ]
         self.geometric = K.AugmentationSequential(*geometric, data_keys=["input", "mask"])
         self.camera = K.AugmentationSequential(*camera, data_keys=["input"])
+        self.tone = K.AugmentationSequential(*camera[:TONE_OPS], data_keys=["input"])
 
-    def forward(self, x: torch.Tensor, mask: torch.Tensor) -> tuple[torch.Tensor, torch.Tensor]:
+    def forward(
+        self, x: torch.Tensor, mask: torch.Tensor, levels: torch.Tensor | None = None
+    ) -> tuple[torch.Tensor, torch.Tensor]:
         """Augment one batch.
 
         Args:
@@ -136,10 +149,20 @@ class Augmenter(torch.nn.Module):
                 :func:`~contactcal.train.ridgeless.ridgeless` erases the ridges of some contact
                 patches and empties their masks (models with a ridge channel).
             mask: ``(N, 1, S, S) float32`` in {0, 1}; warped with nearest-neighbour sampling.
+            levels: ``(N, I, 2) float32``, the image channels' grey levels / 255 mapped to 0
+                and 1 (``CachedSet.levels``); needed with ``norm_floor_percentile`` > 0.
 
         Returns:
             ``(x, mask)`` of the same shapes and dtypes; mask stays binary.
+
+        Raises:
+            ValueError: a floored normalisation without ``levels``.
         """
+        if self.preprocess.norm_floor_percentile > 0.0 and levels is None:
+            raise ValueError(
+                "Augmenter: norm_floor_percentile > 0 needs each sample's levels "
+                "(CachedSet.levels) to take the floor again after the camera operations"
+            )
         ridge = self.preprocess.ridge_work_px > 0
         n_img = x.shape[1] - int(ridge)  # image channels (frame[, reference]), intensities
         u = torch.cat(
@@ -155,24 +178,49 @@ class Augmenter(torch.nn.Module):
                     u, m = ridgeless(
                         u, m, self.config.ridgeless, self.generator, self.preprocess.crop_factor
                     )
-                u = self._camera_ops(u, n_img, ridge)
+                floored = self.preprocess.norm_floor_percentile > 0.0
+                u = self._camera_ops(u, n_img, ridge, levels if floored else None)
         if self.reference_dropout > 0.0 and n_img == 2:
             drop = torch.rand(u.shape[0], generator=self.generator) < self.reference_dropout
             u[drop.to(u.device), 1] = 0.0  # prepare.blank_reference: black, after the warp
         x_out = torch.cat([unit_to_network(u[:, :n_img], self.preprocess), u[:, n_img:]], 1)
         return x_out, (m > 0.5).to(mask.dtype)
 
-    def _camera_ops(self, u: torch.Tensor, n_img: int, ridge: bool) -> torch.Tensor:
-        """The camera operations on the image channels; with ``ridge_blur`` the ridge channel
-        loses what the drawn blur takes from ridges (same draws as without it)."""
+    def _camera_ops(
+        self, u: torch.Tensor, n_img: int, ridge: bool, levels: torch.Tensor | None
+    ) -> torch.Tensor:
+        """The camera operations on the image channels (on grey levels, given ``levels``);
+        with ``ridge_blur`` the ridge channel loses what the drawn blur takes from ridges (same
+        draws as without it)."""
         params = self.camera.forward_parameters(u[:, :n_img].shape)
-        img = self.camera(u[:, :n_img], params=params).clamp(0.0, 1.0)
+        if levels is None:
+            img = self.camera(u[:, :n_img], params=params).clamp(0.0, 1.0)
+        else:
+            img = self._floored_camera(u[:, :n_img], levels.to(u), params)
         rest = u[:, n_img:]
         if ridge and self.config.ridge_blur:
             blur = next(p.data for p in params if p.name.startswith("RandomGaussianBlur"))
             sigma = drawn_blur_sigma(blur["sigma"], blur["batch_prob"]).to(u)
             rest = rest * blurred_ridge_gain(sigma, self.preprocess).view(-1, 1, 1, 1)
         return torch.cat([img, rest], 1)
+
+    def _floored_camera(self, u: torch.Tensor, levels: torch.Tensor, params: list) -> torch.Tensor:
+        """The camera operations on grey levels, normalised again as deployment would.
+
+        Args:
+            u: ``(N, I, S, S)`` image channels in ``[0, 1]``, floored (``(g - F) / (P - F)``).
+            levels: ``(N, I, 2)`` their ``(F, P)`` grey levels / 255.
+            params: the camera operations' drawn parameters.
+
+        Returns:
+            ``(N, I, S, S)`` in ``[0, 1]``: ``(op(g) - op(F)) / (op(P) - op(F))`` with ``op`` the
+            drawn brightness, contrast and gamma, then blur and noise.
+        """
+        lo, hi = levels[..., :1, None], levels[..., 1:, None]  # (N, I, 1, 1)
+        gray = self.camera(lo + u * (hi - lo), params=params).clamp(0.0, 1.0)
+        ends = self.tone(levels[:, :, None, :], params=params[:TONE_OPS]).clamp(0.0, 1.0)
+        lo2, hi2 = ends[..., :1], ends[..., 1:]  # the levels as the tone operations moved them
+        return ((gray - lo2) / (hi2 - lo2).clamp_min(1.0 / 255.0)).clamp(0.0, 1.0)
 
     @contextmanager
     def _seeded(self, device: torch.device) -> Iterator[None]:

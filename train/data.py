@@ -28,7 +28,9 @@ from contactcal.infer.image.read import load_image
 from contactcal.infer.methods.unet.config import PreprocessConfig
 from contactcal.infer.methods.unet.prepare import (
     CropBox,
+    SessionReference,
     crop_resize,
+    norm_levels,
     prepare,
 )
 from contactcal.train.sessions import session_inputs
@@ -44,6 +46,8 @@ class CachedSet:
     boxes: list[CropBox]  # crop of each frame (network → input pixels)
     shapes: list[tuple[int, int]]  # input (H, W) of each frame (after the session's shrink)
     rows: list[IndexRow]  # the index row of each frame (session, pressure, mm/px, onset, ...)
+    levels: torch.Tensor  # (N, I, 2) float32: per image channel (frame[, reference]) the grey
+    #   levels / 255 that its normalisation maps to 0 and 1 (``norm_levels``), for augmentation
 
     def __len__(self) -> int:
         return int(self.x.shape[0])
@@ -108,6 +112,8 @@ def build_cache(
     sessions = session_inputs(rows, config)
     xs = torch.empty((len(rows), channels, s, s), dtype=torch.float32)
     ys = torch.empty((len(rows), 1, s, s), dtype=torch.uint8)
+    n_img = channels - int(config.ridge_work_px > 0)
+    levels = torch.empty((len(rows), n_img, 2), dtype=torch.float32)
     areas, boxes, shapes = [], [], []
     for i, r in enumerate(tqdm(rows, desc="preprocess", disable=not progress, leave=False)):
         sess = sessions[r.session_key]
@@ -119,6 +125,7 @@ def build_cache(
             raise ValueError(f"{r.mask}: mask shape {mask.shape} differs from its frame's")
         net_mask = crop_resize(small, prep.box, s) > 0.5
         xs[i] = torch.from_numpy(prep.x)
+        levels[i] = torch.tensor(_levels(gray, sess.reference, prep.box, config)[:n_img]) / 255
         ys[i, 0] = torch.from_numpy(net_mask.astype(np.uint8))
         areas.append(float(mask.sum()) / sess.shrink**2)
         boxes.append(prep.box)
@@ -130,4 +137,16 @@ def build_cache(
         boxes=boxes,
         shapes=shapes,
         rows=list(rows),
+        levels=levels,
     )
+
+
+def _levels(
+    gray: np.ndarray, reference: SessionReference, box: CropBox, config: PreprocessConfig
+) -> list[tuple[float, float]]:
+    """Grey levels (0-255) mapped to 0 and 1 of the frame and of its reference channel, in
+    ``box``: the reference frame's own, else the frame's (``no_reference`` "self"; a blank
+    plane is 0 whatever its levels)."""
+    frame = norm_levels(gray, box, config)
+    ref = frame if reference.gray is None else norm_levels(reference.gray, box, config)
+    return [frame, ref]

@@ -178,7 +178,7 @@ def _train_epoch(run: Run, epoch: int, progress: bool) -> float:
     for idx in bar:
         x = data.x[idx].to(run.device).float()
         y = data.y[idx].to(run.device).float()
-        x, y = run.augment(x, y)
+        x, y = run.augment(x, y, data.levels[idx].to(run.device))
         loss = segmentation_loss(run.model(x), y, cfg.bce_weight, cfg.dice_weight)
         run.opt.zero_grad(set_to_none=True)
         loss.backward()

@@ -165,14 +165,32 @@ def to_network(
     return _to_network(to_gray_u8(gray, name="to_network input"), box, config)[0]
 
 
-def _to_network(
-    gray: np.ndarray, box: CropBox, config: PreprocessConfig
-) -> tuple[np.ndarray, float]:
-    """:func:`to_network` of a ``(H, W) uint8`` frame, and the span ``P - F`` it divided by
-    (bright level less dark level; ``F`` is 0 without ``config.norm_floor_percentile``)."""
-    s = config.input_size
-    crop = crop_resize(gray, box, s)
-    inside = crop[valid_window(box, gray.shape, s)]
+def norm_levels(gray: np.ndarray, box: CropBox, config: PreprocessConfig) -> tuple[float, float]:
+    """The grey levels ``(F, F + span)`` that :func:`to_network` maps to 0 and 1 in ``box``.
+
+    Training's camera augmentation (``contactcal.train.augment``) maps its inputs back to grey
+    levels with them, so that the floor is taken again after a brightness, contrast or gamma
+    change, as deployment takes it on such a frame.
+
+    Args:
+        gray: ``(H, W) uint8`` frame.
+        box: its crop.
+        config: the normalisation.
+
+    Returns:
+        ``(F, F + span)``, grey levels 0-255: ``F`` the ``norm_floor_percentile``-th
+        percentile (0 without a floor), ``span = max(P - F, 1)``.
+    """
+    crop = crop_resize(to_gray_u8(gray, name="frame"), box, config.input_size)
+    floor, span = _levels(crop, box, gray.shape, config)
+    return floor, floor + span
+
+
+def _levels(
+    crop: np.ndarray, box: CropBox, shape: tuple[int, ...], config: PreprocessConfig
+) -> tuple[float, float]:
+    """``(F, span)`` of a resized crop: percentiles of its in-image pixels."""
+    inside = crop[valid_window(box, shape, config.input_size)]
     floor, level = 0.0, 1.0
     # No network pixel inside the image: nothing to normalise to; postprocess then reports no
     # contact (it ignores every network pixel outside the image), so the scale is immaterial.
@@ -181,7 +199,16 @@ def _to_network(
         floor, level = (float(v) for v in percentiles(inside, qs))
     elif inside.size:
         level = float(percentiles(inside, (config.norm_percentile,))[0])
-    span = max(level - floor, 1.0)
+    return floor, max(level - floor, 1.0)
+
+
+def _to_network(
+    gray: np.ndarray, box: CropBox, config: PreprocessConfig
+) -> tuple[np.ndarray, float]:
+    """:func:`to_network` of a ``(H, W) uint8`` frame, and the span ``P - F`` it divided by
+    (bright level less dark level; ``F`` is 0 without ``config.norm_floor_percentile``)."""
+    crop = crop_resize(gray, box, config.input_size)
+    floor, span = _levels(crop, box, gray.shape, config)
     # unit_to_network(clip((crop - F) / span, 0, 1)) in place on the crop (a new float32 array).
     if floor > 0.0:
         crop -= floor
