@@ -11,12 +11,9 @@ import numpy as np
 import pytest
 
 from contactcal.infer.methods.unet.config import PreprocessConfig
+from contactcal.infer.methods.unet.crop import CropBox
 from contactcal.infer.methods.unet.postprocess import postprocess, region_change
-from contactcal.infer.methods.unet.prepare import (
-    CropBox,
-    reference_difference,
-    session_reference,
-)
+from contactcal.infer.methods.unet.prepare import reference_difference, session_reference
 from contactcal.infer.methods.unet.runner import DEFAULT_MODEL, OnnxSegmenter
 from contactcal.infer.methods.unet.spec import IntervalSpec, ModelError, ModelSpec, read_spec
 from contactcal.train.change_gate import MARGIN, margin_threshold

@@ -13,8 +13,8 @@ import pytest
 from contactcal.infer.methods.base import AreaResult
 from contactcal.infer.methods.classical import ClassicalMethod
 from contactcal.infer.methods.unet.config import PreprocessConfig
+from contactcal.infer.methods.unet.crop import CropBox
 from contactcal.infer.methods.unet.postprocess import Band, boundary_band, postprocess
-from contactcal.infer.methods.unet.prepare import CropBox
 from contactcal.infer.methods.unet.runner import DEFAULT_MODEL, OnnxSegmenter
 from contactcal.infer.methods.unet.spec import IntervalSpec, ModelError, ModelSpec, read_spec
 from contactcal.infer.pipeline.measure import Measured

@@ -11,8 +11,9 @@ import pytest
 
 from contactcal.infer.cli import main
 from contactcal.infer.methods.unet.config import PreprocessConfig
+from contactcal.infer.methods.unet.crop import CropBox, valid_window
 from contactcal.infer.methods.unet.postprocess import postprocess
-from contactcal.infer.methods.unet.prepare import CropBox, to_network, valid_window
+from contactcal.infer.methods.unet.prepare import to_network
 from contactcal.infer.methods.unet.runner import DEFAULT_MODEL, OnnxSegmenter, static_dims
 from contactcal.infer.methods.unet.spec import ModelError, ModelSpec
 

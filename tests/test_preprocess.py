@@ -8,17 +8,19 @@ import pytest
 from procedural import draw_frame
 
 from contactcal.infer.methods.unet.config import PreprocessConfig
-from contactcal.infer.methods.unet.prepare import (
+from contactcal.infer.methods.unet.crop import (
     CropBox,
     crop_box,
     crop_resize,
     from_network,
+    valid_window,
+)
+from contactcal.infer.methods.unet.prepare import (
     network_to_unit,
     prepare,
     session_reference,
     to_network,
     unit_to_network,
-    valid_window,
 )
 from contactcal.infer.methods.unet.ring import RingFit, locate_ring
 from contactcal.infer.methods.unet.runner import sigmoid

@@ -11,8 +11,8 @@ import numpy as np
 import pytest
 
 from contactcal.infer.methods.unet.config import PreprocessConfig
+from contactcal.infer.methods.unet.crop import CropBox
 from contactcal.infer.methods.unet.postprocess import boundary_band, convex_region, postprocess
-from contactcal.infer.methods.unet.prepare import CropBox
 from contactcal.infer.methods.unet.runner import DEFAULT_MODEL, OnnxSegmenter
 from contactcal.infer.methods.unet.spec import (
     IntervalSpec,

@@ -18,7 +18,8 @@ import numpy as np  # noqa: E402
 from contactcal.infer.bench.dataset import IndexRow, read_datasets  # noqa: E402
 from contactcal.infer.cli import main  # noqa: E402
 from contactcal.infer.methods.unet.config import PreprocessConfig  # noqa: E402
-from contactcal.infer.methods.unet.prepare import CropBox, network_to_unit, unit_to_network  # noqa: E402
+from contactcal.infer.methods.unet.crop import CropBox  # noqa: E402
+from contactcal.infer.methods.unet.prepare import network_to_unit, unit_to_network  # noqa: E402
 from contactcal.infer.methods.unet.spec import ModelSpec  # noqa: E402
 from contactcal.train.augment import AugmentConfig, Augmenter, blur_kernel_size  # noqa: E402
 from contactcal.train.checkpoint import config_diff, config_from_dict, config_to_dict  # noqa: E402

@@ -26,13 +26,8 @@ from contactcal.infer.bench.dataset import IndexRow
 from contactcal.infer.image.gray import reduce_area
 from contactcal.infer.image.read import load_image
 from contactcal.infer.methods.unet.config import PreprocessConfig
-from contactcal.infer.methods.unet.prepare import (
-    CropBox,
-    SessionReference,
-    crop_resize,
-    norm_levels,
-    prepare,
-)
+from contactcal.infer.methods.unet.crop import CropBox, crop_resize
+from contactcal.infer.methods.unet.prepare import SessionReference, norm_levels, prepare
 from contactcal.train.sessions import session_inputs
 
 

@@ -26,8 +26,8 @@ import torch.nn.functional as F
 
 from contactcal.infer.bench.dataset import IndexRow
 from contactcal.infer.bench.scoring import ScoredFrame, bin_row
+from contactcal.infer.methods.unet.crop import CropBox
 from contactcal.infer.methods.unet.postprocess import postprocess
-from contactcal.infer.methods.unet.prepare import CropBox
 from contactcal.infer.methods.unet.spec import ModelSpec
 from contactcal.train.data import CachedSet
 

@@ -49,9 +49,10 @@ import numpy as np
 from contactcal.infer.bench.dataset import read_index, sessions_of
 from contactcal.infer.bench.perturb import speck
 from contactcal.infer.image.read import load_image
+from contactcal.infer.methods.unet.crop import crop_resize
 from contactcal.infer.methods.unet.method import UnetMethod
 from contactcal.infer.methods.unet.postprocess import postprocess
-from contactcal.infer.methods.unet.prepare import _to_network, crop_resize, prepare
+from contactcal.infer.methods.unet.prepare import _to_network, prepare
 from contactcal.infer.methods.unet.ridge import ridge_energy
 from contactcal.infer.methods.unet.ring import locate_ring
 

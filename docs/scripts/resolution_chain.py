@@ -31,7 +31,8 @@ import numpy as np
 from contactcal.infer.image.gray import reduce_area
 from contactcal.infer.image.read import load_image
 from contactcal.infer.methods.unet.config import PreprocessConfig
-from contactcal.infer.methods.unet.prepare import crop_resize, prepare, session_reference
+from contactcal.infer.methods.unet.crop import crop_resize
+from contactcal.infer.methods.unet.prepare import prepare, session_reference
 from contactcal.infer.methods.unet.shrink import deployed_shrink
 from contactcal.synth.dataset import DatasetConfig, session_params
 from contactcal.synth.session import RenderConfig, render_session

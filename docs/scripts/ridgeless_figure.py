@@ -22,12 +22,8 @@ import torch
 from contactcal.infer.bench.dataset import read_datasets, sessions_of
 from contactcal.infer.image.read import load_image
 from contactcal.infer.image.write import write_image
-from contactcal.infer.methods.unet.prepare import (
-    crop_resize,
-    network_to_unit,
-    prepare,
-    session_reference,
-)
+from contactcal.infer.methods.unet.crop import crop_resize
+from contactcal.infer.methods.unet.prepare import network_to_unit, prepare, session_reference
 from contactcal.infer.methods.unet.runner import OnnxSegmenter
 from contactcal.train.ridgeless import RidgelessConfig, ridgeless
 

@@ -15,7 +15,8 @@ from __future__ import annotations
 import numpy as np
 
 from contactcal.infer.image.gray import to_gray_u8
-from contactcal.infer.methods.unet.prepare import crop_resize, prepare, session_reference
+from contactcal.infer.methods.unet.crop import crop_resize
+from contactcal.infer.methods.unet.prepare import prepare, session_reference
 from contactcal.infer.methods.unet.runner import OnnxSegmenter
 from contactcal.synth.dataset import DatasetConfig, session_params
 from contactcal.synth.session import RenderConfig, render_session

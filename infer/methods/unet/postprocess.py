@@ -14,7 +14,7 @@ from dataclasses import dataclass
 import cv2
 import numpy as np
 
-from contactcal.infer.methods.unet.prepare import CropBox, from_network, valid_window
+from contactcal.infer.methods.unet.crop import CropBox, from_network, valid_window
 from contactcal.infer.methods.unet.spec import IntervalSpec, ModelSpec
 
 

@@ -34,7 +34,7 @@ def ridge_energy(work: np.ndarray, config: PreprocessConfig, reference_level: fl
 
     Args:
         work: ``(W, W) float32`` the frame's crop resampled to ``W = config.ridge_work_px``
-            (``prepare.crop_resize``), grey levels.
+            (``crop.crop_resize``), grey levels.
         config: ``ridge_work_px`` (> 0), the band and the normalisation.
         reference_level: the span the frame channel was divided by, grey levels: the crop's
             bright level ``P``, less its dark floor ``F`` with ``config.norm_floor_percentile``

@@ -14,7 +14,8 @@ import numpy as np
 
 from contactcal.infer.image.gray import reduce_area
 from contactcal.infer.methods.unet.config import PreprocessConfig
-from contactcal.infer.methods.unet.prepare import SessionReference, crop_box, session_reference
+from contactcal.infer.methods.unet.crop import crop_box
+from contactcal.infer.methods.unet.prepare import SessionReference, session_reference
 from contactcal.infer.methods.unet.ring import locate_ring
 
 #: JPEG decode reductions (and shrink factors of decoded frames) tried, cheapest first.
