@@ -6,6 +6,10 @@ set -euo pipefail
 C=.venv/bin/contactcal
 PY=.venv/bin/python
 R=runs/h15
+# the floored camera augmentation (658f4ff, amended rule) must be in the code that trains
+git merge-base --is-ancestor 658f4ff HEAD || { echo "h15_chain: check out 658f4ff or later" >&2; exit 2; }
+mkdir -p $R out
+[[ -f $R/commit ]] || git rev-parse HEAD > $R/commit  # the code the run started with
 if [[ ! -f $R/val_bins.csv ]]; then  # written last by a finished run
   RESUME=()
   [[ -f $R/last.pt ]] && RESUME=(--resume)
@@ -36,4 +40,5 @@ done
 [[ -f out/h15_noref/results.json ]] || $C bench --data data/val_v6 --variant h15=$R/v25.onnx \
   --no-reference --repeats 1 --timing-frames 1 --out out/h15_noref  # reported, not in the rule
 $PY docs/scripts/h15_rule.py out/h15_choose/results.json out/h15_rob_v24/results.json \
-  out/h15_rob_h15/results.json
+  out/h15_rob_h15/results.json > out/h15_verdict.md.tmp  # exit 2: no verdict, nothing kept
+mv out/h15_verdict.md.tmp out/h15_verdict.md && cat out/h15_verdict.md

@@ -25,6 +25,8 @@ from typing import Any
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 from rule_scores import datasets, scores
 
+from contactcal.infer.files.digest import sha256_file
+
 BASE, CANDIDATE = "unet", "unet[h15]"
 #: (label, sets pooled, the candidate's allowed excess over v2.4 in points) of (a)-(c).
 ERROR_CONDITIONS = (
@@ -152,10 +154,15 @@ def check_runs(choose: dict[str, Any], rob_base: dict[str, Any], rob_cand: dict[
             )
     if rob_base["robustness"]["frames"] != rob_cand["robustness"]["frames"]:
         raise ValueError("the two robustness runs perturbed different frames")
-    pairs = (("v2.4", BASE, rob_base), ("H15", CANDIDATE, rob_cand))
-    for name, method, run in pairs:  # one file per model across the three runs
+    pairs = (
+        ("v2.4", BASE, rob_base, BASE_MODEL),
+        ("H15", CANDIDATE, rob_cand, CANDIDATE_MODEL),
+    )
+    for name, method, run, path in pairs:  # one file per model: the three runs' and today's
         if _sha(choose, method) != _sha(run, BASE):
             raise ValueError(f"{name}: the choosing and robustness runs measured other files")
+        if Path(path).is_file() and _sha(run, BASE) != sha256_file(path):
+            raise ValueError(f"{name}: the runs measured another file than today's {path}")
 
 
 def _sha(run: dict[str, Any], method: str) -> str:
