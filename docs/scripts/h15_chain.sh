@@ -39,7 +39,7 @@ for m in v24:models/contact_unet.onnx h15:$R/v25.onnx; do
     --robustness --robustness-frames 80 --repeats 1 --timing-frames 1 --out "out/h15_rob_${m%%:*}"
 done
 $PY docs/scripts/h15_rule.py out/h15_choose/results.json out/h15_rob_v24/results.json \
-  out/h15_rob_h15/results.json > out/h15_verdict.md.tmp  # exit 2: no verdict, nothing kept
+  out/h15_rob_h15/results.json > out/h15_verdict.md.tmp || { rm -f out/h15_verdict.md.tmp; exit 2; }
 mv out/h15_verdict.md.tmp out/h15_verdict.md && cat out/h15_verdict.md
 [[ -f out/h15_noref/results.json ]] || $C bench --data data/val_v6 --variant h15=$R/v25.onnx \
   --no-reference --repeats 1 --timing-frames 1 --out out/h15_noref  # reported, not in the rule
