@@ -121,17 +121,24 @@ def test_setpoints_finer_than_the_tolerance_are_refused_not_merged(tmp_path: Pat
         assert len({f.step for f in read_session(manifest, tolerance).frames}) == len(fine)
 
 
-def _jittered(folder: Path, rng: np.random.Generator, unloading: bool = False) -> Path:
-    """The example session with three frames per pressure, each with a gauge reading
-    (±0.03 kPa), rows rising (then falling when ``unloading``); no phase column."""
+def _jittered(
+    folder: Path,
+    rng: np.random.Generator,
+    unloading: bool = False,
+    pressures: int | None = None,
+    per_step: int = 3,
+) -> Path:
+    """The example session with ``per_step`` frames per pressure, each with a gauge reading
+    (±0.03 kPa), rows rising (then falling when ``unloading``); no phase column. ``pressures``:
+    only the first that many of its pressures (None: all 21)."""
     import csv
     import shutil
 
-    rows = list(csv.DictReader(open(EXAMPLE / "manifest.csv", encoding="utf-8")))
+    rows = list(csv.DictReader(open(EXAMPLE / "manifest.csv", encoding="utf-8")))[:pressures]
     order = rows + (rows[-2::-1] if unloading else [])
     lines = ["file,pressure_kpa"]
     for n, r in enumerate(order):
-        for k in range(3):
+        for k in range(per_step):
             name = f"{n:02d}_{k}_{r['file']}"
             shutil.copy(EXAMPLE / r["file"], folder / name)
             p = max(0.0, float(r["pressure_kpa"]) + rng.uniform(-0.03, 0.03))
@@ -176,6 +183,37 @@ def test_calibrate_pools_readings_and_says_so(
     argv = ["calibrate", str(manifest), "--out", str(tmp_path / "x"), "--step-tolerance-kpa"]
     assert main([*argv, "-1"]) == 2
     assert "--step-tolerance-kpa -1: step tolerance -1.0 kPa: expected 0 to 1 kPa" in (
+        capsys.readouterr().err
+    )
+    assert not (tmp_path / "x").exists()
+
+
+def test_demo_takes_the_step_tolerance_of_calibrate(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """``demo --manifest`` pools readings as ``calibrate`` does, ``--step-tolerance-kpa 0``
+    keeps every reading a step (each method's record says which), a bad value exits 2."""
+    (tmp_path / "in").mkdir()
+    manifest = _jittered(tmp_path / "in", np.random.default_rng(5), pressures=7, per_step=2)
+    steps = {}
+    for t in (None, "0"):
+        out = tmp_path / f"demo_{t}"
+        given = [] if t is None else ["--step-tolerance-kpa", t]
+        assert main(["demo", "--manifest", str(manifest), "--out", str(out), *given]) == 0
+        for method in ("classical", "unet"):
+            record = json.loads((out / method / "calibration.json").read_text(encoding="utf-8"))
+            want = DEFAULT_STEP_TOLERANCE_KPA if t is None else 0.0
+            assert record["extra"]["step_tolerance_kpa"] == want
+            steps[t, method] = len(record["steps"])
+    assert steps[None, "classical"] == steps[None, "unet"] == 7
+    rows = manifest.read_text(encoding="utf-8").splitlines()[1:]
+    distinct = len({float(r.split(",")[1]) for r in rows})  # 0 kPa readings clip to one
+    assert len(rows) == 14 and distinct >= 12
+    assert steps["0", "classical"] == steps["0", "unet"] == distinct
+    capsys.readouterr()
+    bad = ["demo", "--manifest", str(manifest), "--out", str(tmp_path / "x")]
+    assert main([*bad, "--step-tolerance-kpa", "2"]) == 2
+    assert "--step-tolerance-kpa 2: step tolerance 2.0 kPa: expected 0 to 1 kPa" in (
         capsys.readouterr().err
     )
     assert not (tmp_path / "x").exists()

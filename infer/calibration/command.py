@@ -44,33 +44,49 @@ def add_parsers(sub: argparse._SubParsersAction) -> None:
         help="keep every frame's contact flag as measured: no session rule revising regions "
         "that shrink at the next pressure (the inner ring before contact) to no contact",
     )
-    c.add_argument(
-        "--step-tolerance-kpa",
-        type=float,
-        metavar="T",
-        help="manifest pressures less than T kPa apart are one step, its frames pooled (gauge "
-        "readings of one held pressure); 0: every distinct value is a step (default "
-        f"{DEFAULT_STEP_TOLERANCE_KPA:g}; a video run's steps come from --tolerance-kpa)",
-    )
+    add_step_tolerance_arg(c, "; a video run's steps come from --tolerance-kpa")
     scale_args(c)
     add_video_args(c)
     c.set_defaults(func=_cmd_calibrate)
 
 
-def session_options(args: argparse.Namespace) -> SessionOptions:
-    """The calibration's :class:`~contactcal.infer.calibration.calibrate.SessionOptions` from
-    ``--inverse-phase`` and ``--per-frame-contact`` (the fit's settings: their defaults)."""
-    from contactcal.infer.calibration.calibrate import SessionOptions
+def add_step_tolerance_arg(parser: argparse.ArgumentParser, more: str = "") -> None:
+    """Add ``--step-tolerance-kpa`` (read by :func:`step_tolerance`) to a command that
+    calibrates a manifest (``calibrate``, ``demo``); ``more`` ends its help's parenthesis."""
+    parser.add_argument(
+        "--step-tolerance-kpa",
+        type=float,
+        metavar="T",
+        help="manifest pressures less than T kPa apart are one step, its frames pooled (gauge "
+        "readings of one held pressure); 0: every distinct value is a step (default "
+        f"{DEFAULT_STEP_TOLERANCE_KPA:g}{more})",
+    )
 
+
+def step_tolerance(args: argparse.Namespace) -> float:
+    """kPa: ``--step-tolerance-kpa`` (its default when not given).
+
+    Raises:
+        ValueError: out of range, naming the option and the range expected.
+    """
     t = DEFAULT_STEP_TOLERANCE_KPA if args.step_tolerance_kpa is None else args.step_tolerance_kpa
     try:
         check_tolerance(t)
     except ValueError as exc:
         raise ValueError(f"--step-tolerance-kpa {t:g}: {exc}") from None
+    return t
+
+
+def session_options(args: argparse.Namespace) -> SessionOptions:
+    """The calibration's :class:`~contactcal.infer.calibration.calibrate.SessionOptions` from
+    ``--inverse-phase``, ``--per-frame-contact`` and ``--step-tolerance-kpa`` (the fit's
+    settings: their defaults)."""
+    from contactcal.infer.calibration.calibrate import SessionOptions
+
     return SessionOptions(
         inverse_phase=args.inverse_phase,
         session_rule=not args.per_frame_contact,
-        step_tolerance_kpa=t,
+        step_tolerance_kpa=step_tolerance(args),
     )
 
 

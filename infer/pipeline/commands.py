@@ -6,6 +6,7 @@ import argparse
 import sys
 from pathlib import Path
 
+from contactcal.infer.calibration.command import add_step_tolerance_arg, step_tolerance
 from contactcal.infer.pipeline.args import (
     check_change_gate,
     check_out_folder,
@@ -31,6 +32,7 @@ def add_parsers(sub: argparse._SubParsersAction) -> None:
     d = sub.add_parser("demo", help="calibrate the bundled example session with both methods")
     d.add_argument("--out", type=Path, default=Path("out/demo"), help="output folder")
     d.add_argument("--manifest", type=Path, help="another session instead of the example")
+    add_step_tolerance_arg(d)
     d.set_defaults(func=_cmd_demo)
 
 
@@ -88,8 +90,10 @@ def _cmd_measure(args: argparse.Namespace) -> int:
 
 
 def _cmd_demo(args: argparse.Namespace) -> int:
+    from contactcal.infer.calibration.calibrate import SessionOptions
     from contactcal.infer.pipeline.demo import run_demo
 
+    options = SessionOptions(step_tolerance_kpa=step_tolerance(args))
     check_out_folder(args.out, "demo")
-    print(run_demo(args.out, args.manifest, args.argv))
+    print(run_demo(args.out, args.manifest, args.argv, options))
     return 0

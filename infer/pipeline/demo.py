@@ -9,7 +9,11 @@ from pathlib import Path
 
 import numpy as np
 
-from contactcal.infer.calibration.calibrate import CalibrationReport, calibrate_session
+from contactcal.infer.calibration.calibrate import (
+    CalibrationReport,
+    SessionOptions,
+    calibrate_session,
+)
 from contactcal.infer.calibration.provenance import Provenance
 from contactcal.infer.files.atomic import run_outputs, write_synced
 from contactcal.infer.image.read import load_image
@@ -30,6 +34,7 @@ def run_demo(
     out_dir: str | os.PathLike[str],
     manifest: str | os.PathLike[str] | None = None,
     argv: Sequence[str] | None = None,
+    options: SessionOptions | None = None,
 ) -> str:
     """Calibrate a session (default: the bundled example) with every method.
 
@@ -40,6 +45,8 @@ def run_demo(
         out_dir: the output folder.
         manifest: the session; None: the bundled example.
         argv: the command line, recorded in each ``calibration.json`` (None: not run from it).
+        options: how the measurements become curves (``--step-tolerance-kpa``); None: the
+            defaults, as ``calibrate``'s.
 
     Returns:
         The printed summary (one table per method).
@@ -59,7 +66,7 @@ def run_demo(
     with run_outputs() as outs:
         for method in METHODS:
             rep = calibrate_session(
-                manifest, out / method, method, measure, provenance=recorded, outputs=outs
+                manifest, out / method, method, measure, options, recorded, outputs=outs
             )
             reports[method] = rep
             lines += [f"\n== {method} → {out / method}", rep.table]
