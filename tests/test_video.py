@@ -201,13 +201,20 @@ def test_live_capture_matches_file(tmp_path: Path, rng: np.random.Generator) -> 
     assert last[-1][1] - last[0][1] >= CFG.settle_s
 
 
+def _unreachable(*args: object) -> None:
+    raise AssertionError(f"not to be reached: {args}")
+
+
 def _run(argv: list[str], capsys: pytest.CaptureFixture[str]) -> tuple[int, str]:
     code = main(argv)
     return code, capsys.readouterr().err
 
 
 def test_bad_inputs_exit_2(
-    tmp_path: Path, rng: np.random.Generator, capsys: pytest.CaptureFixture[str]
+    tmp_path: Path,
+    rng: np.random.Generator,
+    capsys: pytest.CaptureFixture[str],
+    monkeypatch: pytest.MonkeyPatch,
 ) -> None:
     kpas = [0, 5, 10]
     make_video(tmp_path / "v.avi", kpas)
@@ -245,7 +252,9 @@ def test_bad_inputs_exit_2(
     (tmp_path / "bar.csv").write_text("\n".join(bar) + "\n")  # the log in bar, not kPa
     argv = ["calibrate", "--video", str(tmp_path / "v.avi"), "--pressure-log"]
     argv += [str(tmp_path / "bar.csv"), "--tolerance-kpa", "0.001", "--out", str(out)]
-    code, err = _run([*argv, "--method", "classical"], capsys)
+    with monkeypatch.context() as m:  # refused before a frame of the video is read
+        m.setattr(cv2, "VideoCapture", _unreachable)
+        code, err = _run([*argv, "--method", "classical"], capsys)
     expected = f"{tmp_path / 'bar.csv'}: the highest pressure_kpa is 0.1, below 1 kPa"
     assert code == 2 and expected in err and err.count("\n") == 1, err  # the log, not a temp file
     assert not out.exists()
