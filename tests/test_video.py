@@ -246,18 +246,19 @@ def test_bad_inputs_exit_2(
         code, err = _run([*argv, "--out", str(out), "--method", "classical"], capsys)
         assert code == 2 and expected in err and err.count("\n") == 1, err
         assert not out.exists()
-    bar = [lines[0]] + [
-        f"{t},{float(p) / 100:.6f},{s}" for t, p, s in (r.split(",") for r in lines[1:])
-    ]
-    (tmp_path / "bar.csv").write_text("\n".join(bar) + "\n")  # the log in bar, not kPa
-    argv = ["calibrate", "--video", str(tmp_path / "v.avi"), "--pressure-log"]
-    argv += [str(tmp_path / "bar.csv"), "--tolerance-kpa", "0.001", "--out", str(out)]
-    with monkeypatch.context() as m:  # refused before a frame of the video is read
-        m.setattr(cv2, "VideoCapture", _unreachable)
-        code, err = _run([*argv, "--method", "classical"], capsys)
-    expected = f"{tmp_path / 'bar.csv'}: the highest pressure_kpa is 0.1, below 1 kPa"
-    assert code == 2 and expected in err and err.count("\n") == 1, err  # the log, not a temp file
-    assert not out.exists()
+    for unit, per_kpa, top in (("bar", 100, "0.10"), ("MPa", 1000, "0.010")):  # not kPa
+        rows = [
+            f"{t},{float(p) / per_kpa:.6f},{s}" for t, p, s in (r.split(",") for r in lines[1:])
+        ]
+        (tmp_path / f"{unit}.csv").write_text("\n".join([lines[0], *rows]) + "\n")
+        argv = ["calibrate", "--video", str(tmp_path / "v.avi"), "--pressure-log"]
+        argv += [str(tmp_path / f"{unit}.csv"), "--out", str(out), "--method", "classical"]
+        with monkeypatch.context() as m:  # refused before a frame of the video is read
+            m.setattr(cv2, "VideoCapture", _unreachable)
+            code, err = _run(argv, capsys)
+        expected = f"{tmp_path / unit}.csv: the highest pressure_kpa is {top}"  # a reading
+        assert code == 2 and expected in err and err.count("\n") == 1, err  # the log's name
+        assert "below 1 kPa; expected a sweep in kPa" in err and not out.exists()
     for argv in (
         ["calibrate", str(EXAMPLE / "manifest.csv"), "--video", str(tmp_path / "v.avi")],
         ["calibrate", "--video", str(tmp_path / "v.avi")],
@@ -347,13 +348,16 @@ def test_a_vent_to_zero_is_left_out_and_a_rerun_is_refused(
     capsys.readouterr()
     assert main([*argv, str(tmp_path / "log.csv"), "--out", str(stills)]) == 0
     assert f"note: replaced the calibration {stills} held (created " in capsys.readouterr().out
-    flat = [0, 0]  # one steady step only (e.g. a log in bar read as kPa)
-    make_log(tmp_path / "flat.csv", flat, rng, hold_s=0.8)
-    make_video(tmp_path / "flat.avi", flat, hold_s=0.8)
-    argv = ["calibrate", "--video", str(tmp_path / "flat.avi"), "--pressure-log"]
-    code, err = _run([*argv, str(tmp_path / "flat.csv"), "--out", str(tmp_path / "f")], capsys)
-    assert code == 2 and "flat.csv: the steady steps found hold 1 loading pressure" in err, err
-    assert not (tmp_path / "f").exists()
+    for flat, expected in (  # one steady step only: at rest (no sweep), or at 5 kPa
+        ([0, 0], "flat.csv: the highest pressure_kpa is 0.0"),
+        ([5, 5], "flat.csv: the steady steps found hold 1 loading pressure"),
+    ):
+        make_log(tmp_path / "flat.csv", flat, rng, hold_s=0.8)
+        make_video(tmp_path / "flat.avi", flat, hold_s=0.8)
+        argv = ["calibrate", "--video", str(tmp_path / "flat.avi"), "--pressure-log"]
+        code, err = _run([*argv, str(tmp_path / "flat.csv"), "--out", str(tmp_path / "f")], capsys)
+        assert code == 2 and expected in err, err
+        assert not (tmp_path / "f").exists()
 
 
 def test_missing_camera_is_one_line(capfd: pytest.CaptureFixture[str]) -> None:

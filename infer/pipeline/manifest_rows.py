@@ -201,7 +201,8 @@ def check_sweep_top(where: str | os.PathLike[str], top: float) -> None:
     if 0.0 < top < MIN_SWEEP_TOP_KPA:
         raise ManifestError(
             f"{where}: the highest pressure_kpa is {top:g}, below {MIN_SWEEP_TOP_KPA:g} kPa; "
-            "expected kPa (the display works at 0-20 kPa, contact from ~3 kPa), not bar or MPa"
+            "expected a sweep in kPa (the display works at 0-20 kPa, contact from ~3 kPa), "
+            "not bar or MPa"
         )
 
 

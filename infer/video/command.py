@@ -50,22 +50,18 @@ def _preview(
     return Preview(method, extractor, outs.stage(args.out / f"preview{suffix}"), fourcc, fps)
 
 
-def _check_log_unit(where: Path, log: PressureLog, cfg: StepConfig) -> None:
-    """Refuse a whole log in bar or MPa before its video is read (minutes, for a long one):
-    its highest steady step, when one stands out of the gauge's rest (above ``tolerance_kpa``),
-    is below :data:`~contactcal.infer.pipeline.manifest.MIN_SWEEP_TOP_KPA`. The used steps are
-    checked again after extraction, as a live log's can only be then."""
+def _check_log_unit(where: Path, log: PressureLog) -> None:
+    """Refuse a whole log in bar or MPa (or one whose pressure never rose) before its video is
+    read (minutes, for a long one): its highest reading is below
+    :data:`~contactcal.infer.pipeline.manifest.MIN_SWEEP_TOP_KPA`, so every step would be. The
+    used steps are checked again after extraction, as a live log's can only be then."""
     from contactcal.infer.pipeline.manifest import check_sweep_top
-    from contactcal.infer.video.steps import detect_steps
 
-    top = max((s.pressure_kpa for s in detect_steps(log, cfg)), default=0.0)
-    if top > cfg.tolerance_kpa:
-        check_sweep_top(where, top)
+    check_sweep_top(where, float(log.pressures_kpa.max()))
 
 
 def _source(
     args: argparse.Namespace,
-    cfg: StepConfig,
 ) -> tuple[
     Iterator[tuple[float, np.ndarray]],
     Callable[[], PressureLog | None],
@@ -83,7 +79,7 @@ def _source(
 
     if args.video is not None:
         log = read_pressure_log(args.pressure_log)
-        _check_log_unit(args.pressure_log, log, cfg)
+        _check_log_unit(args.pressure_log, log)
         logs = iter([log])
         cap, fps = extract.open_video(args.video)
         return (
@@ -140,7 +136,7 @@ def calibrate_video(
     protect = [args.video, args.pressure_log, args.model, args.rig]
     with run_outputs(protect) as outs:
         ex = extract.Extractor(cfg, args.out / "frames", outs.stage)
-        frames, feed, stop, fps = _source(args, cfg)
+        frames, feed, stop, fps = _source(args)
         preview = _preview(args, measure, outs, ex, fps)
         progress = live.Progress(ex) if args.camera is not None else None
         observers = [o for o in (preview, progress) if o is not None]
