@@ -50,16 +50,6 @@ def _preview(
     return Preview(method, extractor, outs.stage(args.out / f"preview{suffix}"), fourcc, fps)
 
 
-def _check_log_unit(where: Path, log: PressureLog) -> None:
-    """Refuse a whole log in bar or MPa (or one whose pressure never rose) before its video is
-    read (minutes, for a long one): its highest reading is below
-    :data:`~contactcal.infer.pipeline.manifest.MIN_SWEEP_TOP_KPA`, so every step would be. The
-    used steps are checked again after extraction, as a live log's can only be then."""
-    from contactcal.infer.pipeline.manifest import check_sweep_top
-
-    check_sweep_top(where, float(log.pressures_kpa.max()))
-
-
 def _source(
     args: argparse.Namespace,
 ) -> tuple[
@@ -74,12 +64,16 @@ def _source(
     recording's log in another unit than kPa is refused before its video is opened."""
     import cv2
 
+    from contactcal.infer.pipeline.manifest import check_sweep_top
     from contactcal.infer.video import extract, live
     from contactcal.infer.video.log import read_pressure_log
 
     if args.video is not None:
         log = read_pressure_log(args.pressure_log)
-        _check_log_unit(args.pressure_log, log)
+        # a log in bar or MPa (or at rest) is refused before the video is read (minutes, for a
+        # long one): every step is below its highest reading; the used steps are checked again
+        # after extraction, as a live log's can only be then
+        check_sweep_top(args.pressure_log, float(log.pressures_kpa.max()))
         logs = iter([log])
         cap, fps = extract.open_video(args.video)
         return (
