@@ -46,6 +46,8 @@ def add_parsers(sub: argparse._SubParsersAction) -> None:
     add_fidelity_parser(sub)
 
 
+#: The files ``fidelity`` writes into its ``--out`` folder.
+FIDELITY_FILES = ("fidelity.json", "fidelity.md", "fidelity_strip.jpg")
 STRIP_MAX_WIDTH_PX = 2400  # fidelity_strip.jpg is downscaled to at most this width
 
 #: Modules of the ``synth`` extra that rendering needs (checked before anything is written).
@@ -103,7 +105,12 @@ def _cmd_fidelity(args: argparse.Namespace) -> int:
     import cv2
     import numpy as np
 
-    from contactcal.infer.files.atomic import run_outputs, write_json, write_text
+    from contactcal.infer.files.atomic import (
+        check_destination,
+        run_outputs,
+        write_json,
+        write_text,
+    )
     from contactcal.infer.image.write import write_image
     from contactcal.synth.fidelity_report import (
         FidelityConfig,
@@ -117,6 +124,11 @@ def _cmd_fidelity(args: argparse.Namespace) -> int:
     if args.sessions < 1:
         raise ValueError(f"--sessions must be >= 1, got {args.sessions}")
     check_cpu_count("--workers", args.workers)
+    if args.out.exists() and not args.out.is_dir():  # before the renders, not after
+        raise ValueError(f"{args.out}: exists and is not a folder; expected a folder for --out")
+    json_name, md_name, jpg_name = FIDELITY_FILES
+    for name in FIDELITY_FILES:
+        check_destination(args.out / name)
     width, height = parse_size(args.size)
     config = FidelityConfig(
         sessions=args.sessions,
@@ -128,14 +140,14 @@ def _cmd_fidelity(args: argparse.Namespace) -> int:
     results = run_fidelity(config)
     summary = summarise([r for r, _ in results]) | {"args": _args(args)}
     with run_outputs() as out:
-        write_json(out.stage(args.out / "fidelity.json"), summary)
-        write_text(out.stage(args.out / "fidelity.md"), summary_markdown(summary))
+        write_json(out.stage(args.out / json_name), summary)
+        write_text(out.stage(args.out / md_name), summary_markdown(summary))
         strip = np.ascontiguousarray(results[0][1][:, :, ::-1])  # RGB → BGR
         if strip.shape[1] > STRIP_MAX_WIDTH_PX:  # a figure for docs, not data: keep it small
             f = STRIP_MAX_WIDTH_PX / strip.shape[1]
             strip = cv2.resize(strip, None, fx=f, fy=f, interpolation=cv2.INTER_AREA)
         jpeg = (cv2.IMWRITE_JPEG_QUALITY, 85)
-        write_image(out.stage(args.out / "fidelity_strip.jpg"), strip, jpeg)
+        write_image(out.stage(args.out / jpg_name), strip, jpeg)
     print(summary_markdown(summary), end="")
     print(f"fidelity: ROI found within tolerance in {summary['roi_ok']}/{args.sessions} sessions")
     return 0

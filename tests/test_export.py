@@ -25,6 +25,7 @@ from contactcal.infer.methods.unet.spec import (  # noqa: E402
     SPEC_KEYS,
     read_spec,
 )
+from contactcal.train.commands import OPSETS  # noqa: E402
 from contactcal.train.data import dataset_digest  # noqa: E402
 from contactcal.train.export import PARITY_ATOL, PARITY_RTOL, export_onnx, load_run, self_check  # noqa: E402
 from contactcal.train.loop import train  # noqa: E402
@@ -105,6 +106,47 @@ def test_export_errors(run_dir: Path, tmp_path: Path) -> None:
         export_onnx(tmp_path / "nothing", tmp_path / "m.onnx")
     with pytest.raises(ValueError, match=r"\.onnx"):
         export_onnx(run_dir, tmp_path / "m.txt")
+    moved = tmp_path / "moved"  # a run whose data folder is not where its config says
+    moved.mkdir()
+    (moved / "best.pt").write_bytes((run_dir / "best.pt").read_bytes())
+    info = json.loads((run_dir / "config.json").read_text())
+    (moved / "config.json").write_text(json.dumps({**info, "data_dirs": ["gone/data"]}))
+    with pytest.raises(ValueError, match=r"config\.json: the run's dataset folder gone/data"):
+        export_onnx(moved, tmp_path / "m.onnx")
+    (moved / "config.json").write_text(
+        json.dumps({k: v for k, v in info.items() if k != "data_dirs"})
+    )
+    with pytest.raises(ValueError, match="expected data_dirs"):
+        export_onnx(moved, tmp_path / "m.onnx")
+    assert not (tmp_path / "m.onnx").exists()
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("opset", [OPSETS[0], OPSETS[-1]])
+def test_export_at_the_ends_of_the_opset_range(run_dir: Path, tmp_path: Path, opset: int) -> None:
+    out = export_onnx(run_dir, tmp_path / "m.onnx", opset=opset)  # checks itself: parity
+    assert onnx.load(str(out)).opset_import[0].version == opset
+
+
+def test_cli_export_refuses_bad_options_before_the_work(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    from contactcal.infer.cli import main
+
+    target = tmp_path / "kept.onnx"
+    target.write_bytes(b"kept")
+    link = tmp_path / "link.onnx"
+    link.symlink_to(target)
+    run = tmp_path / "no_run"  # never read: the options are refused first
+    for argv, says in (
+        (["--out", str(tmp_path / "m.onnx"), "--opset", "99"], "--opset must be"),
+        (["--out", str(link)], "symbolic link"),
+        (["--out", str(tmp_path / "m.txt")], "ending in .onnx"),
+    ):
+        assert main(["export", str(run), *argv]) == 2
+        err = capsys.readouterr().err.strip().splitlines()
+        assert len(err) == 1 and says in err[0], err
+    assert target.read_bytes() == b"kept" and link.is_symlink()
 
 
 @pytest.mark.slow

@@ -8,6 +8,8 @@ error at >= 5 kPa on session 1 was -6 % at 160x120 and -7 % at 240x180, against 
 
 from __future__ import annotations
 
+from pathlib import Path
+
 import numpy as np
 import pytest
 
@@ -106,3 +108,16 @@ def test_full_fidelity_check_on_twelve_nominal_sessions() -> None:
     # 1e: from 5 kPa the routine's blob encloses the contact in >= 90 % of the frames; the rest
     # are frames whose brightest structure is the skin, not the ring (docs/fidelity.md)
     assert all(b["blob_encloses_share"] >= BLOB_ENCLOSES_MIN for b in s["bins"][3:])
+
+
+def test_cli_refuses_an_output_that_is_not_a_folder_before_rendering(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    from contactcal.infer.cli import main
+
+    afile = tmp_path / "afile"
+    afile.write_text("kept")
+    assert main(["fidelity", "--sessions", "1", "--out", str(afile)]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "is not a folder" in err[0] and str(afile) in err[0]
+    assert afile.read_text() == "kept"

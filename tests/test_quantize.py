@@ -12,7 +12,7 @@ pytest.importorskip("onnx")
 
 from contactcal.infer.cli import main
 from contactcal.infer.methods.unet.runner import DEFAULT_MODEL, OnnxSegmenter
-from contactcal.train.quantize import quantize_model
+from contactcal.train.quantize import quantize_model, spread
 
 
 def test_int8_variant_keeps_the_spec_and_the_decisions(tmp_path: Path) -> None:
@@ -39,3 +39,33 @@ def test_cli_bad_input(tmp_path: Path) -> None:
     data = write_dataset(tmp_path / "data")
     assert main([*argv, "--data", str(data), "--frames", "0"]) == 2
     assert not (tmp_path / "q.onnx").exists()
+
+
+def test_refuses_an_int8_model_and_writes_nothing(tmp_path: Path) -> None:
+    data = _example_dataset(tmp_path / "data")
+    q = tmp_path / "int8.onnx"
+    quantize_model(DEFAULT_MODEL, q, [data], frames=2)
+    with pytest.raises(ValueError, match="already quantized"):
+        quantize_model(q, tmp_path / "qq.onnx", [data], frames=2)
+    assert not (tmp_path / "qq.onnx").exists()
+
+
+def test_cli_refuses_an_output_that_is_not_a_model_before_the_work(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    data = write_dataset(tmp_path / "data")
+    frame = next(data.rglob("*.png"))
+    before = frame.read_bytes()
+    for out in (frame, data / "index.csv"):
+        argv = ["quantize", str(DEFAULT_MODEL), "--out", str(out), "--data", str(data)]
+        assert main(argv) == 2
+        err = capsys.readouterr().err.strip().splitlines()
+        assert len(err) == 1 and "ending in .onnx" in err[0] and str(out) in err[0]
+    assert frame.read_bytes() == before
+
+
+def test_calibration_frames_are_spread_over_all_frames() -> None:
+    # 65 frames, 40 wanted: a stride of 65 // 40 = 1 once took the first 40 (the first sessions)
+    idx = spread(65, 40)
+    assert len(idx) == 40 and idx[0] == 0 and idx[-1] == 64
+    assert spread(5, 64) == [0, 1, 2, 3, 4] and spread(10, 1) == [0] and spread(0, 3) == []

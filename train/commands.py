@@ -14,6 +14,10 @@ from typing import Any
 from contactcal.infer.errors import require_extra
 from contactcal.infer.pipeline.args import check_cpu_count
 
+#: ONNX opsets ``export`` accepts: tested at both ends (``tests/test_export.py``); at opset 10 the
+#: export failed its parity check. Within the range the export's own checks still decide.
+OPSETS = range(13, 21)
+
 
 def add_parsers(sub: Any) -> None:
     """Add ``train``, ``export`` and ``quantize`` to the CLI's subparsers object.
@@ -74,7 +78,12 @@ def add_parsers(sub: Any) -> None:
     e = sub.add_parser("export", help="export a trained run to ONNX")
     e.add_argument("run_dir", type=Path, metavar="RUN_DIR", help="run folder with best.pt")
     e.add_argument("--out", type=Path, required=True, metavar="MODEL.onnx", help="output model")
-    e.add_argument("--opset", type=int, default=17, help="ONNX opset (default 17)")
+    e.add_argument(
+        "--opset",
+        type=int,
+        default=17,
+        help=f"ONNX opset, {OPSETS[0]}-{OPSETS[-1]} (default 17; the export checks itself at any)",
+    )
     e.add_argument(
         "--tune-min-area",
         action="store_true",
@@ -273,8 +282,25 @@ def _cmd_train(args: argparse.Namespace) -> int:
     return 0
 
 
+def _check_model_out(out: Path, protect: list[Path]) -> None:
+    """Refuse an output model path before any work: not ``.onnx``, an input, a link, a device.
+
+    Raises:
+        ValueError: naming the path and what was expected.
+    """
+    from contactcal.infer.files.atomic import check_destination
+
+    if out.suffix.lower() != ".onnx":
+        raise ValueError(f"{out}: expected an output file name ending in .onnx")
+    check_destination(out, protect)
+
+
 def _cmd_export(args: argparse.Namespace) -> int:
     require_extra("export", "train", TRAIN_MODULES)
+    if args.opset not in OPSETS:
+        raise ValueError(f"--opset must be {OPSETS[0]}-{OPSETS[-1]}, got {args.opset}")
+    _check_model_out(args.out, [args.run_dir / "best.pt", args.run_dir / "config.json"])
+    from contactcal.infer.errors import RunError
     from contactcal.train.export import export_onnx
 
     min_area = None
@@ -283,7 +309,10 @@ def _cmd_export(args: argparse.Namespace) -> int:
 
         min_area, summary = tune_min_area(args.run_dir)
         print(f"minimum contact area tuned on the validation fingers: {summary}")
-    path = export_onnx(args.run_dir, args.out, opset=args.opset, min_contact_area_px=min_area)
+    try:
+        path = export_onnx(args.run_dir, args.out, opset=args.opset, min_contact_area_px=min_area)
+    except RuntimeError as exc:  # the export's own checks (checker, parity, decisions, metadata)
+        raise RunError(f"export: {exc}; nothing was written") from exc
     print(f"wrote {path}")
     return 0
 
@@ -293,6 +322,7 @@ def _cmd_quantize(args: argparse.Namespace) -> int:
     _check_dirs(list(args.data))
     if args.frames < 1:
         raise ValueError(f"--frames must be >= 1, got {args.frames}")
+    _check_model_out(args.out, [args.model])
     from contactcal.train.quantize import quantize_model
 
     check = quantize_model(args.model, args.out, args.data, args.frames)

@@ -64,7 +64,8 @@ def load_run(run_dir: str | os.PathLike[str]) -> tuple[TrainConfig, dict, dict]:
         ``(train config, config.json content, best checkpoint)``.
 
     Raises:
-        ValueError: missing or unreadable files.
+        ValueError: missing or unreadable files, or dataset folders of the run (``data_dirs``,
+            which export calibrates and checks on) that cannot be found from here.
     """
     run = Path(run_dir)
     path = run / "config.json"
@@ -74,8 +75,33 @@ def load_run(run_dir: str | os.PathLike[str]) -> tuple[TrainConfig, dict, dict]:
         info = json.loads(path.read_text(encoding="utf-8"))
     except (OSError, json.JSONDecodeError) as exc:
         raise ValueError(f"{path}: unreadable run config ({exc})") from exc
+    if not isinstance(info, dict):
+        raise ValueError(f"{path}: expected a JSON object (a `contactcal train` run config)")
     cfg = saved_train_config(info.get("train"), str(path))
+    check_data_dirs(info.get("data_dirs"), path)
     return cfg, info, load_checkpoint(run / "best.pt")
+
+
+def check_data_dirs(dirs: object, config_path: Path) -> None:
+    """Refuse a run whose ``data_dirs`` are missing or not found from the current folder.
+
+    Args:
+        dirs: the config's ``data_dirs`` (as the run was given them: relative to the folder
+            ``contactcal train`` ran in, unless absolute).
+        config_path: the run's ``config.json``, for the message.
+
+    Raises:
+        ValueError: naming the config, the folder and how to fix it.
+    """
+    if not isinstance(dirs, list) or not dirs or not all(isinstance(d, str) for d in dirs):
+        raise ValueError(f"{config_path}: expected data_dirs, a list of the run's dataset folders")
+    for d in dirs:
+        if not (Path(d) / "index.csv").is_file():
+            raise ValueError(
+                f"{config_path}: the run's dataset folder {d} (data_dirs) has no index.csv as "
+                f"seen from {Path.cwd()}; run from the folder the run was trained in (relative "
+                "data_dirs are read from there) or put the data back"
+            )
 
 
 def metadata(spec: ModelSpec, info: dict, ckpt: dict) -> dict[str, str]:

@@ -10,6 +10,8 @@ reads as a spec, and its decisions are compared with the float model's on the ca
 
 from __future__ import annotations
 
+import contextlib
+import logging
 import os
 import tempfile
 from collections.abc import Iterator, Sequence
@@ -24,22 +26,29 @@ from contactcal.infer.methods.unet.prepare import SessionReference, prepare
 from contactcal.infer.methods.unet.runner import OnnxSegmenter
 from contactcal.train.sessions import session_inputs
 
-__all__ = ["calibration_frames", "quantize_model"]
+__all__ = ["calibration_frames", "quantize_model", "spread"]
 
 
 def calibration_frames(
     preprocess: PreprocessConfig, data: Sequence[str | os.PathLike[str]], frames: int
 ) -> list[tuple[np.ndarray, SessionReference]]:
-    """Up to ``frames`` ``(frame (H, W) uint8, session reference)`` pairs, spread evenly."""
+    """Up to ``frames`` ``(frame (H, W) uint8, session reference)`` pairs, spread evenly over
+    the frames of all sessions (first and last included)."""
     groups = sessions_of(read_datasets([Path(d) for d in data]))
     pairs = [r for rows in groups.values() for r in rows]
-    step = max(1, len(pairs) // frames)
-    picks = pairs[::step][:frames]
+    picks = [pairs[i] for i in spread(len(pairs), frames)]
     used = {r.session_key for r in picks}
     sessions = session_inputs([r for r in pairs if r.session_key in used], preprocess)
     return [
         (sessions[r.session_key].frame(r.frame), sessions[r.session_key].reference) for r in picks
     ]
+
+
+def spread(n: int, k: int) -> list[int]:
+    """``min(k, n)`` distinct indices into ``n`` items, evenly spaced, first and last included."""
+    if n < 1 or k < 1:
+        return []
+    return sorted(set(np.linspace(0, n - 1, min(k, n)).round().astype(int).tolist()))
 
 
 class _Reader:
@@ -74,7 +83,8 @@ def quantize_model(
         INT8 area / float area over the frames both call contact (None if there are none).
 
     Raises:
-        ValueError: ``out`` is the input, or no calibration frames.
+        ValueError: ``out`` is the input, ``model`` is already quantized, or no calibration
+            frames.
     """
     from onnx import load, save
     from onnxruntime.quantization import QuantFormat, QuantType, quantize_static
@@ -82,6 +92,12 @@ def quantize_model(
     if Path(out).resolve() == Path(model).resolve():
         raise ValueError(f"{out}: would overwrite the float model; choose another --out")
     float_seg = OnnxSegmenter(model, threads=1)
+    fm = load(str(model))
+    if any(n.op_type in QDQ_OPS for n in fm.graph.node):
+        raise ValueError(
+            f"{model}: already quantized (it holds QuantizeLinear/DequantizeLinear nodes); "
+            "expected the float model that `contactcal export` wrote"
+        )
     spec = float_seg.spec
     pairs = calibration_frames(spec.preprocess, data, frames)
     if not pairs:
@@ -89,21 +105,41 @@ def quantize_model(
     inputs = [prepare(g, r, spec.preprocess, spec.channels).x[None] for g, r in pairs]
     with tempfile.TemporaryDirectory() as tmp:
         q = Path(tmp) / "q.onnx"
-        quantize_static(
-            str(model),
-            str(q),
-            _Reader(float_seg.input_name, inputs),
-            quant_format=QuantFormat.QDQ,
-            activation_type=QuantType.QUInt8,
-            weight_type=QuantType.QInt8,
-            per_channel=True,
-        )
-        qm, fm = load(str(q)), load(str(model))
+        with _quiet_root_warnings():
+            quantize_static(
+                str(model),
+                str(q),
+                _Reader(float_seg.input_name, inputs),
+                quant_format=QuantFormat.QDQ,
+                activation_type=QuantType.QUInt8,
+                weight_type=QuantType.QInt8,
+                per_channel=True,
+            )
+        qm = load(str(q))
         del qm.metadata_props[:]
         qm.metadata_props.extend(fm.metadata_props)
         with atomic_path(out, protect=[model]) as tmp_out:
             save(qm, str(tmp_out))
-    return _agreement(float_seg, OnnxSegmenter(out, threads=1), pairs)
+            try:  # checked before it replaces anything: loads, reads as a spec, decides
+                return _agreement(float_seg, OnnxSegmenter(tmp_out, threads=1), pairs)
+            except ValueError as exc:
+                raise ValueError(f"{out}: the INT8 model fails its check ({exc})") from exc
+
+
+#: Operators of a quantized (QDQ) graph: a model holding them is not quantized again.
+QDQ_OPS = frozenset({"QuantizeLinear", "DequantizeLinear"})
+
+
+@contextlib.contextmanager
+def _quiet_root_warnings() -> Iterator[None]:
+    """Hold back onnxruntime's advice on the root logger ("consider pre-processing") while
+    quantizing, so the command prints its one line; the logging state is restored after."""
+    before = logging.root.manager.disable
+    logging.disable(logging.WARNING)
+    try:
+        yield
+    finally:
+        logging.disable(before)
 
 
 def _agreement(

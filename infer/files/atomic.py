@@ -59,7 +59,7 @@ def check_destination(path: str | os.PathLike[str], protect: Iterable[Path] = ()
     if stat.S_ISLNK(st.st_mode):
         raise OutputError(
             f"{p}: is a symbolic link; outputs never replace a link or its target "
-            "(give a regular file path; --out - writes to standard output)"
+            "(give a regular file path; `measure --out -` writes to standard output)"
         )
     if not stat.S_ISREG(st.st_mode):
         raise OutputError(
