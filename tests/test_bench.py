@@ -341,3 +341,72 @@ def test_cli_rejects_a_bad_variant(tmp_path: Path) -> None:
     for bad in ("int8", "=x.onnx", f"int8={tmp_path / 'missing.onnx'}"):
         argv = ["bench", "--data", str(data), "--out", str(tmp_path / "o"), "--variant", bad]
         assert main(argv) == 2
+
+
+def _rewrite_index(index: Path, edit: Any) -> None:
+    """Rewrite ``index`` with ``edit(rows) -> rows`` (rows as lists of cells, header first)."""
+    with open(index, newline="") as fh:
+        rows = list(csv.reader(fh))
+    with open(index, "w", newline="") as fh:
+        csv.writer(fh).writerows(edit(rows))
+
+
+def test_index_rows_that_cannot_be_scored_are_named(tmp_path: Path) -> None:
+    from contactcal.infer.bench.dataset import read_index
+
+    data = write_dataset(tmp_path / "data", fingers=1)
+    index = data / "index.csv"
+    original = index.read_bytes()
+
+    def onset(value: str) -> Any:
+        def edit(rows: list[list[str]]) -> list[list[str]]:
+            i = rows[0].index("onset_kpa")
+            return [rows[0]] + [[*r[:i], value, *r[i + 1 :]] for r in rows[1:]]
+
+        return edit
+
+    cases = (
+        (lambda rows: [*rows, rows[-1][:3]], r"line \d+: no value in column"),  # a short row
+        (onset("nan"), "onset_kpa is nan; expected a finite number"),
+        (onset("inf"), "onset_kpa is inf"),
+        (lambda rows: [*rows, rows[-1]], "has a frame at .* kPa already"),  # a repeated frame
+    )
+    for edit, says in cases:
+        index.write_bytes(original)
+        _rewrite_index(index, edit)
+        with pytest.raises(ValueError, match=says) as err:
+            read_index(data)
+        assert str(index) in str(err.value)
+    index.write_bytes(b"\xff\xfe" + original)
+    with pytest.raises(ValueError, match="not UTF-8 text") as err:
+        read_index(data)
+    assert str(index) in str(err.value)
+
+
+def test_cli_refuses_a_report_folder_it_cannot_write_before_the_work(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    data = write_dataset(tmp_path / "data", fingers=1)
+    afile = tmp_path / "afile"
+    afile.write_text("kept")
+    blocked = tmp_path / "blocked"
+    (blocked / "pareto.png").mkdir(parents=True)  # once: results.json written, report.md not
+    link = tmp_path / "link"
+    link.symlink_to(blocked)
+    model = str(tmp_path / "m.onnx")
+    (tmp_path / "m.onnx").write_bytes(b"x")
+    for out, more, says in (
+        (afile, [], "is not a folder"),
+        (blocked, [], "not a regular file"),
+        (link, [], "symbolic link"),
+        (Path("-"), [], "writes a folder of files"),
+        (tmp_path / "o", ["--variant", f"a={model}", "--variant", f"a={model}"], "given twice"),
+    ):
+        argv = ["bench", "--data", str(data), "--out", str(out), "--repeats", "1", *more]
+        assert main(argv) == 2
+        err = capsys.readouterr().err.strip().splitlines()
+        assert len(err) == 1 and says in err[0], err
+    assert afile.read_text() == "kept" and sorted(p.name for p in blocked.iterdir()) == [
+        "pareto.png"
+    ]
+    assert not (tmp_path / "o").exists()

@@ -10,9 +10,10 @@ from test_one_path import _example_dataset
 
 pytest.importorskip("onnx")
 
+from contactcal.infer.bench.dataset import spread
 from contactcal.infer.cli import main
 from contactcal.infer.methods.unet.runner import DEFAULT_MODEL, OnnxSegmenter
-from contactcal.train.quantize import quantize_model, spread
+from contactcal.train.quantize import quantize_model
 
 
 def test_int8_variant_keeps_the_spec_and_the_decisions(tmp_path: Path) -> None:

@@ -9,11 +9,10 @@ area must agree with the torch model's.
 
 from __future__ import annotations
 
-import numpy as np
 import onnxruntime as ort
 import torch
 
-from contactcal.infer.bench.dataset import read_datasets
+from contactcal.infer.bench.dataset import read_datasets, spread
 from contactcal.infer.methods.unet.postprocess import postprocess
 from contactcal.infer.methods.unet.runner import sigmoid
 from contactcal.infer.methods.unet.spec import ModelSpec
@@ -53,8 +52,7 @@ def check_decisions(
     rows = read_datasets(info.get("data_dirs") or [])
     train_rows, val_rows = split_by_finger(rows, val_fraction, seed)
     pool = val_rows or train_rows
-    idx = np.linspace(0, len(pool) - 1, min(DECISION_FRAMES, len(pool))).astype(int)
-    picks = [pool[i] for i in sorted(set(idx))]
+    picks = [pool[i] for i in spread(len(pool), DECISION_FRAMES)]
     cache = build_cache(picks, spec.preprocess, spec.channels)
     sess = ort.InferenceSession(onnx_bytes, providers=["CPUExecutionProvider"])
     with torch.no_grad():

@@ -19,14 +19,14 @@ from pathlib import Path
 
 import numpy as np
 
-from contactcal.infer.bench.dataset import read_datasets, sessions_of
+from contactcal.infer.bench.dataset import read_datasets, sessions_of, spread
 from contactcal.infer.files.atomic import atomic_path
 from contactcal.infer.methods.unet.config import PreprocessConfig
 from contactcal.infer.methods.unet.prepare import SessionReference, prepare
 from contactcal.infer.methods.unet.runner import OnnxSegmenter
 from contactcal.train.sessions import session_inputs
 
-__all__ = ["calibration_frames", "quantize_model", "spread"]
+__all__ = ["calibration_frames", "quantize_model"]
 
 
 def calibration_frames(
@@ -42,13 +42,6 @@ def calibration_frames(
     return [
         (sessions[r.session_key].frame(r.frame), sessions[r.session_key].reference) for r in picks
     ]
-
-
-def spread(n: int, k: int) -> list[int]:
-    """``min(k, n)`` distinct indices into ``n`` items, evenly spaced, first and last included."""
-    if n < 1 or k < 1:
-        return []
-    return sorted(set(np.linspace(0, n - 1, min(k, n)).round().astype(int).tolist()))
 
 
 class _Reader:

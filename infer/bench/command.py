@@ -59,12 +59,18 @@ def _cmd_bench(args: argparse.Namespace) -> int:
 
     if args.repeats < 1 or args.timing_frames < 1:
         raise ValueError("--repeats and --timing-frames must be >= 1")
+    check_report_folder(args.out)
+    variants = tuple(_variant(v) for v in args.variant)
+    if len({label for label, _ in variants}) < len(variants):
+        labels = [label for label, _ in variants]
+        twice = sorted({x for x in labels if labels.count(x) > 1})
+        raise ValueError(f"--variant: label(s) {', '.join(twice)} given twice; expected one each")
     cfg = BenchConfig(
         repeats=args.repeats,
         timing_frames=args.timing_frames,
         robustness_frames=_robustness_frames(args),
         use_reference=not args.no_reference,
-        variants=tuple(_variant(v) for v in args.variant),
+        variants=variants,
     )
     model = None if args.model is None else str(args.model)
     res = run_bench(args.data, args.out, model, cfg, args.crosscheck)
@@ -80,6 +86,29 @@ def _cmd_bench(args: argparse.Namespace) -> int:
         )
     print(f"report: {args.out / 'report.md'}")
     return 0
+
+
+def check_report_folder(out: Path) -> None:
+    """Refuse a report folder before any work: ``-``, a link, a file, or a report file that
+    must not be replaced (a link, a device: ``check_destination``).
+
+    Raises:
+        ValueError: naming the path and what was expected.
+    """
+    from contactcal.infer.bench.report import REPORT_FILES
+    from contactcal.infer.files.atomic import check_destination
+    from contactcal.infer.pipeline.args import check_out_folder
+
+    check_out_folder(out, "bench")
+    if out.is_symlink():
+        raise ValueError(
+            f"{out}: is a symbolic link; reports never write through a link (give the folder "
+            f"itself: {out.resolve()})"
+        )
+    if out.exists() and not out.is_dir():
+        raise ValueError(f"{out}: exists and is not a folder; expected a folder for --out")
+    for name in REPORT_FILES:
+        check_destination(out / name)
 
 
 def _variant(text: str) -> tuple[str, str]:

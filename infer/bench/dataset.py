@@ -5,10 +5,13 @@
 from __future__ import annotations
 
 import csv
+import math
 import os
 from collections.abc import Sequence
 from dataclasses import dataclass
 from pathlib import Path
+
+import numpy as np
 
 #: Columns every dataset row must have.
 REQUIRED_COLUMNS = (
@@ -52,8 +55,18 @@ class IndexRow:
         return f"{self.dataset}#{self.session}"
 
 
-def _parse(folder: Path, line: int, r: dict[str, str]) -> IndexRow:
+def spread(n: int, k: int) -> list[int]:
+    """``min(k, n)`` distinct indices into ``n`` items, evenly spaced, first and last included."""
+    if n < 1 or k < 1:
+        return []
+    return sorted(set(np.linspace(0, n - 1, min(k, n)).round().astype(int).tolist()))
+
+
+def _parse(folder: Path, line: int, r: dict[str, str | None]) -> IndexRow:
     where = f"{folder / 'index.csv'} line {line}"
+    if empty := [c for c in REQUIRED_COLUMNS if not r.get(c)]:  # a short row: None cells
+        raise ValueError(f"{where}: no value in column(s) {', '.join(empty)}")
+    r = {k: v for k, v in r.items() if isinstance(k, str) and isinstance(v, str)}
     try:
         row = IndexRow(
             dataset=folder,
@@ -70,6 +83,9 @@ def _parse(folder: Path, line: int, r: dict[str, str]) -> IndexRow:
         )
     except ValueError as exc:
         raise ValueError(f"{where}: unparsable value ({exc})") from exc
+    for name in ("pressure_kpa", "area_px", "mm_per_px", "onset_kpa"):
+        if not math.isfinite(getattr(row, name)):
+            raise ValueError(f"{where}: {name} is {r[name]}; expected a finite number")
     for p in (row.frame, row.mask):
         if not p.is_file():
             raise ValueError(f"{where}: missing file {p}")
@@ -89,17 +105,29 @@ def read_index(folder: str | os.PathLike[str]) -> list[IndexRow]:
     index = root / "index.csv"
     if not index.is_file():
         raise ValueError(f"{index}: missing index.csv (is {root} a `contactcal synth` output?)")
-    with open(index, newline="", encoding="utf-8") as fh:
-        reader = csv.DictReader(fh)
-        missing = [c for c in REQUIRED_COLUMNS if c not in (reader.fieldnames or [])]
-        if missing:
-            raise ValueError(
-                f"{index}: missing column(s) {', '.join(missing)}; "
-                f"expected at least {', '.join(REQUIRED_COLUMNS)}"
-            )
-        rows = [_parse(root, line, r) for line, r in enumerate(reader, start=2)]
+    try:
+        with open(index, newline="", encoding="utf-8") as fh:
+            reader = csv.DictReader(fh)
+            missing = [c for c in REQUIRED_COLUMNS if c not in (reader.fieldnames or [])]
+            if missing:
+                raise ValueError(
+                    f"{index}: missing column(s) {', '.join(missing)}; "
+                    f"expected at least {', '.join(REQUIRED_COLUMNS)}"
+                )
+            rows = [_parse(root, line, r) for line, r in enumerate(reader, start=2)]
+    except UnicodeDecodeError as exc:
+        raise ValueError(f"{index}: not UTF-8 text ({exc.reason}); expected a CSV file") from exc
     if not rows:
         raise ValueError(f"{index}: no frames listed")
+    seen: dict[tuple[str, float], int] = {}
+    for line, row in enumerate(rows, start=2):
+        first = seen.setdefault((row.session, row.pressure_kpa), line)
+        if first != line:
+            raise ValueError(
+                f"{index} line {line}: session {row.session} has a frame at "
+                f"{row.pressure_kpa:g} kPa already (line {first}); expected one frame per "
+                "pressure step"
+            )
     return rows
 
 

@@ -16,7 +16,7 @@ from contactcal.infer.bench.scoring import (
     covering_bins,
     median_or_none,
 )
-from contactcal.infer.files.atomic import write_json, write_text
+from contactcal.infer.files.atomic import run_outputs, write_json, write_text
 
 #: Markdown table columns: (key, header, shown as %).
 Columns = Sequence[tuple[str, str, bool]]
@@ -244,6 +244,14 @@ def _digests(results: Mapping[str, Any]) -> str:
     return " (" + ", ".join(f"{k} sha256 {v['sha256'][:12]}…" for k, v in models.items()) + ")"
 
 
+def _timed_frames(results: Mapping[str, Any]) -> str:
+    """How many frames the end-to-end timings ran on (fewer than asked on a small set)."""
+    n = {int(r["frames"]) for r in results["timing"] if r["config"] != "unet network only"}
+    asked = int(results["config"]["timing_frames"])
+    got = max(n, default=0)
+    return f"{got}" if got == asked else f"{got} (of {asked} asked: all the set offers)"
+
+
 def report_text(results: Mapping[str, Any]) -> str:
     """``report.md`` from the results (with their ``bins``, ``hard`` and ``coverage`` tables)."""
     cfg = results["config"]
@@ -255,7 +263,7 @@ def report_text(results: Mapping[str, Any]) -> str:
         f"{results['reference']}. Areas are compared in input pixels with the exact masks; "
         "relative\nerrors and the IoU of the method's outline with the mask over frames with true "
         "contact. Timing: median of "
-        f"{cfg['repeats']} runs over\n{cfg['timing_frames']} frames upscaled to {w}×{h}, "
+        f"{cfg['repeats']} runs over\n{_timed_frames(results)} frames upscaled to {w}×{h}, "
         "in one process. Rows `(soft area)`: the same prediction measured by its probability\n"
         "mass; rows `(session rule)`: the same frames after `calibrate`'s session rule (a region "
         "that\nshrinks at the next pressure beyond both stated intervals, and a contact left "
@@ -294,6 +302,17 @@ def accuracy_tables(
     }
 
 
+#: The files ``write_report`` may write into the report folder (checked before a bench runs).
+REPORT_FILES = (
+    "results.json",
+    "error_vs_pressure.png",
+    "pareto.png",
+    "robustness.png",
+    "robustness_no_contact.png",
+    "report.md",
+)
+
+
 def write_report(
     out_dir: str | os.PathLike[str],
     results: dict[str, Any],
@@ -304,7 +323,7 @@ def write_report(
     """Add the ``bins``, ``hard`` and ``coverage`` tables to ``results``; write ``results.json``,
     the figures (``error_vs_pressure.png``, ``pareto.png``, with ``robustness`` results also
     ``robustness.png`` and ``robustness_no_contact.png``) and ``report.md`` into ``out_dir``,
-    atomically.
+    all or nothing (:data:`REPORT_FILES`).
 
     Args:
         out_dir: report folder (created if missing).
@@ -316,12 +335,16 @@ def write_report(
     """
     out = Path(out_dir)
     results.update(accuracy_tables(frames, results["onset"], bins))
-    write_json(out / "results.json", results)
-    plot_error_vs_pressure(out / "error_vs_pressure.png", frames)
     size = tuple(results["config"]["full_size"])
-    plot_pareto(out / "pareto.png", results["bins"], results["timing"], (size[0], size[1]))
-    if "robustness" in results:
-        plot_robustness(out / "robustness.png", results["robustness"])
-        plot_robustness(out / "robustness_no_contact.png", results["robustness"], "no_contact")
     text = report_text(results)
-    write_text(out / "report.md", text + ("\n" + extra_text if extra_text else ""))
+    with run_outputs() as outputs:  # every file of the report, or none
+        write_json(outputs.stage(out / "results.json"), results)
+        plot_error_vs_pressure(outputs.stage(out / "error_vs_pressure.png"), frames)
+        pareto = outputs.stage(out / "pareto.png")
+        plot_pareto(pareto, results["bins"], results["timing"], (size[0], size[1]))
+        if "robustness" in results:
+            rob = results["robustness"]
+            plot_robustness(outputs.stage(out / "robustness.png"), rob)
+            plot_robustness(outputs.stage(out / "robustness_no_contact.png"), rob, "no_contact")
+        md = text + ("\n" + extra_text if extra_text else "")
+        write_text(outputs.stage(out / "report.md"), md)

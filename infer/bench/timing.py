@@ -22,7 +22,7 @@ import cv2
 import numpy as np
 
 from contactcal.infer.bench.config import BenchConfig
-from contactcal.infer.bench.dataset import IndexRow
+from contactcal.infer.bench.dataset import IndexRow, spread
 from contactcal.infer.image.cv_threads import opencv_threads
 from contactcal.infer.image.read import load_image
 from contactcal.infer.image.write import write_image
@@ -73,8 +73,7 @@ def pick_frames(
     rows = [r for rs in sessions.values() for r in rs]
     mid = [r for r in rows if TIMED_KPA[0] <= r.pressure_kpa <= TIMED_KPA[1]]
     pool = mid or rows  # a dataset without mid-range pressures still gets timed
-    step = max(1, len(pool) // count)
-    picks = pool[::step][:count]
+    picks = [pool[i] for i in spread(len(pool), count)]
     return picks, sessions[picks[0].session_key][0]
 
 
