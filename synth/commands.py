@@ -6,7 +6,7 @@ import argparse
 from pathlib import Path
 
 from contactcal.infer.errors import require_extra
-from contactcal.infer.pipeline.args import check_cpu_count
+from contactcal.infer.pipeline.args import check_cpu_count, check_out_folder
 
 
 def add_parsers(sub: argparse._SubParsersAction) -> None:
@@ -124,6 +124,7 @@ def _cmd_fidelity(args: argparse.Namespace) -> int:
     if args.sessions < 1:
         raise ValueError(f"--sessions must be >= 1, got {args.sessions}")
     check_cpu_count("--workers", args.workers)
+    check_out_folder(args.out, "fidelity")
     if args.out.exists() and not args.out.is_dir():  # before the renders, not after
         raise ValueError(f"{args.out}: exists and is not a folder; expected a folder for --out")
     json_name, md_name, jpg_name = FIDELITY_FILES

@@ -358,17 +358,18 @@ def test_index_rows_that_cannot_be_scored_are_named(tmp_path: Path) -> None:
     index = data / "index.csv"
     original = index.read_bytes()
 
-    def onset(value: str) -> Any:
+    def column(name: str, value: str) -> Any:
         def edit(rows: list[list[str]]) -> list[list[str]]:
-            i = rows[0].index("onset_kpa")
+            i = rows[0].index(name)
             return [rows[0]] + [[*r[:i], value, *r[i + 1 :]] for r in rows[1:]]
 
         return edit
 
     cases = (
         (lambda rows: [*rows, rows[-1][:3]], r"line \d+: no value in column"),  # a short row
-        (onset("nan"), "onset_kpa is nan; expected a finite number"),
-        (onset("inf"), "onset_kpa is inf"),
+        (column("onset_kpa", "nan"), "onset_kpa is nan; expected a finite number"),
+        (column("onset_kpa", "inf"), "onset_kpa is inf"),
+        (column("finger", "inf"), "unparsable value"),  # int(inf): OverflowError once escaped
         (lambda rows: [*rows, rows[-1]], "has a frame at .* kPa already"),  # a repeated frame
     )
     for edit, says in cases:
@@ -400,6 +401,8 @@ def test_cli_refuses_a_report_folder_it_cannot_write_before_the_work(
         (blocked, [], "not a regular file"),
         (link, [], "symbolic link"),
         (Path("-"), [], "writes a folder of files"),
+        (afile / "sub", [], "is not a folder"),  # its receiving folder is a file
+        (link / "sub", [], "symbolic link to a folder"),  # ... or a link
         (tmp_path / "o", ["--variant", f"a={model}", "--variant", f"a={model}"], "given twice"),
     ):
         argv = ["bench", "--data", str(data), "--out", str(out), "--repeats", "1", *more]

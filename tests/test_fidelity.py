@@ -117,7 +117,10 @@ def test_cli_refuses_an_output_that_is_not_a_folder_before_rendering(
 
     afile = tmp_path / "afile"
     afile.write_text("kept")
-    assert main(["fidelity", "--sessions", "1", "--out", str(afile)]) == 2
-    err = capsys.readouterr().err.strip().splitlines()
-    assert len(err) == 1 and "is not a folder" in err[0] and str(afile) in err[0]
+    for out in (afile, afile / "sub"):
+        assert main(["fidelity", "--sessions", "1", "--out", str(out)]) == 2
+        err = capsys.readouterr().err.strip().splitlines()
+        assert len(err) == 1 and "is not a folder" in err[0] and str(afile) in err[0]
+    assert main(["fidelity", "--sessions", "1", "--out", "-"]) == 2
+    assert "writes a folder of files" in capsys.readouterr().err
     assert afile.read_text() == "kept"

@@ -302,6 +302,7 @@ def _cmd_export(args: argparse.Namespace) -> int:
     _check_model_out(args.out, [args.run_dir / "best.pt", args.run_dir / "config.json"])
     from contactcal.infer.errors import RunError
     from contactcal.train.export import export_onnx
+    from contactcal.train.export_check import ExportCheckError
 
     min_area = None
     if args.tune_min_area:
@@ -311,8 +312,8 @@ def _cmd_export(args: argparse.Namespace) -> int:
         print(f"minimum contact area tuned on the validation fingers: {summary}")
     try:
         path = export_onnx(args.run_dir, args.out, opset=args.opset, min_contact_area_px=min_area)
-    except RuntimeError as exc:  # the export's own checks (checker, parity, decisions, metadata)
-        raise RunError(f"export: {exc}; nothing was written") from exc
+    except ExportCheckError as exc:  # the export's own checks (checker, parity, decisions, ...)
+        raise RunError(f"export: {' '.join(str(exc).split())}; nothing was written") from exc
     print(f"wrote {path}")
     return 0
 

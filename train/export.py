@@ -46,7 +46,7 @@ from contactcal.infer.files.atomic import atomic_open
 from contactcal.infer.methods.unet.spec import ModelSpec, read_spec
 from contactcal.train.checkpoint import load_checkpoint
 from contactcal.train.config import TrainConfig, saved_train_config
-from contactcal.train.export_check import check_decisions
+from contactcal.train.export_check import ExportCheckError, check_decisions
 from contactcal.train.interval import calibrate_run
 from contactcal.train.model import UNet
 
@@ -134,9 +134,9 @@ def self_check(data: bytes, spec: ModelSpec, out: Path) -> None:
     try:
         back = read_spec(meta, out)
     except ValueError as exc:
-        raise RuntimeError(f"exported metadata rejected by read_spec: {exc}") from exc
+        raise ExportCheckError(f"exported metadata rejected by read_spec: {exc}") from exc
     if back != spec:
-        raise RuntimeError(f"{out}: metadata reads back as {back}, expected {spec}")
+        raise ExportCheckError(f"{out}: metadata reads back as {back}, expected {spec}")
 
 
 def check_parity(model: torch.nn.Module, onnx_bytes: bytes, channels: int, seed: int = 0) -> float:
@@ -158,10 +158,12 @@ def check_parity(model: torch.nn.Module, onnx_bytes: bytes, channels: int, seed:
     sess = ort.InferenceSession(onnx_bytes, opts, providers=["CPUExecutionProvider"])
     got = sess.run(None, {"input": x.numpy()})[0]
     if got.shape != ref.shape:
-        raise RuntimeError(f"ONNX output shape {got.shape} != torch {ref.shape}")
+        raise ExportCheckError(f"ONNX output shape {got.shape} != torch {ref.shape}")
     err = float(np.max(np.abs(got - ref)))
     if not np.allclose(got, ref, atol=PARITY_ATOL, rtol=PARITY_RTOL):
-        raise RuntimeError(f"ONNX/torch parity failed: max |Δlogit| = {err:.3g} > {PARITY_ATOL}")
+        raise ExportCheckError(
+            f"ONNX/torch parity failed: max |Δlogit| = {err:.3g} > {PARITY_ATOL}"
+        )
     return err
 
 
@@ -207,7 +209,7 @@ def export_onnx(
     try:
         onnx.checker.check_model(proto, full_check=True)
     except onnx.checker.ValidationError as exc:
-        raise RuntimeError(f"exported model fails onnx.checker: {exc}") from exc
+        raise ExportCheckError(f"exported model fails onnx.checker: {exc}") from exc
     data = proto.SerializeToString()
     check_parity(model, data, cfg.model.in_channels)
     check_decisions(model, data, spec, info, cfg.val_fraction, cfg.seed)

@@ -25,6 +25,11 @@ DECISION_TOL_NET_PX = 2.0
 DECISION_FRAMES = 8
 
 
+class ExportCheckError(RuntimeError):
+    """An exported graph that fails one of the export's own checks (checker, parity, decisions,
+    metadata read-back); nothing is written then."""
+
+
 def check_decisions(
     model: torch.nn.Module,
     onnx_bytes: bytes,
@@ -62,7 +67,7 @@ def check_decisions(
         a = postprocess(p_torch[i], cache.boxes[i], cache.shapes[i], spec)
         b = postprocess(p_ort[i], cache.boxes[i], cache.shapes[i], spec)
         if a.contact != b.contact or abs(a.region_net_px - b.region_net_px) > DECISION_TOL_NET_PX:
-            raise RuntimeError(
+            raise ExportCheckError(
                 f"{row.frame}: torch and ONNX decide differently (contact {a.contact} vs "
                 f"{b.contact}, region {a.region_net_px:g} vs {b.region_net_px:g} network px)"
             )

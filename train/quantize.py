@@ -20,6 +20,7 @@ from pathlib import Path
 import numpy as np
 
 from contactcal.infer.bench.dataset import read_datasets, sessions_of, spread
+from contactcal.infer.errors import RunError
 from contactcal.infer.files.atomic import atomic_path
 from contactcal.infer.methods.unet.config import PreprocessConfig
 from contactcal.infer.methods.unet.prepare import SessionReference, prepare
@@ -113,10 +114,11 @@ def quantize_model(
         qm.metadata_props.extend(fm.metadata_props)
         with atomic_path(out, protect=[model]) as tmp_out:
             save(qm, str(tmp_out))
-            try:  # checked before it replaces anything: loads, reads as a spec, decides
+            try:  # before it replaces anything: it loads and reads as a spec; agreement measured
                 return _agreement(float_seg, OnnxSegmenter(tmp_out, threads=1), pairs)
             except ValueError as exc:
-                raise ValueError(f"{out}: the INT8 model fails its check ({exc})") from exc
+                msg = " ".join(str(exc).split())
+                raise RunError(f"{out}: the INT8 model fails its check ({msg})") from exc
 
 
 #: Operators of a quantized (QDQ) graph: a model holding them is not quantized again.

@@ -81,7 +81,7 @@ def _parse(folder: Path, line: int, r: dict[str, str | None]) -> IndexRow:
             onset_kpa=float(r["onset_kpa"]),
             hard=bool(int(float(r["hard"]))),
         )
-    except ValueError as exc:
+    except (ValueError, OverflowError) as exc:  # int(float("inf")): OverflowError
         raise ValueError(f"{where}: unparsable value ({exc})") from exc
     for name in ("pressure_kpa", "area_px", "mm_per_px", "onset_kpa"):
         if not math.isfinite(getattr(row, name)):
@@ -114,13 +114,16 @@ def read_index(folder: str | os.PathLike[str]) -> list[IndexRow]:
                     f"{index}: missing column(s) {', '.join(missing)}; "
                     f"expected at least {', '.join(REQUIRED_COLUMNS)}"
                 )
-            rows = [_parse(root, line, r) for line, r in enumerate(reader, start=2)]
+            rows, lines = [], []
+            for r in reader:  # reader.line_num: the file's line (blank lines, quoted newlines)
+                rows.append(_parse(root, reader.line_num, r))
+                lines.append(reader.line_num)
     except UnicodeDecodeError as exc:
         raise ValueError(f"{index}: not UTF-8 text ({exc.reason}); expected a CSV file") from exc
     if not rows:
         raise ValueError(f"{index}: no frames listed")
     seen: dict[tuple[str, float], int] = {}
-    for line, row in enumerate(rows, start=2):
+    for line, row in zip(lines, rows, strict=True):
         first = seen.setdefault((row.session, row.pressure_kpa), line)
         if first != line:
             raise ValueError(

@@ -16,6 +16,7 @@ from contactcal.infer.bench.scoring import (
     covering_bins,
     median_or_none,
 )
+from contactcal.infer.bench.timing import TIMED_KPA
 from contactcal.infer.files.atomic import run_outputs, write_json, write_text
 
 #: Markdown table columns: (key, header, shown as %).
@@ -249,7 +250,10 @@ def _timed_frames(results: Mapping[str, Any]) -> str:
     n = {int(r["frames"]) for r in results["timing"] if r["config"] != "unet network only"}
     asked = int(results["config"]["timing_frames"])
     got = max(n, default=0)
-    return f"{got}" if got == asked else f"{got} (of {asked} asked: all the set offers)"
+    lo, hi = TIMED_KPA
+    if got == asked:
+        return f"{got}"
+    return f"{got} (of {asked} asked: all the set has at {lo:g}-{hi:g} kPa, or at all pressures)"
 
 
 def report_text(results: Mapping[str, Any]) -> str:

@@ -52,6 +52,7 @@ def check_destination(path: str | os.PathLike[str], protect: Iterable[Path] = ()
         OutputError: the message names the path and says what to do instead.
     """
     p = Path(path)
+    check_receiving_folder(p)
     try:
         st = os.lstat(p)
     except (FileNotFoundError, NotADirectoryError):
@@ -74,6 +75,26 @@ def check_destination(path: str | os.PathLike[str], protect: Iterable[Path] = ()
                     f"{p}: is an input of this run ({q}); refusing to overwrite it "
                     "(choose another output path)"
                 )
+
+
+def check_receiving_folder(path: str | os.PathLike[str]) -> None:
+    """Refuse an output whose nearest existing folder above it is a link or not a folder.
+
+    That folder gets the new entries (the output, or the missing folders on its way).
+
+    Raises:
+        OutputError: naming that folder.
+    """
+    final = Path(os.path.abspath(path))
+    receiving = next(p for p in (final.parent, *final.parents) if os.path.lexists(p))
+    if receiving.is_symlink():
+        raise OutputError(
+            f"{receiving}: is a symbolic link to a folder; outputs never write "
+            f"through a link into its target (give the folder itself: "
+            f"{receiving.resolve()})"
+        )
+    if not receiving.is_dir():
+        raise OutputError(f"{receiving}: is not a folder; cannot write outputs into it")
 
 
 def _pid_running(pid: int) -> bool:
@@ -145,16 +166,7 @@ class OutputSet:
             raise OutputError(f"{path}: written twice by one run; give each output its own name")
         stage = self._stages.get(final.parent)
         if stage is None:
-            # The folder that gets new entries: the output's folder, or the nearest existing
-            # folder above it (where this run creates the missing ones).
-            receiving = next(p for p in (final.parent, *final.parents) if os.path.lexists(p))
-            if receiving.is_symlink():
-                raise OutputError(
-                    f"{receiving}: is a symbolic link to a folder; outputs never write "
-                    f"through a link into its target (give the folder itself: "
-                    f"{receiving.resolve()})"
-                )
-            self._make_folder(final.parent)
+            self._make_folder(final.parent)  # its receiving folder: check_destination
             remove_stale_temporaries(final.parent)
             name = f".{final.name}.{os.getpid()}."
             try:
