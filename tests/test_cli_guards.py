@@ -145,10 +145,15 @@ def test_ctrl_c_waits_for_the_block_to_finish() -> None:
     from contactcal.infer.files.interrupt import deferred_interrupt
 
     done = []
-    with pytest.raises(KeyboardInterrupt):
-        with deferred_interrupt():
-            signal.raise_signal(signal.SIGINT)
-            done.append("renamed")  # still runs: the interrupt waits for the block
+    # Python's own Ctrl-C handler, also where the suite runs as a background job (SIGINT ignored)
+    before = signal.signal(signal.SIGINT, signal.default_int_handler)
+    try:
+        with pytest.raises(KeyboardInterrupt):
+            with deferred_interrupt():
+                signal.raise_signal(signal.SIGINT)
+                done.append("renamed")  # still runs: the interrupt waits for the block
+    finally:
+        signal.signal(signal.SIGINT, before)
     assert done == ["renamed"]
 
 
