@@ -105,12 +105,7 @@ def _cmd_fidelity(args: argparse.Namespace) -> int:
     import cv2
     import numpy as np
 
-    from contactcal.infer.files.atomic import (
-        check_destination,
-        run_outputs,
-        write_json,
-        write_text,
-    )
+    from contactcal.infer.files.atomic import run_outputs, write_json, write_text
     from contactcal.infer.image.write import write_image
     from contactcal.synth.fidelity_report import (
         FidelityConfig,
@@ -124,12 +119,8 @@ def _cmd_fidelity(args: argparse.Namespace) -> int:
     if args.sessions < 1:
         raise ValueError(f"--sessions must be >= 1, got {args.sessions}")
     check_cpu_count("--workers", args.workers)
-    check_out_folder(args.out, "fidelity")
-    if args.out.exists() and not args.out.is_dir():  # before the renders, not after
-        raise ValueError(f"{args.out}: exists and is not a folder; expected a folder for --out")
+    check_out_folder(args.out, "fidelity", FIDELITY_FILES)  # before the renders, not after
     json_name, md_name, jpg_name = FIDELITY_FILES
-    for name in FIDELITY_FILES:
-        check_destination(args.out / name)
     width, height = parse_size(args.size)
     config = FidelityConfig(
         sessions=args.sessions,

@@ -55,11 +55,13 @@ def add_parsers(sub: argparse._SubParsersAction) -> None:
 
 def _cmd_bench(args: argparse.Namespace) -> int:
     from contactcal.infer.bench.config import BenchConfig
+    from contactcal.infer.bench.report import REPORT_FILES
     from contactcal.infer.bench.run import run_bench
+    from contactcal.infer.pipeline.args import check_out_folder
 
     if args.repeats < 1 or args.timing_frames < 1:
         raise ValueError("--repeats and --timing-frames must be >= 1")
-    check_report_folder(args.out)
+    check_out_folder(args.out, "bench", REPORT_FILES)  # before the work, not after
     variants = tuple(_variant(v) for v in args.variant)
     if len({label for label, _ in variants}) < len(variants):
         labels = [label for label, _ in variants]
@@ -86,29 +88,6 @@ def _cmd_bench(args: argparse.Namespace) -> int:
         )
     print(f"report: {args.out / 'report.md'}")
     return 0
-
-
-def check_report_folder(out: Path) -> None:
-    """Refuse a report folder before any work: ``-``, a link, a file, or a report file that
-    must not be replaced (a link, a device: ``check_destination``).
-
-    Raises:
-        ValueError: naming the path and what was expected.
-    """
-    from contactcal.infer.bench.report import REPORT_FILES
-    from contactcal.infer.files.atomic import check_destination
-    from contactcal.infer.pipeline.args import check_out_folder
-
-    check_out_folder(out, "bench")
-    if out.is_symlink():
-        raise ValueError(
-            f"{out}: is a symbolic link; reports never write through a link (give the folder "
-            f"itself: {out.resolve()})"
-        )
-    if out.exists() and not out.is_dir():
-        raise ValueError(f"{out}: exists and is not a folder; expected a folder for --out")
-    for name in REPORT_FILES:
-        check_destination(out / name)
 
 
 def _variant(text: str) -> tuple[str, str]:

@@ -66,7 +66,6 @@ def _parse(folder: Path, line: int, r: dict[str, str | None]) -> IndexRow:
     where = f"{folder / 'index.csv'} line {line}"
     if empty := [c for c in REQUIRED_COLUMNS if not r.get(c)]:  # a short row: None cells
         raise ValueError(f"{where}: no value in column(s) {', '.join(empty)}")
-    r = {k: v for k, v in r.items() if isinstance(k, str) and isinstance(v, str)}
     try:
         row = IndexRow(
             dataset=folder,
@@ -114,23 +113,23 @@ def read_index(folder: str | os.PathLike[str]) -> list[IndexRow]:
                     f"{index}: missing column(s) {', '.join(missing)}; "
                     f"expected at least {', '.join(REQUIRED_COLUMNS)}"
                 )
-            rows, lines = [], []
-            for r in reader:  # reader.line_num: the file's line (blank lines, quoted newlines)
-                rows.append(_parse(root, reader.line_num, r))
-                lines.append(reader.line_num)
+            rows: list[IndexRow] = []
+            seen: dict[tuple[str, float], int] = {}  # (session, kPa) → its first line
+            for r in reader:
+                line = reader.line_num  # the file's line (blank lines, quoted newlines)
+                row = _parse(root, line, r)
+                first = seen.setdefault((row.session, row.pressure_kpa), line)
+                if first != line:
+                    raise ValueError(
+                        f"{index} line {line}: session {row.session} has a frame at "
+                        f"{row.pressure_kpa:g} kPa already (line {first}); expected one frame "
+                        "per pressure step"
+                    )
+                rows.append(row)
     except UnicodeDecodeError as exc:
         raise ValueError(f"{index}: not UTF-8 text ({exc.reason}); expected a CSV file") from exc
     if not rows:
         raise ValueError(f"{index}: no frames listed")
-    seen: dict[tuple[str, float], int] = {}
-    for line, row in zip(lines, rows, strict=True):
-        first = seen.setdefault((row.session, row.pressure_kpa), line)
-        if first != line:
-            raise ValueError(
-                f"{index} line {line}: session {row.session} has a frame at "
-                f"{row.pressure_kpa:g} kPa already (line {first}); expected one frame per "
-                "pressure step"
-            )
     return rows
 
 

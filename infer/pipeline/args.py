@@ -158,17 +158,24 @@ MANIFEST_SCALE = "no rig.json beside the manifest, no --mm-per-px or --rig"
 VIDEO_SCALE = "no --mm-per-px or --rig; a video or camera run reads no rig.json"
 
 
-def check_out_folder(out: Path, command: str) -> None:
-    """Refuse ``--out -`` for a command whose outputs are a folder of files.
+def check_out_folder(out: Path, command: str, files: tuple[str, ...] = ()) -> None:
+    """Refuse ``--out -`` for a command whose outputs are a folder of files, and, before the
+    work, each of ``files`` in ``out`` that could not be written (a folder that is a file or a
+    link, or above it; a file that is a link or a device: ``check_destination``).
 
     Raises:
-        ValueError: ``out`` is ``-`` (standard output: ``measure``'s JSON only).
+        ValueError: ``out`` is ``-`` (standard output: ``measure``'s JSON only), or an output
+            that must not be written (named).
     """
+    from contactcal.infer.files.atomic import check_destination
+
     if str(out) == "-":
         raise ValueError(
             f"--out -: {command} writes a folder of files, not one stream; give a folder "
             "(standard output is for `contactcal measure --out -` only)"
         )
+    for name in files:
+        check_destination(out / name)
 
 
 def measure_options(args: argparse.Namespace, default_rig: Path | None = None) -> MeasureOptions:
