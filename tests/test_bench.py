@@ -20,6 +20,7 @@ from contactcal.infer.bench.accuracy import from_record, onset_errors, to_record
 from contactcal.infer.bench.config import BenchConfig
 from contactcal.infer.bench.plots import pareto_points
 from contactcal.infer.bench.report import (
+    _timed_frames,
     accuracy_tables,
     coverage_table,
     hard_table,
@@ -413,3 +414,16 @@ def test_cli_refuses_a_report_folder_it_cannot_write_before_the_work(
         "pareto.png"
     ]
     assert not (tmp_path / "o").exists()
+
+
+def test_the_report_says_how_many_frames_were_timed() -> None:
+    """Fewer frames than asked (a small set) are said as such; the network-only row (one
+    prepared input) does not count."""
+    timing = [
+        {"config": "unet jpeg", "frames": 2},
+        {"config": "classical jpeg", "frames": 2},
+        {"config": "unet network only", "frames": 1},
+    ]
+    few = {"timing": timing, "config": {"timing_frames": 6}}
+    assert _timed_frames(few) == "2 (of 6 asked: all the set has at 6-16 kPa, or at all pressures)"
+    assert _timed_frames({**few, "config": {"timing_frames": 2}}) == "2"

@@ -150,6 +150,29 @@ def test_cli_export_refuses_bad_options_before_the_work(
 
 
 @pytest.mark.slow
+def test_cli_a_failed_export_check_is_one_line_and_writes_nothing(
+    run_dir: Path,
+    tmp_path: Path,
+    monkeypatch: pytest.MonkeyPatch,
+    capsys: pytest.CaptureFixture[str],
+) -> None:
+    from contactcal.infer.cli import main
+    from contactcal.train import export
+    from contactcal.train.export_check import ExportCheckError
+
+    def parity_fails(*args: object) -> None:
+        raise ExportCheckError("ONNX output differs from torch\n  max |diff| 0.3")
+
+    monkeypatch.setattr(export, "check_parity", parity_fails)
+    out = tmp_path / "m.onnx"
+    assert main(["export", str(run_dir), "--out", str(out)]) == 1
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1, err
+    assert "ONNX output differs from torch max |diff| 0.3; nothing was written" in err[0]
+    assert list(tmp_path.iterdir()) == []
+
+
+@pytest.mark.slow
 def test_tune_min_area_never_worse(run_dir: Path, tmp_path: Path) -> None:
     from contactcal.train.threshold import tune_min_area
 

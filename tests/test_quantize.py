@@ -13,6 +13,7 @@ pytest.importorskip("onnx")
 from contactcal.infer.bench.dataset import spread
 from contactcal.infer.cli import main
 from contactcal.infer.methods.unet.runner import DEFAULT_MODEL, OnnxSegmenter
+from contactcal.train import quantize
 from contactcal.train.quantize import quantize_model
 
 
@@ -42,10 +43,16 @@ def test_cli_bad_input(tmp_path: Path) -> None:
     assert not (tmp_path / "q.onnx").exists()
 
 
-def test_refuses_an_int8_model_and_writes_nothing(tmp_path: Path) -> None:
+def test_refuses_an_int8_model_and_writes_nothing(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str], caplog: pytest.LogCaptureFixture
+) -> None:
     data = _example_dataset(tmp_path / "data")
     q = tmp_path / "int8.onnx"
-    quantize_model(DEFAULT_MODEL, q, [data], frames=2)
+    argv = ["quantize", str(DEFAULT_MODEL), "--out", str(q), "--data", str(data), "--frames", "2"]
+    assert main(argv) == 0
+    out, err = capsys.readouterr()
+    assert err == "" and out.startswith(f"wrote {q}: on 2 calibration frames")
+    assert not [r.getMessage() for r in caplog.records]  # onnxruntime's advice held back
     with pytest.raises(ValueError, match="already quantized"):
         quantize_model(q, tmp_path / "qq.onnx", [data], frames=2)
     assert not (tmp_path / "qq.onnx").exists()
@@ -70,3 +77,33 @@ def test_calibration_frames_are_spread_over_all_frames() -> None:
     idx = spread(65, 40)
     assert len(idx) == 40 and idx[0] == 0 and idx[-1] == 64
     assert spread(5, 64) == [0, 1, 2, 3, 4] and spread(10, 1) == [0] and spread(0, 3) == []
+
+
+def test_an_int8_model_that_departs_from_the_float_is_not_written(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """A failed check is a run error (exit 1, one line) and leaves the earlier file untouched."""
+    data = _example_dataset(tmp_path / "data")
+    out = tmp_path / "int8.onnx"
+    out.write_bytes(b"an earlier INT8 model")
+    argv = ["quantize", str(DEFAULT_MODEL), "--out", str(out), "--data", str(data)]
+    checks = {
+        "% of 2 calibration frames": {"frames": 2.0, "contact_agreement": 0.5},
+        "0.900× the float model's": {"frames": 2.0, "median_area_ratio": 0.9},
+    }
+    for expected, bad in checks.items():
+        fake = {"frames": 2.0, "contact_agreement": 1.0, "median_area_ratio": 1.0, **bad}
+        monkeypatch.setattr(quantize, "_agreement", lambda *a, fake=fake: fake)
+        assert main([*argv, "--frames", "2"]) == 1
+        err = capsys.readouterr().err.strip().splitlines()
+        assert len(err) == 1 and "not written" in err[0] and expected in err[0], err
+
+    def unreadable(*args: object) -> None:
+        raise ValueError("model metadata: no 'preprocess'\n key")
+
+    monkeypatch.setattr(quantize, "_agreement", unreadable)
+    assert main([*argv, "--frames", "2"]) == 1
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "fails its check (model metadata: no 'preprocess' key)" in err[0]
+    assert out.read_bytes() == b"an earlier INT8 model"
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["data", "int8.onnx"]

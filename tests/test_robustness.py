@@ -12,6 +12,7 @@ import numpy as np
 import pytest
 from procedural import draw_frame, write_dataset
 
+from contactcal.infer.bench import command as bench_command
 from contactcal.infer.bench import config as bench_config
 from contactcal.infer.bench import run as bench_run
 from contactcal.infer.bench.config import BenchConfig
@@ -270,8 +271,12 @@ def test_off_by_default_and_cli(
     assert not (tmp_path / "plain" / "robustness_no_contact.png").exists()
     out = tmp_path / "rob"
     assert main([*args, "--out", str(out), "--robustness", "--robustness-frames", "2"]) == 0
-    assert len(json.loads((out / "results.json").read_text())["robustness"]["frames"]) == 2
-    assert "robustness: 2 frames" in capsys.readouterr().out
+    rob = json.loads((out / "results.json").read_text())["robustness"]
+    assert len(rob["frames"]) == 2
+    first = rob["rows"][0]
+    line = capsys.readouterr().out
+    assert "robustness: 2 frames sampled, " in line
+    assert f"{first['no_contact_frames']} without contact score no-contact accuracy" in line
     assert main([*args, "--out", str(out), "--robustness-frames", "2"]) == 2
     assert "--robustness-frames needs --robustness" in capsys.readouterr().err
     assert main([*args, "--out", str(out), "--robustness", "--robustness-frames", "0"]) == 2
@@ -319,3 +324,14 @@ def test_ratio_interval_undefined_and_bad_input() -> None:
     assert ratio_interval(_scored([0.1, 0.2]), _scored([0.0, 0.0]), rng) is None  # zero baseline
     with pytest.raises(ValueError, match="frames differ"):
         ratio_interval(_scored([0.1, 0.2]), _scored([0.1, 0.2, 0.3]), rng)
+
+
+def test_the_cli_line_says_when_no_frame_scores_an_error_row() -> None:
+    """One sampled frame without contact at >= 5 kPa: the line says so, in the singular."""
+    rob = {"frames": ["a.png"], "rows": [{"contact_frames_ge5": 0, "no_contact_frames": 1}]}
+    line = bench_command._robustness_line(rob, Path("r/robustness.png"))
+    assert line.startswith("robustness: 1 frame sampled, none with true contact at >= 5 kPa")
+    assert "no error rows (sample more frames)" in line
+    rob = {"frames": ["a", "b", "c"], "rows": [{"contact_frames_ge5": 2, "no_contact_frames": 1}]}
+    line = bench_command._robustness_line(rob, Path("r/robustness.png"))
+    assert "3 frames sampled, 2 with true contact at >= 5 kPa score the error rows" in line

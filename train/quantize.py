@@ -115,10 +115,44 @@ def quantize_model(
         with atomic_path(out, protect=[model]) as tmp_out:
             save(qm, str(tmp_out))
             try:  # before it replaces anything: it loads and reads as a spec; agreement measured
-                return _agreement(float_seg, OnnxSegmenter(tmp_out, threads=1), pairs)
+                check = _agreement(float_seg, OnnxSegmenter(tmp_out, threads=1), pairs)
             except ValueError as exc:
                 msg = " ".join(str(exc).split())
                 raise RunError(f"{out}: the INT8 model fails its check ({msg})") from exc
+            _check_agreement(out, check)
+            return check
+
+
+#: Least share of calibration frames on which the INT8 model must make the float model's contact
+#: decision. Lower lets a quantization that flips decisions through; higher refuses INT8 models
+#: whose few flips are frames near the onset, where the float model itself is unsure.
+MIN_CONTACT_AGREEMENT = 0.9
+#: Largest departure of the median INT8/float area ratio from 1 (over frames both call contact).
+#: A percent or two is the rounding of int8 activations; more is a bias the calibration would carry.
+MAX_AREA_RATIO_DEPARTURE = 0.05
+
+
+def _check_agreement(out: str | os.PathLike[str], check: dict[str, float | None]) -> None:
+    """Refuse an INT8 model that departs from the float model (RunError: nothing is written).
+
+    Args:
+        out: the requested output, for the message.
+        check: :func:`_agreement`'s result.
+    """
+    agree, ratio = check["contact_agreement"], check["median_area_ratio"]
+    n = f"{check['frames']:.0f} calibration frames"
+    if agree is not None and agree < MIN_CONTACT_AGREEMENT:
+        raise RunError(
+            f"{out}: not written: the INT8 model makes the float model's contact decision on "
+            f"{100 * agree:.1f} % of {n}, expected >= {100 * MIN_CONTACT_AGREEMENT:.0f} %; "
+            "deploy the float model, or calibrate on other validation renders (--data, --frames)"
+        )
+    if ratio is not None and abs(ratio - 1.0) > MAX_AREA_RATIO_DEPARTURE:
+        raise RunError(
+            f"{out}: not written: the INT8 model's median area is {ratio:.3f}× the float model's "
+            f"on {n}, expected within {MAX_AREA_RATIO_DEPARTURE:.0%} of 1; deploy the float "
+            "model, or calibrate on other validation renders (--data, --frames)"
+        )
 
 
 #: Operators of a quantized (QDQ) graph: a model holding them is not quantized again.

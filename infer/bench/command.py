@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import argparse
 from pathlib import Path
+from typing import Any
 
 #: Frames the robustness suite samples when ``--robustness-frames`` is not given.
 DEFAULT_ROBUSTNESS_FRAMES = 40
@@ -83,9 +84,7 @@ def _cmd_bench(args: argparse.Namespace) -> int:
             method, kpa = row["method"], row["bin_kpa"]
             print(f"[{c['label']}] {method:>16s} {kpa:>6s} kPa  median |rel err| {_pct(row)}")
     if "robustness" in res:
-        print(
-            f"robustness: {len(res['robustness']['frames'])} frames, {args.out / 'robustness.png'}"
-        )
+        print(_robustness_line(res["robustness"], args.out / "robustness.png"))
     print(f"report: {args.out / 'report.md'}")
     return 0
 
@@ -108,6 +107,21 @@ def _robustness_frames(args: argparse.Namespace) -> int:
     if n is not None and n < 1:
         raise ValueError(f"--robustness-frames must be >= 1, got {n}")
     return (DEFAULT_ROBUSTNESS_FRAMES if n is None else n) if args.robustness else 0
+
+
+def _robustness_line(rob: dict[str, Any], figure: Path) -> str:
+    """The CLI's one line on the robustness suite: frames sampled, and how many score each row."""
+    first, n = rob["rows"][0], len(rob["frames"])
+    scored = first["contact_frames_ge5"]
+    errors = (
+        f"{scored} with true contact at >= 5 kPa score the error rows"
+        if scored
+        else "none with true contact at >= 5 kPa, so no error rows (sample more frames)"
+    )
+    return (
+        f"robustness: {n} frame{'s' if n != 1 else ''} sampled, {errors}, "
+        f"{first['no_contact_frames']} without contact score no-contact accuracy; {figure}"
+    )
 
 
 def _pct(row: dict[str, object]) -> str:

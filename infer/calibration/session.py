@@ -68,7 +68,10 @@ class PhaseFit:
             reason = f"not assessed: {len(above)} step(s) in contact above the onset" + more
         elif rise <= floor:
             resolves = False
-            reason = rises + f"{MIN_RISE_FRACTION:.0%} of its largest area ({floor:.3g})"
+            reason = rises + (
+                f"{MIN_RISE_FRACTION:.0%} of its largest area ({floor:.3g} of "
+                f"{float(c.area_range()[1]):.4g} {c.area_unit})"
+            )
         elif cv is None:
             reason = (
                 "not assessed: no cross-validated error to compare its rise with (fewer than "
