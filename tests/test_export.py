@@ -113,6 +113,10 @@ def test_export_errors(run_dir: Path, tmp_path: Path) -> None:
     (moved / "config.json").write_text(json.dumps({**info, "data_dirs": ["gone/data"]}))
     with pytest.raises(ValueError, match=r"config\.json: the run's dataset folder gone/data"):
         export_onnx(moved, tmp_path / "m.onnx")
+    assert all(Path(d).is_absolute() for d in info["data_dirs"])  # found from any folder
+    (moved / "config.json").write_text(json.dumps({**info, "data_digest": "0" * 64}))
+    with pytest.raises(ValueError, match=r"no longer hold the data it was trained on"):
+        export_onnx(moved, tmp_path / "m.onnx")  # e.g. re-rendered with another seed since
     (moved / "config.json").write_text(
         json.dumps({k: v for k, v in info.items() if k != "data_dirs"})
     )

@@ -46,6 +46,7 @@ from contactcal.infer.files.atomic import atomic_open
 from contactcal.infer.methods.unet.spec import ModelSpec, read_spec
 from contactcal.train.checkpoint import load_checkpoint
 from contactcal.train.config import TrainConfig, saved_train_config
+from contactcal.train.data import dataset_digest
 from contactcal.train.export_check import ExportCheckError, check_decisions
 from contactcal.train.interval import calibrate_run
 from contactcal.train.model import UNet
@@ -78,17 +79,19 @@ def load_run(run_dir: str | os.PathLike[str]) -> tuple[TrainConfig, dict, dict]:
     if not isinstance(info, dict):
         raise ValueError(f"{path}: expected a JSON object (a `contactcal train` run config)")
     cfg = saved_train_config(info.get("train"), str(path))
-    check_data_dirs(info.get("data_dirs"), path)
+    check_data_dirs(info.get("data_dirs"), path, info.get("data_digest"))
     return cfg, info, load_checkpoint(run / "best.pt")
 
 
-def check_data_dirs(dirs: object, config_path: Path) -> None:
-    """Refuse a run whose ``data_dirs`` are missing or not found from the current folder.
+def check_data_dirs(dirs: object, config_path: Path, digest: object = None) -> None:
+    """Refuse a run whose ``data_dirs`` are missing, not found, or not the data it trained on.
 
     Args:
-        dirs: the config's ``data_dirs`` (as the run was given them: relative to the folder
-            ``contactcal train`` ran in, unless absolute).
+        dirs: the config's ``data_dirs`` (absolute since runs record them resolved; a run
+            written before reads its relative ones from the current folder).
         config_path: the run's ``config.json``, for the message.
+        digest: the config's ``data_digest`` (:func:`~contactcal.train.data.dataset_digest`
+            of the folders at training time); None or absent: not compared.
 
     Raises:
         ValueError: naming the config, the folder and how to fix it.
@@ -102,6 +105,13 @@ def check_data_dirs(dirs: object, config_path: Path) -> None:
                 f"seen from {Path.cwd()}; run from the folder the run was trained in (relative "
                 "data_dirs are read from there) or put the data back"
             )
+    if isinstance(digest, str) and digest and dataset_digest(dirs) != digest:
+        raise ValueError(
+            f"{config_path}: the run's dataset folders {', '.join(dirs)} (data_dirs) no longer "
+            "hold the data it was trained on (their index.csv digest differs from data_digest); "
+            "the export calibrates and checks on the run's validation fingers, so put the "
+            "original data back (a re-render with the same command and seed is identical)"
+        )
 
 
 def metadata(spec: ModelSpec, info: dict, ckpt: dict) -> dict[str, str]:

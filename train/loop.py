@@ -78,7 +78,7 @@ def _run_info(
     """The content of ``config.json``."""
     return {
         "train": config_to_dict(cfg),
-        "data_dirs": [str(d) for d in data_dirs],
+        "data_dirs": [str(Path(d).resolve()) for d in data_dirs],  # export reads them anywhere
         "data_digest": digest,
         "split": split,
         "device": str(dev),
