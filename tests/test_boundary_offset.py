@@ -206,9 +206,12 @@ def test_cli_evaluate_measures_it_and_calibrate_applies_it(
     assert record["extra"]["boundary_offset_mm"] == 0.3
     ev2 = tmp_path / "ev2"
     args = ["evaluate", manifest, "--labels", str(EXAMPLE / "masks"), "--rig", str(rig)]
+    capsys.readouterr()  # calibrate's table
     assert main([*args, "--out", str(ev2)]) == 0
+    printed = capsys.readouterr().out
+    assert f"boundary offset +0.300 mm ({rig}); the offset below is what remains" in printed
     off2 = json.loads((ev2 / "evaluation.json").read_text())["boundary_offset"]
-    assert off2["applied_mm"] == 0.3
+    assert off2["applied_mm"] == 0.3 and off2["applied_from"] == str(rig)
     assert off2["median_mm"] == pytest.approx(off["median_mm"] - 0.3, abs=0.03)  # what remains
     stale = _rig(tmp_path / "stale.json", **{OFFSET_KEY: 0.3, MODEL_KEY: SHA})
     ev3 = tmp_path / "ev3"

@@ -182,6 +182,7 @@ GOOD = ["p10.0kpa.jpg", "200.5", "150.5", "90", "70", "15"]
         (None, ["p10.0kpa.jpg:1", *GOOD[1:]], "remove the ':…' suffix ImageJ adds"),
         (None, [*GOOD[:2], "abc", *GOOD[3:]], "cy 'abc' is not a finite number"),
         (None, [GOOD[0], "900", *GOOD[2:]], "lies outside the 400×300 px frame"),
+        (None, [*GOOD[:3], "70", "90", GOOD[5]], "minor 90 is longer than major 70"),
     ],
 )
 def test_bad_ellipse_csv_exits_2_with_one_line(

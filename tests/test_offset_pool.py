@@ -145,9 +145,34 @@ def test_one_sessions_keys_are_printed_with_the_pooling_they_need() -> None:
         "median_mm": 0.03,
         "interval_mm": [0.02, 0.039],
         "rig_config": {"boundary_offset_mm": 0.03, "boundary_offset_model_sha256": "ab"},
+        "applied_mm": None,
+        "applied_from": None,
     }
     text = offset_line(off)
     assert "one session's: pool five or more sessions' evaluations with `contactcal " in text
     assert text.endswith(
         'apply it: "boundary_offset_mm": 0.03, "boundary_offset_model_sha256": "ab"'
     )
+    assert "note:" not in text  # no offset applied: nothing to say about one
+
+
+def test_an_applied_offset_is_said_and_the_keys_state_the_total() -> None:
+    """With the rig's offset applied the measured one is what remains: the text says which was
+    applied (and from where), and that the keys hold the total, not the printed median."""
+    off = {
+        "stale": None,
+        "frames": 18,
+        "median_px": -14.8,
+        "interval_px": [-15.0, -14.6],
+        "median_mm": -1.87,
+        "interval_mm": [-1.9, -1.85],
+        "rig_config": {"boundary_offset_mm": 0.03, "boundary_offset_model_sha256": "ab"},
+        "applied_mm": 1.9,
+        "applied_from": "s/rig.json",
+    }
+    text = offset_line(off)
+    assert text.startswith(
+        "note: the U-Net's areas include the rig's boundary offset +1.900 mm (s/rig.json)"
+    )
+    assert "against the labels on top of the applied +1.900 mm, 18 frames: -1.870 mm" in text
+    assert 'apply the total (+1.900 mm applied + this): "boundary_offset_mm": 0.03' in text

@@ -59,6 +59,7 @@ class LabelMask:
     mask: np.ndarray  # (H, W) bool, True = contact
     area_px: int  # pixel count of ``mask`` (the area errors are computed against)
     analytic_area_px: float | None  # π·major·minor/4 for an ellipse, else None
+    note: str | None = None  # how the label was read, when not as drawn (a soft-edged mask)
 
 
 def read_labels(labels: str | os.PathLike[str], frames: list[Frame], manifest: Path) -> list[Label]:
@@ -83,7 +84,7 @@ def _mask_labels(folder: Path, frames: list[Frame]) -> list[Label]:
     by_stem: dict[str, list[Path]] = {}
     for f in frames:
         by_stem.setdefault(f.file.stem, []).append(f.file)
-    out = []
+    out: list[Label] = []
     for mask in sorted(p for p in folder.iterdir() if p.suffix.lower() == ".png"):
         match = by_stem.get(mask.stem, [])
         if not match:
@@ -96,6 +97,12 @@ def _mask_labels(folder: Path, frames: list[Frame]) -> list[Label]:
             raise LabelError(
                 f"{mask}: frames {match[0]} and {match[1]} share its stem; masks are matched "
                 "by stem, so give the frames distinct names"
+            )
+        twice = [lab.source for lab in out if lab.frame == match[0]]
+        if twice:
+            raise LabelError(
+                f"{mask}: labels {match[0].name} like {twice[0]}; expected one mask per frame "
+                "(remove one of them)"
             )
         out.append(Label(match[0], mask, None, None))
     return out
@@ -173,6 +180,11 @@ def _ellipse(at: str, cells: dict[str, str]) -> ImageJEllipse | None:
                 "axis length in pixels (leave all five numbers empty to label a frame without "
                 "contact)"
             )
+    if v["minor"] > v["major"]:
+        raise LabelError(
+            f"{at}: minor {v['minor']:g} is longer than major {v['major']:g}; ImageJ writes "
+            "major >= minor, so the columns are probably swapped (an ellipse turned by 90°)"
+        )
     return ImageJEllipse(v["cx"], v["cy"], v["major"], v["minor"], v["angle_deg"])
 
 
@@ -220,8 +232,10 @@ def _ellipse_labels(path: Path, frames: list[Frame], manifest: Path) -> list[Lab
     return list(out.values())
 
 
-def _read_mask(path: Path) -> np.ndarray:
-    """``(H, W)`` bool: any colour channel > 0 (alpha ignored, unless it alone holds a shape).
+def _read_mask(path: Path) -> tuple[np.ndarray, str | None]:
+    """``(H, W)`` bool: any colour channel > 0 (alpha ignored, unless it alone holds a shape);
+    a mask of several non-zero values (a soft, anti-aliased or JPEG-damaged edge) is read at
+    half its largest value, the edge's half coverage, and the note says so (None otherwise).
 
     Raises:
         LabelError: not a decodable image, or no pixel 0 (no background: an inverted mask, or a
@@ -235,11 +249,17 @@ def _read_mask(path: Path) -> np.ndarray:
         )
     if img.ndim == 3:
         colour = img[..., : 3 if img.shape[2] >= 3 else 1]
-        mask = np.any(colour > 0, axis=2)
-        _check_alpha(path, img, mask)
-        img = colour
-    else:
-        mask = img > 0
+        _check_alpha(path, img, colour)
+        img = colour.max(axis=2)
+    mask, note = img > 0, None
+    levels = np.unique(img[mask]) if mask.any() else img[:0]
+    if levels.size > 1 and not mask.all():
+        top = levels[-1]
+        mask = img > top / 2
+        note = (
+            f"soft edge: {levels.size} non-zero values, read as contact above half the largest "
+            f"({top}); {int(np.count_nonzero(img[img > 0] < top))} px between"
+        )
     if mask.all():
         values = np.unique(img)
         shown = ", ".join(str(v) for v in values[:4]) + (", …" if values.size > 4 else "")
@@ -248,24 +268,26 @@ def _read_mask(path: Path) -> np.ndarray:
             "expected 0 = background, > 0 = contact (an inverted mask, or a background other "
             "than 0?)"
         )
-    return mask
+    return mask, note
 
 
-def _check_alpha(path: Path, img: np.ndarray, colour_mask: np.ndarray) -> None:
-    """Refuse a mask whose contact is drawn in its alpha channel only (colour all 0, alpha
-    not uniform): read by colour it would label every frame "no contact".
+def _check_alpha(path: Path, img: np.ndarray, colour: np.ndarray) -> None:
+    """Refuse a mask whose contact is drawn in its alpha channel only (one colour everywhere,
+    alpha not uniform): read by colour it would label every frame "no contact" (colour 0) or
+    "contact everywhere" (e.g. white on transparent).
 
     Args:
         path: the mask file, for the message.
         img: ``(H, W, C)`` the decoded mask, ``C`` 2 (grey + alpha) or 4 (BGRA) with alpha.
-        colour_mask: ``(H, W)`` bool, its colour channels > 0.
+        colour: ``(H, W, C')`` its colour channels.
     """
-    if img.shape[2] not in (2, 4) or colour_mask.any():
+    if img.shape[2] not in (2, 4) or colour.min() != colour.max():
         return
     alpha = img[..., -1]
     if alpha.min() != alpha.max():
         raise LabelError(
-            f"{path}: every colour value is 0 and the shape is in the alpha channel only; "
+            f"{path}: every colour value is {colour.flat[0]} and the shape is in the alpha "
+            "channel only; "
             "expected 0 = background, > 0 = contact in the colour (grey) values (flatten the "
             "mask, or export it without transparency)"
         )
@@ -280,13 +302,13 @@ def label_mask(label: Label, frame_size: tuple[int, int]) -> LabelMask:
     """
     w, h = frame_size
     if label.row is None:
-        mask = _read_mask(label.source)
+        mask, note = _read_mask(label.source)
         if mask.shape != (h, w):
             raise LabelError(
                 f"{label.source}: mask is {mask.shape[1]}×{mask.shape[0]} px but its frame "
                 f"{label.frame} is {w}×{h} px; expected a mask of the frame's size"
             )
-        return LabelMask(mask, int(mask.sum()), None)
+        return LabelMask(mask, int(mask.sum()), None, note)
     e = label.ellipse
     if e is None:
         return LabelMask(np.zeros((h, w), dtype=bool), 0, None)
@@ -295,9 +317,30 @@ def label_mask(label: Label, frame_size: tuple[int, int]) -> LabelMask:
             f"{label.where()}: centre ({e.cx:g}, {e.cy:g}) lies outside the {w}×{h} px frame "
             f"{label.frame.name}; expected pixels (in ImageJ: Analyze › Set Scale › remove scale)"
         )
+    _check_inside(label, e, (w, h))
     mask = rasterise(e.to_opencv(), (h, w))
     if not mask.any():
         raise LabelError(
             f"{label.where()}: the ellipse covers no pixel centre; expected axes of >= 1 px"
         )
     return LabelMask(mask, int(mask.sum()), e.analytic_area_px)
+
+
+#: px an ellipse may run past the frame's edge (its outline's rounding) before it is refused.
+EDGE_SLACK_PX = 1.0
+
+
+def _check_inside(label: Label, e: ImageJEllipse, frame_size: tuple[int, int]) -> None:
+    """Refuse an ellipse running past the frame's edge: its clipped raster would be scored
+    against an area the label does not state (a unit or a column mistake)."""
+    w, h = frame_size
+    a, b, t = e.major / 2.0, e.minor / 2.0, math.radians(e.angle_deg)
+    hx = math.hypot(a * math.cos(t), b * math.sin(t))  # half extents of the bounding box
+    hy = math.hypot(a * math.sin(t), b * math.cos(t))
+    past = max(hx - e.cx, e.cx + hx - w, hy - e.cy, e.cy + hy - h)
+    if past > EDGE_SLACK_PX:
+        raise LabelError(
+            f"{label.where()}: the ellipse runs {past:.0f} px past the edge of the {w}×{h} px "
+            f"frame {label.frame.name}; expected a contact label inside the frame (axes in "
+            "pixels, full lengths)"
+        )

@@ -34,9 +34,9 @@ LEVEL = 0.90
 MIN_FRAMES = 5
 #: The notes of a measured offset: keys given, or too far to be a rig config's.
 APPLY_NOTE = (
-    "positive: the labelled edge lies outside the U-Net's; from one session, and sessions differ "
-    "by ~0.05-0.09 mm: pool five or more with `contactcal boundary-offset` before putting "
-    "rig_config's two keys in the rig config"
+    "positive: the labelled edge lies outside the U-Net's, negative: inside; from one session, "
+    "and sessions differ by ~0.05-0.09 mm: pool five or more with `contactcal boundary-offset` "
+    "before putting rig_config's two keys in the rig config"
 )
 UNRESOLVED = (
     "its 90 % interval includes 0: no offset is resolved on these frames, nothing to change in "
@@ -109,6 +109,7 @@ def boundary_offset(
     scale: PixelScale | None,
     model_sha256: str,
     stale: str = "",
+    applied_from: str | None = None,
 ) -> dict[str, Any]:
     """The U-Net's boundary offset against the labels (the ``boundary_offset`` of
     ``evaluation.json``).
@@ -119,11 +120,14 @@ def boundary_offset(
         scale: the rig's pixel scale (None: the offset in pixels only).
         model_sha256: the model measured, for the rig config keys.
         stale: :func:`current_offset`'s note, kept as ``stale`` (None when "").
+        applied_from: the rig config whose offset the measurements applied, for the record
+            and the printed line (kept only when an offset was applied).
 
     Returns:
         ``frames`` (used), ``frame_offsets_px`` / ``_mm`` (each used frame's), ``model_sha256``,
         ``median_px`` and ``interval_px`` (:func:`median_interval`), the same in mm (None
-        without a scale), ``applied_mm`` (the offset the run already applied),
+        without a scale), ``applied_mm`` (the offset the run already applied; the median is
+        what remains on top of it), ``applied_from`` (its rig config),
         ``rig_config`` (the two keys with the total offset: applied + measured; None without a
         scale, with fewer than :data:`MIN_FRAMES` frames, when the interval includes 0 or beyond
         ``MAX_OFFSET_MM``), ``stale`` and a ``note``.
@@ -138,6 +142,7 @@ def boundary_offset(
         mm.append(None if scale is None else d * scale.at_width(m.width))
     applied = measured[0].boundary_offset_mm if measured else None
     out: dict[str, Any] = {"frames": len(px), "applied_mm": applied, "rig_config": None}
+    out["applied_from"] = None if applied is None else applied_from
     out["stale"] = stale or None
     out["model_sha256"] = model_sha256
     out["frame_offsets_px"] = px  # per frame used, for `contactcal boundary-offset` (pooling)
@@ -178,16 +183,24 @@ def unet_offset(
     scale: PixelScale | None,
     described: dict[str, Any],
     stale: str,
+    applied_from: str | None = None,
 ) -> dict[str, Any] | None:
     """:func:`boundary_offset` of the U-Net's measurements (None when the U-Net did not run)."""
     if "unet" not in described:
         return None
-    return boundary_offset(measured, label_areas, scale, described["unet"]["model_sha256"], stale)
+    sha = described["unet"]["model_sha256"]
+    return boundary_offset(measured, label_areas, scale, sha, stale, applied_from)
 
 
 def offset_line(off: dict[str, Any]) -> str:
-    """The lines for the printed table (a stale offset's note first)."""
+    """The lines for the printed table (a stale or an applied offset's note first)."""
     first = f"note: {off['stale']}\n" if off["stale"] else ""
+    if off["applied_mm"] is not None:
+        first += (
+            f"note: the U-Net's areas include the rig's boundary offset {off['applied_mm']:+.3f} "
+            f"mm ({off['applied_from'] or 'rig config'}); the offset below is what remains on "
+            "top of it\n"
+        )
     return first + _offset_text(off)
 
 
@@ -200,11 +213,14 @@ def _offset_text(off: dict[str, Any]) -> str:
     if off["median_mm"] is not None:
         lo, hi = off["interval_mm"]
         text = f"{off['median_mm']:+.3f} mm (90 % interval {lo:+.3f} … {hi:+.3f}), " + text
-    line = f"boundary offset (unet) against the labels, {off['frames']} frames: {text}"
+    applied = off["applied_mm"]
+    remains = "" if applied is None else f" on top of the applied {applied:+.3f} mm"
+    line = f"boundary offset (unet) against the labels{remains}, {off['frames']} frames: {text}"
     if off["rig_config"] is None:
         return f"{line}\n  {off['note']}"
     keys = ", ".join(f"{json.dumps(k)}: {json.dumps(v)}" for k, v in off["rig_config"].items())
+    what = "it" if applied is None else f"the total ({applied:+.3f} mm applied + this)"
     return (
         f"{line}\n  one session's: pool five or more sessions' evaluations with `contactcal "
-        f"boundary-offset` before you apply it; these keys would apply it: {keys}"
+        f"boundary-offset` before you apply it; these keys would apply {what}: {keys}"
     )

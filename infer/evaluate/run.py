@@ -30,7 +30,12 @@ from contactcal.infer.evaluate.window import Window, check_label_area, find_wind
 from contactcal.infer.files.atomic import OutputSet, run_outputs, write_synced
 from contactcal.infer.files.jsonable import json_text
 from contactcal.infer.methods.registry import METHODS
-from contactcal.infer.pipeline.manifest import Frame, read_manifest
+from contactcal.infer.pipeline.manifest import (
+    Frame,
+    check_sweep_unit,
+    read_manifest,
+    sweep_top_warning,
+)
 from contactcal.infer.pipeline.measure import Measured
 from contactcal.infer.pipeline.options import MeasureOptions
 
@@ -107,16 +112,28 @@ def _score(
     measured, described, stale = _measure(names, frames, [f.file for f in labelled], measure)
     masks = _label_masks(labs, measured[names[0]], find_window(frames[0].file, measure.bit_depth))
     areas = [float(mask.area_px) for mask in masks]
-    offset = unet_offset(measured.get("unet", []), areas, measure.scale, described, stale)
+    source = None if measure.boundary is None else measure.boundary.source
+    offset = unet_offset(measured.get("unet", []), areas, measure.scale, described, stale, source)
     pressures = [f.pressure_kpa for f in labelled]
     scored = score_frames(str(manifest), pressures, masks, measured, measure.scale)
     return scored, masks, offset
 
 
-def _table(bins_and_onset: str, offset: dict[str, Any] | None, unlabelled: list[str]) -> str:
-    """The printed table: bins and onset, the boundary offset's line, the unlabelled frames (the
-    first :data:`LISTED` named)."""
+def _table(
+    bins_and_onset: str,
+    offset: dict[str, Any] | None,
+    unlabelled: list[str],
+    masks: list[LabelMask],
+) -> str:
+    """The printed table: bins and onset, the boundary offset's line, the labels read other than
+    as drawn (soft edges), the unlabelled frames (the first :data:`LISTED` named)."""
     table = "\n".join([bins_and_onset, *([offset_line(offset)] if offset else [])])
+    soft = sum(m.note is not None for m in masks)
+    if soft:
+        table += (
+            f"\nnote: {soft} mask(s) with a soft edge (several non-zero values) read as contact "
+            "above half their largest value (each frame's label_note in evaluation.json)"
+        )
     if unlabelled:
         shown = ", ".join(unlabelled[:LISTED]) + (", …" if len(unlabelled) > LISTED else "")
         table += (
@@ -182,6 +199,8 @@ def evaluate_session(
     _check_request(method, labels, out)
     names = list(METHODS) if method == "both" else [method]
     frames = read_manifest(manifest, 0.0)  # each frame scored at its own pressure
+    check_sweep_unit(manifest, frames)  # bar or MPa read as kPa, as calibrate refuses them
+    high = sweep_top_warning(max(f.pressure_kpa for f in frames))
     base = manifest.resolve().parent
     labs = read_labels(labels, frames, manifest)
     labelled, labs, unlabelled = _labelled(frames, labs, labels, base)
@@ -199,6 +218,9 @@ def evaluate_session(
             "methods": names,
             "model": None if measure.model is None else os.fspath(measure.model),
             "change_gate": "on" if measure.change_gate else "off (--no-change-gate)",
+            "mm_per_px": None if measure.scale is None else measure.scale.mm_per_px,
+            "scale_image_width_px": None if measure.scale is None else measure.scale.image_width_px,
+            "warning": high,
             "area_note": "errors and IoU against the label's rasterised pixel count",
             "frames": frame_records(base, masks, [lab.where() for lab in labs], scored),
             "unlabelled": unlabelled,
@@ -207,5 +229,6 @@ def evaluate_session(
         }  # the evaluation.json content
         plot_evaluation(staged["png"], scored)
         write_synced(staged["json"], json_text(record))
-    table = _table(format_table(bins, onset), offset, unlabelled)
+    table = _table(format_table(bins, onset), offset, unlabelled, masks)
+    table = table if high is None else f"{high}\n{table}"
     return Evaluation(record, table, paths)

@@ -91,6 +91,7 @@ def frame_records(
                 "label": src,
                 "label_area_px": lab.area_px,
                 "label_area_analytic_px": lab.analytic_area_px,
+                "label_note": lab.note,
                 "results": {m: _result(fs[i]) for m, fs in by_method.items()},
             }
         )

@@ -65,16 +65,11 @@ def check_label_area(
         window: the reference frame's ring (None: only the whole frame bounds the contact).
 
     Raises:
-        LabelError: the label covers every pixel of the frame, or more than the window ring's
-            area (naming the label's file and the reference frame).
+        LabelError: the label covers more than the window ring's area, or lies mostly
+            outside it (naming the label's file and the reference frame).
     """
-    w, h = frame_size
-    if mask.area_px >= w * h:
-        raise LabelError(
-            f"{label.where()}: labels all {w}×{h} px of its frame {label.frame.name} as contact; "
-            "expected the contact patch only, inside the window ring (0 = background, > 0 = "
-            "contact for a mask)"
-        )
+    w, h = frame_size  # a label of the whole frame never gets here: a mask needs a pixel 0,
+    # an ellipse must lie inside the frame (labels.py)
     if window is not None and mask.area_px > window.max_area_px:
         raise LabelError(
             f"{label.where()}: labels {mask.area_px} px of its frame {label.frame.name} as "
