@@ -77,7 +77,10 @@ def build_parser(command: str | None = None) -> argparse.ArgumentParser:
 #: What an interrupted command leaves, where it is not "nothing" (commands that write as they go).
 INTERRUPTED = {
     "synth": "the frames written so far stay; run it again with the same arguments to resume",
-    "train": "the last epoch's checkpoint stays; continue with --resume",
+    "train": (
+        "the last finished epoch's checkpoint (last.pt) stays; continue with --resume (stopped "
+        "before the first epoch ended there is none: start it again without --resume)"
+    ),
 }
 
 

@@ -63,6 +63,8 @@ class DatasetConfig:
 
     def __post_init__(self) -> None:
         check_sweep(self.fingers, self.pressures_kpa)
+        if self.seed < 0:  # numpy seeds are >= 0; checked before config.json is written
+            raise ValueError(f"--seed must be >= 0, got {self.seed}")
         if not 0.0 <= self.hard_fraction <= 1.0:
             raise ValueError(f"--hard-fraction must be in [0, 1], got {self.hard_fraction}")
         if not 0.0 <= self.smooth_fraction <= 1.0:

@@ -427,3 +427,19 @@ def test_the_report_says_how_many_frames_were_timed() -> None:
     few = {"timing": timing, "config": {"timing_frames": 6}}
     assert _timed_frames(few) == "2 (of 6 asked: all the set has at 6-16 kPa, or at all pressures)"
     assert _timed_frames({**few, "config": {"timing_frames": 2}}) == "2"
+
+
+def test_a_mask_that_contradicts_the_index_is_named(tmp_path: Path) -> None:
+    """A damaged dataset (a contact frame's mask emptied) once scored a 0/0 IoU: NaN in JSON."""
+    import cv2
+    import numpy as np
+
+    from contactcal.infer.bench import accuracy
+    from contactcal.infer.bench.dataset import read_index
+
+    row = next(r for r in read_index(write_dataset(tmp_path / "d", fingers=1)) if r.contact)
+    assert accuracy._truth(row) is not None  # as written: mask and index agree
+    shape = cv2.imread(str(row.mask), cv2.IMREAD_GRAYSCALE).shape
+    cv2.imwrite(str(row.mask), np.zeros(shape, np.uint8))
+    with pytest.raises(ValueError, match=rf"{row.mask.name}: holds 0 contact px but index.csv"):
+        accuracy._truth(row)

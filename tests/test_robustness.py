@@ -277,6 +277,10 @@ def test_off_by_default_and_cli(
     line = capsys.readouterr().out
     assert "robustness: 2 frames sampled, " in line
     assert f"{first['no_contact_frames']} without contact score no-contact accuracy" in line
+    assert main([*args, "--out", str(out)]) == 0  # the same folder, without the suite
+    said = capsys.readouterr().out
+    assert f"note: robustness.png, robustness_no_contact.png in {out} are an earlier run's" in said
+    assert "## Robustness" not in (out / "report.md").read_text(encoding="utf-8")
     assert main([*args, "--out", str(out), "--robustness-frames", "2"]) == 2
     assert "--robustness-frames needs --robustness" in capsys.readouterr().err
     assert main([*args, "--out", str(out), "--robustness", "--robustness-frames", "0"]) == 2

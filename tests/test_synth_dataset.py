@@ -122,6 +122,9 @@ def test_bad_arguments(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> No
         DatasetConfig(fingers=0, pressures_kpa=(0.0,), seed=0)
     assert main(["synth", "--fingers", "1", "--out", str(tmp_path), "--shard", "2/2"]) == 2
     assert "--shard" in capsys.readouterr().err
+    out = tmp_path / "neg"  # refused before config.json is written: the folder stays usable
+    assert main(["synth", "--fingers", "1", "--seed", "-1", "--out", str(out)]) == 2
+    assert "--seed must be >= 0, got -1" in capsys.readouterr().err and not out.exists()
     build_dataset(tmp_path / "a", dataclasses.replace(CONFIG, fingers=1), progress=False)
     with pytest.raises(ValueError, match="different config"):
         build_dataset(

@@ -160,6 +160,37 @@ def test_bad_dataset_paths(tmp_path: Path) -> None:
         read_datasets([d])
 
 
+def test_cli_train_refuses_inputs_it_cannot_use_before_any_work(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """One folder under two spellings (its fingers on both sides of the split), a run folder
+    that is or holds a dataset, a single finger (no validation), a negative seed, an input size
+    past any budget: one line each, exit 2, nothing written."""
+    d = write_dataset(tmp_path / "d", fingers=3)
+    one = write_dataset(tmp_path / "one", fingers=1)
+    before = (d / "index.csv").read_bytes()
+    run = tmp_path / "run"
+    tiny = ["--epochs", "1", "--input-size", "32", "--batch-size", "4", "--base", "4"]
+    cases = [
+        ([str(d), str(tmp_path / "." / "d")], run, [], "given twice (also as"),
+        ([str(d)], d, [], "overlaps the dataset folder"),
+        ([str(d)], d / "runs" / "r1", [], "overlaps the dataset folder"),
+        ([str(d)], tmp_path, [], "overlaps the dataset folder"),
+        ([str(one)], run, [], "1 finger(s), none left for validation"),
+        ([str(d)], run, ["--seed", "-1"], "--seed must be >= 0, got -1"),
+        ([str(d)], run, ["--input-size", "100000"], "--input-size must be 16-1024 px"),
+    ]
+    for data, out, extra, said in cases:
+        argv = ["train", "--data", *data, "--out", str(out), *tiny, *extra, "--quiet"]
+        assert main(argv) == 2, said
+        err = capsys.readouterr().err.strip().splitlines()
+        assert len(err) == 1 and said in err[0], (said, err)
+    assert not run.exists() and (d / "index.csv").read_bytes() == before
+    assert sorted(p.name for p in d.iterdir()) == sorted(
+        p.name for p in write_dataset(tmp_path / "again", fingers=3).iterdir()
+    )
+
+
 def test_config_round_trip() -> None:
     cfg = tiny_config().resolved()
     back = config_from_dict(TrainConfig, config_to_dict(cfg))

@@ -114,14 +114,24 @@ def _add_quantize_parser(sub: Any) -> None:
 TRAIN_MODULES = ("torch", "kornia", "onnx")
 
 
-def _check_dirs(dirs: list[Path]) -> None:
-    """Cheap path checks before torch is imported (clear message, exit 2 in the CLI)."""
+def _check_dirs(dirs: list[Path], out: Path | None = None) -> None:
+    """Cheap path checks before torch is imported (clear message, exit 2 in the CLI); ``out``
+    (a run folder) must neither be nor lie inside nor hold a dataset folder: its config.json
+    and checkpoints would land among (or replace) the data's."""
     for d in dirs:
         if not d.is_dir():
             raise ValueError(f"{d}: dataset folder does not exist")
         if not (d / "index.csv").is_file():
             raise ValueError(
                 f"{d / 'index.csv'}: missing index.csv (is {d} a `contactcal synth` output?)"
+            )
+        if out is not None and (
+            out.resolve().is_relative_to(d.resolve()) or d.resolve().is_relative_to(out.resolve())
+        ):
+            raise ValueError(
+                f"{out}: the run folder overlaps the dataset folder {d} (it would write its "
+                "config.json and checkpoints among the data); expected another --out, e.g. "
+                "runs/r1"
             )
 
 
@@ -267,7 +277,7 @@ def _add_reference_args(t: argparse.ArgumentParser) -> None:
 
 def _cmd_train(args: argparse.Namespace) -> int:
     require_extra("train", "train", TRAIN_MODULES)
-    _check_dirs(list(args.data))
+    _check_dirs(list(args.data), args.out)
     from contactcal.train.loop import train
 
     summary = train(

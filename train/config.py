@@ -17,6 +17,9 @@ from contactcal.train.model import UNetConfig
 #: ``augment.blur_kernel_px`` of a config saved before the field existed: the fixed kernel it
 #: trained with, taps.
 LEGACY_BLUR_KERNEL_PX = 5
+#: px, largest network input side: 5× the shipped 192 and past any CPU budget per frame; larger
+#: sides once reached OpenCV's allocator ("Insufficient memory") as a traceback.
+MAX_INPUT_SIZE = 1024
 
 
 @dataclass(frozen=True)
@@ -54,16 +57,18 @@ class TrainConfig:
     def __post_init__(self) -> None:
         if self.epochs < 1 or self.batch_size < 2:
             raise ValueError(
-                f"epochs must be >= 1 and batch_size >= 2, got {self.epochs}, {self.batch_size}"
+                f"--epochs must be >= 1 and --batch-size >= 2, got {self.epochs}, {self.batch_size}"
             )
+        if self.seed < 0:  # numpy and torch seeds are >= 0
+            raise ValueError(f"--seed must be >= 0, got {self.seed}")
         if self.num_threads < 0:
             raise ValueError(
                 f"num_threads must be >= 0 (0 = torch's default), got {self.num_threads}"
             )
         if self.device not in ("cpu", "cuda", "auto"):
             raise ValueError(f"device must be cpu, cuda or auto, got {self.device!r}")
-        if self.input_size < 16:
-            raise ValueError(f"input_size must be >= 16 px, got {self.input_size}")
+        if not 16 <= self.input_size <= MAX_INPUT_SIZE:
+            raise ValueError(f"--input-size must be 16-{MAX_INPUT_SIZE} px, got {self.input_size}")
         if not 0.0 <= self.reference_dropout < 1.0:
             raise ValueError(f"reference_dropout must be in [0, 1), got {self.reference_dropout}")
         if self.reference_dropout > 0.0 and not self.use_reference:

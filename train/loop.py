@@ -95,6 +95,13 @@ def _split(cfg: TrainConfig, dirs: list[Path]) -> tuple[list[IndexRow], list[Ind
         raise ValueError(
             f"{dirs[0]}: need >= 2 training frames after the split, got {len(train_rows)}"
         )
+    if not val_rows:
+        fingers = len({r.finger_key for r in train_rows})
+        raise ValueError(
+            f"{', '.join(map(str, dirs))}: {fingers} finger(s), none left for validation; "
+            "expected >= 2 fingers (validation chooses best.pt, and export calibrates the "
+            "area interval on the validation fingers)"
+        )
     return train_rows, val_rows
 
 

@@ -13,6 +13,8 @@ from collections.abc import Mapping, Sequence
 from dataclasses import asdict, fields, replace
 from typing import Any
 
+import numpy as np
+
 from contactcal.infer.bench.dataset import IndexRow
 from contactcal.infer.bench.scoring import (
     SESSION_SUFFIX,
@@ -44,7 +46,7 @@ def score_session(
     out: list[ScoredFrame] = []
     for r in rows:
         res = method.measure(load_image(r.frame, reduce=k))
-        truth = load_image(r.mask) > 0 if r.contact else None
+        truth = _truth(r)
         scored = ScoredFrame(
             method=name,
             session=r.session_key,
@@ -66,6 +68,25 @@ def score_session(
             soft = float(res.soft_area_px) if res.soft_area_px is not None else 0.0
             out.append(_renamed(scored, name + SOFT_SUFFIX, soft))
     return out + session_ruled([f for f in out if f.method == name])
+
+
+def _truth(row: IndexRow) -> np.ndarray | None:
+    """``(H, W)`` bool exact mask of a frame with contact (None without), checked against the
+    index: a damaged dataset would otherwise score a 0/0 IoU.
+
+    Raises:
+        ValueError: the mask's pixel count is not the index's ``area_px`` (naming both).
+    """
+    if not row.contact:
+        return None
+    truth = load_image(row.mask) > 0
+    if int(np.count_nonzero(truth)) != round(row.area_px):
+        raise ValueError(
+            f"{row.mask}: holds {int(np.count_nonzero(truth))} contact px but index.csv of "
+            f"{row.dataset} says area_px {row.area_px:g}; expected the mask the index was "
+            "written from (render the session again)"
+        )
+    return truth
 
 
 def session_ruled(frames: Sequence[ScoredFrame]) -> list[ScoredFrame]:

@@ -56,7 +56,7 @@ def add_parsers(sub: argparse._SubParsersAction) -> None:
 
 def _cmd_bench(args: argparse.Namespace) -> int:
     from contactcal.infer.bench.config import BenchConfig
-    from contactcal.infer.bench.report import REPORT_FILES
+    from contactcal.infer.bench.report import REPORT_FILES, ROBUSTNESS_FILES
     from contactcal.infer.bench.run import run_bench
     from contactcal.infer.pipeline.args import check_out_folder
 
@@ -85,6 +85,13 @@ def _cmd_bench(args: argparse.Namespace) -> int:
             print(f"[{c['label']}] {method:>16s} {kpa:>6s} kPa  median |rel err| {_pct(row)}")
     if "robustness" in res:
         print(_robustness_line(res["robustness"], args.out / "robustness.png"))
+    else:
+        earlier = [n for n in ROBUSTNESS_FILES if (args.out / n).exists()]
+        if earlier:
+            print(
+                f"note: {', '.join(earlier)} in {args.out} are an earlier run's (this one ran "
+                "without --robustness; report.md has no robustness section)"
+            )
     print(f"report: {args.out / 'report.md'}")
     return 0
 

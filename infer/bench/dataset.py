@@ -134,9 +134,22 @@ def read_index(folder: str | os.PathLike[str]) -> list[IndexRow]:
 
 
 def read_datasets(folders: Sequence[str | os.PathLike[str]]) -> list[IndexRow]:
-    """Rows of several dataset folders, in order (see :func:`read_index`)."""
+    """Rows of several dataset folders, in order (see :func:`read_index`).
+
+    Raises:
+        ValueError: no folder, or one folder given twice (under any spelling: its frames would
+            count twice, and its fingers could fall on both sides of a split by finger).
+    """
     if not folders:
         raise ValueError("no dataset folder given")
+    seen: dict[Path, int] = {}
+    for i, f in enumerate(folders):
+        first = seen.setdefault(Path(f).resolve(), i)
+        if first != i:
+            raise ValueError(
+                f"{f}: dataset folder given twice (also as {folders[first]}); expected each "
+                "folder once"
+            )
     return [row for f in folders for row in read_index(f)]
 
 

@@ -25,7 +25,8 @@ Columns = Sequence[tuple[str, str, bool]]
 BIN_COLUMNS: Columns = (
     ("method", "method", False),
     ("bin_kpa", "kPa", False),
-    ("contact_frames", "frames", False),
+    ("frames", "frames", False),
+    ("contact_frames", "contact frames", False),  # the errors and the IoU are over these
     ("median_abs_rel_error", "median abs. rel. error", True),
     ("mean_rel_error", "mean rel err", True),
     ("sd_rel_error", "sd", True),
@@ -306,13 +307,14 @@ def accuracy_tables(
     }
 
 
+#: The figures of the robustness suite (written only by a run with ``--robustness``).
+ROBUSTNESS_FILES = ("robustness.png", "robustness_no_contact.png")
 #: The files ``write_report`` may write into the report folder (checked before a bench runs).
 REPORT_FILES = (
     "results.json",
     "error_vs_pressure.png",
     "pareto.png",
-    "robustness.png",
-    "robustness_no_contact.png",
+    *ROBUSTNESS_FILES,
     "report.md",
 )
 
@@ -348,7 +350,8 @@ def write_report(
         plot_pareto(pareto, results["bins"], results["timing"], (size[0], size[1]))
         if "robustness" in results:
             rob = results["robustness"]
-            plot_robustness(outputs.stage(out / "robustness.png"), rob)
-            plot_robustness(outputs.stage(out / "robustness_no_contact.png"), rob, "no_contact")
+            figure, no_contact = ROBUSTNESS_FILES
+            plot_robustness(outputs.stage(out / figure), rob)
+            plot_robustness(outputs.stage(out / no_contact), rob, "no_contact")
         md = text + ("\n" + extra_text if extra_text else "")
         write_text(outputs.stage(out / "report.md"), md)

@@ -90,6 +90,8 @@ class GeneratorConfig:
 
     def __post_init__(self) -> None:
         check_sweep(self.fingers, self.pressures_kpa)
+        if self.seed < 0:  # numpy seeds are >= 0
+            raise ValueError(f"--seed must be >= 0, got {self.seed}")
         if self.width < 16 or self.height < 12:
             size = f"{self.width}x{self.height}"
             raise ValueError(f"--size: frames must be at least 16x12 px, got {size}")
