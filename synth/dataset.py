@@ -15,7 +15,7 @@ import io
 import json
 import multiprocessing as mp
 import os
-from dataclasses import asdict, dataclass, field
+from dataclasses import asdict, dataclass, field, replace
 from pathlib import Path
 from typing import Any
 
@@ -32,6 +32,7 @@ from contactcal.synth.layout import (
 )
 from contactcal.synth.randomize import SessionParams, sample_session
 from contactcal.synth.session import FrameOutput, RenderConfig, render_session
+from contactcal.synth.variant import choose_variant
 
 #: What changed the frames a given config renders (recorded in ``config.json``; a folder of an
 #: earlier revision is not resumed, since its frames and new ones would differ).
@@ -194,8 +195,17 @@ def build_dataset(
     shard: tuple[int, int] = (0, 1),
     progress: bool = True,
 ) -> dict[str, int]:
-    """Render this shard's fingers into ``out_dir`` (resuming), then rebuild ``index.csv``."""
+    """Render this shard's fingers into ``out_dir`` (resuming), then rebuild ``index.csv``.
+
+    The Mitsuba variant is resolved here (``auto`` → the one this machine renders with) and
+    recorded in ``config.json``, so a resume or a shard that would render with another variant
+    (whose frames differ in their bytes) is refused instead of mixed in.
+    """
     root = Path(out_dir)
+    if root.exists() and not root.is_dir():
+        raise ValueError(f"{root}: is a file; expected a dataset folder for --out (new or resumed)")
+    variant = choose_variant(config.render.variant)
+    config = replace(config, render=replace(config.render, variant=variant))
     root.mkdir(parents=True, exist_ok=True)
     remove_stale_temporaries(root)  # left by a killed run
     _check_config_matches(root, config)
@@ -227,6 +237,17 @@ def _check_config_matches(root: Path, config: DatasetConfig) -> None:
     if path.is_file():
         old = json.loads(path.read_text())
         new = json.loads(json.dumps(data))
+        if not isinstance(old, dict) or not isinstance(old.get("render"), dict):
+            raise ValueError(
+                f"{path}: is not the config of a `contactcal synth` dataset (a training run's or "
+                "another tool's?); render into a new --out"
+            )
+        if old["render"].get("variant") == "auto":
+            raise ValueError(
+                f"{path}: rendered before the Mitsuba variant was recorded ('auto'), so a resume "
+                f"could mix frames of another variant (this machine's: {config.render.variant}); "
+                "render into a new --out"
+            )
         old.setdefault("smooth_fraction", 0.0)  # folders rendered before the options existed
         old.setdefault("speck_fraction", 0.0)
         old.setdefault("departure_fraction", 0.0)

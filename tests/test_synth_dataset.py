@@ -26,6 +26,7 @@ from contactcal.synth.dataset import (
 )
 from contactcal.synth.layout import parse_pressures, parse_size
 from contactcal.synth.session import RenderConfig
+from contactcal.synth.variant import VARIANTS
 
 pytestmark = pytest.mark.slow
 
@@ -155,6 +156,30 @@ def test_bad_arguments(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> No
     cfg.write_text(json.dumps(old))
     with pytest.raises(ValueError, match="synth revision 1"):
         build_dataset(tmp_path / "a", dataclasses.replace(CONFIG, fingers=1), progress=False)
+
+
+def test_the_variant_rendered_with_is_recorded_and_held(dataset: Path, tmp_path: Path) -> None:
+    """config.json names the variant used, not 'auto': a resume that would render with another
+    variant (other bytes) is refused; so are a config.json of another tool and a file as --out."""
+    used = json.loads((dataset / "config.json").read_text())["render"]["variant"]
+    assert used in VARIANTS
+    one = dataclasses.replace(CONFIG, fingers=1)
+    build_dataset(tmp_path / "a", one, progress=False)
+    explicit = dataclasses.replace(one, render=dataclasses.replace(TINY, variant=used))
+    build_dataset(tmp_path / "a", explicit, progress=False)  # the same variant, named: resumes
+    cfg = tmp_path / "a" / "config.json"
+    old = json.loads(cfg.read_text())
+    cfg.write_text(json.dumps({**old, "render": {**old["render"], "variant": "auto"}}))
+    with pytest.raises(ValueError, match=r"variant was recorded \('auto'\)"):
+        build_dataset(tmp_path / "a", one, progress=False)
+    run = tmp_path / "run"  # a training run's folder given as --out
+    run.mkdir()
+    (run / "config.json").write_text(json.dumps({"train": {}, "data_dirs": []}))
+    with pytest.raises(ValueError, match="is not the config of a `contactcal synth` dataset"):
+        build_dataset(run, one, progress=False)
+    (tmp_path / "afile").write_text("x")
+    with pytest.raises(ValueError, match="afile: is a file; expected a dataset folder"):
+        build_dataset(tmp_path / "afile", one, progress=False)
 
 
 def test_pressures_that_share_a_frame_name_are_refused(
