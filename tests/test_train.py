@@ -179,6 +179,7 @@ def test_cli_train_refuses_inputs_it_cannot_use_before_any_work(
         ([str(one)], run, [], "1 finger(s), none left for validation"),
         ([str(d)], run, ["--seed", "-1"], "--seed must be >= 0, got -1"),
         ([str(d)], run, ["--input-size", "100000"], "--input-size must be 16-1024 px"),
+        ([str(d)], run, ["--blur-sigma", "0.1", "100"], "601-tap blur kernel cannot filter a 32"),
     ]
     for data, out, extra, said in cases:
         argv = ["train", "--data", *data, "--out", str(out), *tiny, *extra, "--quiet"]

@@ -69,6 +69,13 @@ class TrainConfig:
             raise ValueError(f"device must be cpu, cuda or auto, got {self.device!r}")
         if not 16 <= self.input_size <= MAX_INPUT_SIZE:
             raise ValueError(f"--input-size must be 16-{MAX_INPUT_SIZE} px, got {self.input_size}")
+        k = blur_kernel_size(self.augment)
+        if self.augment.enabled and k // 2 >= self.input_size:  # reflect padding needs less
+            raise ValueError(
+                f"--blur-sigma {self.augment.blur_sigma[1]:g} / --blur-kernel: a {k}-tap blur "
+                f"kernel cannot filter a {self.input_size} px input (at most "
+                f"{2 * self.input_size - 1} taps); expected a smaller σ or a larger --input-size"
+            )
         if not 0.0 <= self.reference_dropout < 1.0:
             raise ValueError(f"reference_dropout must be in [0, 1), got {self.reference_dropout}")
         if self.reference_dropout > 0.0 and not self.use_reference:
