@@ -14,6 +14,12 @@ import numpy as np
 
 from contactcal.infer.bench.scoring import ScoredFrame
 
+#: %, largest |error| drawn on a linear axis; beyond it the axis is symmetric-log, linear within
+#: ±:data:`SYMLOG_LINEAR_PCT` (the U-Net's few per cent stay readable beside a 480 % miss).
+SYMLOG_ABOVE_PCT = 30.0
+SYMLOG_LINEAR_PCT = 5.0
+SYMLOG_TICKS_PCT = (-1000, -100, -20, -5, -2, 0, 2, 5, 20, 100, 1000, 10000)
+
 
 def bland_altman(frames: Sequence[ScoredFrame]) -> tuple[np.ndarray, np.ndarray, float, float]:
     """Mean and difference of method and label areas, the mean bias and its 1.96 sd half-width.
@@ -41,19 +47,17 @@ def plot_evaluation(path: str | os.PathLike[str], scored: Sequence[ScoredFrame])
     FigureCanvasAgg(fig)
     err_ax, ba_ax = fig.subplots(1, 2)
     err_ax.axhline(0.0, color="black", lw=0.8)
+    worst = 0.0  # %, the largest |error| drawn
     for i, method in enumerate(sorted({s.method for s in scored})):
         fs = [s for s in scored if s.method == method and s.true_contact]
         if not fs:
             continue
         colour = f"C{i}"
-        err_ax.plot(
-            [f.pressure_kpa for f in fs],
-            [100.0 * f.rel_error for f in fs],
-            color=colour,
-            marker="o",
-            ms=4,
-            label=method,
-        )
+        errors = [100.0 * f.rel_error for f in fs]
+        worst = max(worst, *(abs(e) for e in errors))
+        # markers only: a line would join a loading pass's top to the unloading pass's frames
+        err_ax.plot([f.pressure_kpa for f in fs], errors, ls="", color=colour, marker="o", ms=4)
+        err_ax.plot([], [], ls="", color=colour, marker="o", ms=4, label=method)
         mean, diff, bias, half = bland_altman(fs)
         ba_ax.scatter(mean, diff, color=colour, s=16, label=f"{method}: bias {bias:+.0f} px")
         ba_ax.axhline(bias, color=colour, lw=1.2)
@@ -62,6 +66,11 @@ def plot_evaluation(path: str | os.PathLike[str], scored: Sequence[ScoredFrame])
     err_ax.set_xlabel("pressure (kPa)")
     err_ax.set_ylabel("(method − label) / label area (%)")
     err_ax.set_title("Signed relative area error")
+    if worst > SYMLOG_ABOVE_PCT:  # one method's outliers would flatten the other's errors
+        err_ax.set_yscale("symlog", linthresh=SYMLOG_LINEAR_PCT, linscale=2.0)
+        ticks = [t for t in SYMLOG_TICKS_PCT if abs(t) <= 2.0 * worst]
+        err_ax.set_yticks(ticks, [f"{t:g}" for t in ticks])
+        err_ax.set_title(f"Signed relative area error (log beyond ±{SYMLOG_LINEAR_PCT:g} %)")
     ba_ax.set_xlabel("(method + label) / 2 area (px)")
     ba_ax.set_ylabel("method − label area (px)")
     ba_ax.set_title("Bland-Altman: bias (solid), ±1.96 sd (dashed)")
