@@ -104,6 +104,10 @@ def test_self_check_rejects_foreign_metadata(tmp_path: Path) -> None:
 def test_export_errors(run_dir: Path, tmp_path: Path) -> None:
     with pytest.raises(ValueError, match="config.json"):
         export_onnx(tmp_path / "nothing", tmp_path / "m.onnx")
+    dataset = write_dataset(tmp_path / "data", fingers=1)  # a dataset folder, not a run
+    (dataset / "config.json").write_text(json.dumps({"fingers": 1, "seed": 0}))
+    with pytest.raises(ValueError, match="not a `contactcal train` run config"):
+        export_onnx(dataset, tmp_path / "m.onnx")
     with pytest.raises(ValueError, match=r"\.onnx"):
         export_onnx(run_dir, tmp_path / "m.txt")
     moved = tmp_path / "moved"  # a run whose data folder is not where its config says

@@ -144,6 +144,8 @@ def test_bad_arguments() -> None:
             parse_pressures(bad)
     with pytest.raises(ValueError, match="--fingers"):
         GeneratorConfig(fingers=0, pressures_kpa=(0.0,), seed=0)
+    with pytest.raises(ValueError, match="--size: frames must be 4:3"):
+        GeneratorConfig(fingers=1, pressures_kpa=(0.0,), seed=0, width=64, height=12)
     with pytest.raises(ValueError, match="--seed must be >= 0"):
         GeneratorConfig(fingers=1, pressures_kpa=(0.0,), seed=-1)
 

@@ -76,8 +76,11 @@ def load_run(run_dir: str | os.PathLike[str]) -> tuple[TrainConfig, dict, dict]:
         info = json.loads(path.read_text(encoding="utf-8"))
     except (OSError, json.JSONDecodeError) as exc:
         raise ValueError(f"{path}: unreadable run config ({exc})") from exc
-    if not isinstance(info, dict):
-        raise ValueError(f"{path}: expected a JSON object (a `contactcal train` run config)")
+    if not isinstance(info, dict) or "train" not in info:
+        raise ValueError(
+            f"{path}: not a `contactcal train` run config (no 'train' settings: a dataset's "
+            f"config?); expected a run folder, e.g. runs/r1"
+        )
     cfg = saved_train_config(info.get("train"), str(path))
     check_data_dirs(info.get("data_dirs"), path, info.get("data_digest"))
     return cfg, info, load_checkpoint(run / "best.pt")
