@@ -121,6 +121,30 @@ def test_calibrate_records_gated_frames_above_contact(
     record = json.loads((tmp_path / "cal" / "calibration.json").read_text())
     assert record["extra"]["gated_above_contact"] == 1
     assert "which is in contact" in rep.table and "--no-change-gate" in rep.table
+    lost = record["extra"]["no_contact_above_contact"]
+    assert [Path(f).name for f in lost] == ["p12.0kpa.jpg"]
+    assert "warning: 1 frame(s) without contact above a pressure in contact of their pass " in (
+        rep.table
+    )
+
+
+def test_a_blank_frame_in_the_sweep_is_warned(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """A dark frame at 10 kPa (no ring, no contact) among contacts: the fit moves; it is said."""
+    import shutil
+
+    import cv2
+
+    from contactcal.infer.cli import main
+
+    session = tmp_path / "s"
+    shutil.copytree(Path(__file__).resolve().parents[1] / "examples" / "session", session)
+    cv2.imwrite(str(session / "p10.0kpa.jpg"), np.zeros((300, 400), np.uint8))
+    assert main(["calibrate", str(session / "manifest.csv"), "--out", str(tmp_path / "c")]) == 0
+    out = capsys.readouterr().out
+    assert "warning: 1 frame(s) without contact above a pressure in contact" in out
+    assert "(p10.0kpa.jpg)" in out
 
 
 def test_a_session_starting_in_contact_is_said(tmp_path: Path) -> None:

@@ -11,11 +11,13 @@ from typing import Any
 from contactcal.infer.calibration.curve import MM2, PX, Curve
 from contactcal.infer.calibration.fit import CurveConfig
 from contactcal.infer.calibration.gate_check import (
+    LOST_ABOVE_CONTACT_WARNING,
     NOT_AT_REST_WARNING,
     REFERENCE_NOTE,
     REST_KPA,
     flag_gated_above_contact,
     flag_gated_reference,
+    lost_above_contact,
     reference_above_rest,
 )
 from contactcal.infer.calibration.phases import LOADING
@@ -59,6 +61,8 @@ class CalibrationReport:
     fit: SessionFit  # every phase's steps, curve and band; hysteresis
 
 
+#: Frames named in the warning of frames without contact above a contact (the record lists all).
+LISTED_LOST = 5
 #: The table's line when readings were pooled into steps (``{p}``: the session's
 #: :class:`~contactcal.infer.pipeline.manifest.Pooled`, ``{t}``: the tolerance, kPa).
 POOLED_NOTE = (
@@ -193,6 +197,11 @@ def _notes(
         lines.append(
             NOT_AT_REST_WARNING.format(name=name, p=results[0].pressure_kpa, rest=REST_KPA)
         )
+    lost = checks["no_contact_above_contact"]
+    if lost:
+        shown = ", ".join(os.path.basename(f) for f in lost[:LISTED_LOST])
+        more = ", …" if len(lost) > LISTED_LOST else ""
+        lines.append(LOST_ABOVE_CONTACT_WARNING.format(n=len(lost), shown=shown + more))
     if same:
         lines.append(identical_frames_warning(same))
     if session.pooled is not None:
@@ -216,7 +225,11 @@ def _session_points(
     _check_contact(manifest, points, results, name)
     results, above = flag_gated_above_contact(results)
     results, reference = flag_gated_reference(results)
-    checks = {"gated_above_contact": above, "reference_gated_above_zero": reference}
+    checks = {
+        "gated_above_contact": above,
+        "reference_gated_above_zero": reference,
+        "no_contact_above_contact": lost_above_contact(results),
+    }
     return results, checks | {"reference_above_rest_kpa": reference_above_rest(results)}
 
 

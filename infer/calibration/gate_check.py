@@ -51,6 +51,33 @@ def flag_gated_above_contact(
     return out, n
 
 
+def lost_above_contact(points: Sequence[CalibrationPoint]) -> list[str]:
+    """The frames without contact above the lowest contact of their pass, for any reason (the
+    gate, no ring found in a dark or blank frame, the session rule): within a pass contact does
+    not end as the pressure rises, so each is a frame to check, and it pulls the fit (a miss
+    next to the onset can move it by kPa).
+
+    Returns:
+        Their files, in the order given.
+    """
+    lowest: dict[str, float] = {}
+    for r in points:
+        if r.contact:
+            lowest[r.phase] = min(lowest.get(r.phase, math.inf), r.pressure_kpa)
+    return [
+        r.file for r in points if not r.contact and r.pressure_kpa > lowest.get(r.phase, math.inf)
+    ]
+
+
+#: The warning of :func:`lost_above_contact`'s frames (the first few named).
+LOST_ABOVE_CONTACT_WARNING = (
+    "warning: {n} frame(s) without contact above a pressure in contact of their pass ({shown}): "
+    "contact does not end as the pressure rises, and each pulls the fit; check them (their "
+    "notes say why: a dark or blank frame, no ring found, the change gate) and leave them out "
+    "of the manifest if they are bad frames"
+)
+
+
 #: A reference frame at or below this pressure (kPa) is at rest: a video step's pressure is the
 #: median of a noisy gauge (0.00x kPa at rest), and contact onsets are 2-4 kPa.
 REST_KPA = 0.5
