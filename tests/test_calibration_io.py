@@ -202,6 +202,19 @@ def test_format_table() -> None:
     assert named[0] == "device: TD-0042 left" and named[1:] == lines
 
 
+def test_a_steps_notes_are_said_once() -> None:
+    """Two frames of one step whose notes share a part (the reference's note extends its
+    sibling's): the row says each part once."""
+    from dataclasses import replace
+
+    results = _results()
+    four = next(r for r in results if r.pressure_kpa == 4)
+    results.append(replace(four, file="p04.0b.png", note="dim; this is the reference"))
+    table = format_table(results, _curve(results))
+    row = next(line for line in table.splitlines() if line.split()[1:2] == ["4.00"])
+    assert row.endswith("dim; this is the reference") and row.count("dim") == 1
+
+
 def test_curve_title_names_the_device(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
     titles: list[str | None] = []
 

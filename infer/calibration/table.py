@@ -11,10 +11,10 @@ from contactcal.infer.calibration.session import PhaseFit, SessionFit
 
 
 def _rows(results: list[CalibrationPoint], fit: SessionFit) -> list[list[str]]:
-    notes: dict[tuple[str, float], list[str]] = {}
+    notes: dict[tuple[str, float], list[str]] = {}  # a step's notes' parts, each once
     for r in results:
-        if r.note and r.note not in notes.setdefault((r.phase, r.pressure_kpa), []):
-            notes[(r.phase, r.pressure_kpa)].append(r.note)
+        said = notes.setdefault((r.phase, r.pressure_kpa), [])
+        said += [part for part in r.note.split("; ") if part and part not in said]
     rows = []
     for ph in fit.phases.values():
         band = ph.curve.band
