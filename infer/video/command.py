@@ -59,7 +59,7 @@ def _source(
     float,
 ]:
     """``(frames, feed, stop, fps)`` of the recording (``--video`` with its whole pressure
-    log) or the camera (``--camera``, the log polled as it grows; stops back at 0 kPa or at
+    log) or the camera (``--camera``, the log polled as it grows; stops back at rest or at
     ``--duration-s``), for :func:`~contactcal.infer.video.extract.extract_frames`; a
     recording's log in another unit than kPa is refused before its video is opened."""
     import cv2
