@@ -343,6 +343,31 @@ def test_video_areas_equal_stills(
     assert cap.isOpened() and cap.read()[0]
 
 
+def test_staging_left_by_a_killed_run_is_no_earlier_recording(tmp_path: Path) -> None:
+    """A ``frames/`` folder holding only the staging entries of a killed run (SIGKILL: its
+    process gone) is fresh: they are removed; a running process's staging is refused, said."""
+    import os
+    import subprocess
+    import sys
+
+    from contactcal.infer.video.command import check_fresh_frames
+
+    dead = subprocess.Popen([sys.executable, "-c", "pass"])
+    dead.wait()
+    frames = tmp_path / "out" / "frames"
+    (frames / f".f000005.png.{dead.pid}.abc123.tmp").mkdir(parents=True)
+    (frames / f".f000005.png.{dead.pid}.abc123.tmp" / "f000005.png").write_bytes(b"x")
+    (frames / f".manifest.csv.{dead.pid}.x_9.tmp").write_text("partial")
+    check_fresh_frames(frames)
+    assert list(frames.iterdir()) == []
+    (frames / f".f000001.png.{os.getpid()}.live.tmp").mkdir()  # a run still going
+    with pytest.raises(ValueError, match=f"another run \\(process {os.getpid()}\\)"):
+        check_fresh_frames(frames)
+    (frames / "f000001.png").write_bytes(b"x")  # a frame: an earlier recording
+    with pytest.raises(ValueError, match="holds the frames of an earlier recording"):
+        check_fresh_frames(frames)
+
+
 def test_a_vent_to_zero_is_left_out_and_a_rerun_is_refused(
     tmp_path: Path, rng: np.random.Generator, capsys: pytest.CaptureFixture[str]
 ) -> None:
