@@ -15,7 +15,7 @@ from test_outputs import copy_session
 
 from contactcal.infer.calibration import record as calibration_io
 from contactcal.infer.calibration.fit import CurveConfig
-from contactcal.infer.calibration.load import load_curve
+from contactcal.infer.calibration.load import NoContactCurveError, load_curve
 from contactcal.infer.calibration.points import CalibrationPoint
 from contactcal.infer.calibration.record import write_calibration
 from contactcal.infer.calibration.session import SessionFit, fit_session
@@ -111,6 +111,14 @@ def test_px_curve_without_mm2_and_without_contact(tmp_path: Path) -> None:
     paths = write_calibration(tmp_path / "none", flat, _curve(flat, "px"), "classical", {})
     data = json.loads(paths["json"].read_text(encoding="utf-8"))
     assert data["onset_kpa"] is None and data["inverse"] is None
+    # load_curve refuses it up front, naming the file and the pass (not pressure_for_area later)
+    with pytest.raises(NoContactCurveError, match="the loading curve has no contact") as exc:
+        load_curve(paths["json"])
+    assert str(paths["json"]) in str(exc.value) and "not a readable" not in str(exc.value)
+    v2 = {k: v for k, v in data.items() if k != "phases"} | {"format_version": 2}
+    (tmp_path / "v2.json").write_text(json.dumps(v2), encoding="utf-8")
+    with pytest.raises(NoContactCurveError, match="v2.json: the loading curve has no contact"):
+        load_curve(tmp_path / "v2.json")
 
 
 def test_failed_write_leaves_nothing(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:

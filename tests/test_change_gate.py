@@ -228,3 +228,32 @@ def test_a_frame_against_itself_is_unchanged(tmp_path: Path) -> None:
     res = m.measure(frame)
     limit = f"{m.segmenter.spec.min_change:.3f}"
     assert not res.contact and res.note == f"{UNCHANGED_NOTE} (change 0.000 < {limit})"
+
+
+def test_measure_says_when_a_frame_is_its_own_reference(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """``measure --reference X X`` (or a byte-identical copy of X): the gate's "no contact"
+    is noted and warned as a frame compared with itself; the result is unchanged."""
+    import shutil
+
+    from contactcal.infer.cli import main
+    from contactcal.infer.pipeline.measure import SELF_REFERENCE_NOTE
+
+    example = Path(__file__).resolve().parents[1] / "examples" / "session"
+    ref = example / "p12.0kpa.jpg"  # in contact: only the gate says no contact
+    copy = tmp_path / "copy.jpg"
+    shutil.copy(ref, copy)
+    other = example / "p14.0kpa.jpg"
+    out = tmp_path / "r.json"
+    argv = ["measure", "--reference", str(ref), "--out", str(out), str(ref), str(copy), str(other)]
+    assert main(argv) == 0
+    err = capsys.readouterr().err
+    same, copied, different = json.loads(out.read_text())
+    for row, how in ((same, "path"), (copied, "bytes")):
+        assert not row["contact"] and row["area_px"] == 0.0  # as measured
+        assert row["note"].startswith("no contact: the region is unchanged from the reference")
+        assert row["note"].endswith(SELF_REFERENCE_NOTE.format(how=how))
+        assert f"warning: {row['file']}: {SELF_REFERENCE_NOTE.format(how=how)}" in err
+    assert "reference frame itself" not in different["note"]
+    assert err.count("warning:") == 2

@@ -92,6 +92,51 @@ def test_inverse_phase_missing_is_an_error(
     assert "no unloading pass" in capsys.readouterr().err
 
 
+def _passes_session(
+    tmp_path: Path, loading: tuple[float, ...], unloading: tuple[float, ...]
+) -> Path:
+    """Example frames: a loading pass at ``loading`` kPa and an unloading one at ``unloading``."""
+    src = example_manifest().parent
+    s = tmp_path / "s"
+    s.mkdir()
+    shutil.copy(src / "rig.json", s / "rig.json")
+    rows = ["file,pressure_kpa,phase"]
+    for phase, kpas in (("loading", loading), ("unloading", unloading)):
+        for p in kpas:
+            name = f"p{p:04.1f}_{phase[0]}.jpg"
+            shutil.copy(src / f"p{p:04.1f}kpa.jpg", s / name)
+            rows.append(f"{name},{p},{phase}")
+    (s / "manifest.csv").write_text("\n".join(rows) + "\n", encoding="utf-8")
+    return s / "manifest.csv"
+
+
+@pytest.mark.parametrize(
+    ("loading", "unloading", "inverse"),
+    [
+        ((0.0, 1.0, 2.0), (12.0, 10.0, 8.0), "loading"),  # the default pass never in contact
+        ((0.0, 8.0, 10.0, 12.0), (2.0, 1.0), "unloading"),  # the one asked for never in contact
+    ],
+)
+def test_inverted_pass_without_contact_is_refused(
+    tmp_path: Path,
+    capsys: pytest.CaptureFixture[str],
+    loading: tuple[float, ...],
+    unloading: tuple[float, ...],
+    inverse: str,
+) -> None:
+    """A record with ``inverse: null`` is no calibration: exit 1 (a RunError), one line naming
+    the manifest and the pass, nothing written; the other pass is suggested."""
+    manifest = _passes_session(tmp_path, loading, unloading)
+    out = tmp_path / "out"
+    code = main(["calibrate", str(manifest), "--inverse-phase", inverse, "--out", str(out)])
+    err = capsys.readouterr().err
+    assert code == 1 and not out.exists(), err
+    assert len(err.strip().splitlines()) == 1 and str(manifest) in err, err
+    other = "unloading" if inverse == "loading" else "loading"
+    assert f"the {inverse} pass" in err and "no contact" in err
+    assert f"--inverse-phase {other}" in err
+
+
 def test_steps_aggregate_by_median() -> None:
     pts = [
         CalibrationPoint(f"f{i}.png", 5.0, a > 0, a, None) for i, a in enumerate((10.0, 12.0, 90.0))

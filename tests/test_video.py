@@ -97,13 +97,16 @@ def make_log(
     hold_s: float = 1.2,
     ramp_s: float = 0.5,
     extra_s: float = 0.0,
+    offset_kpa: float = 0.0,
 ) -> None:
-    """The controller's log of the same run (samples offset from the frames by 1/40 s)."""
+    """The controller's log of the same run (samples offset from the frames by 1/40 s), the
+    gauge reading ``offset_kpa`` above the true pressure."""
     end = len(kpas) * (hold_s + ramp_s) + extra_s
     lines = ["time_s,pressure_kpa,setpoint_kpa"]
     for t in np.arange(0.025, end, 1 / LOG_HZ):
         p, k, _ = _pressure_at(float(t), kpas, hold_s, ramp_s)
-        lines.append(f"{t:.4f},{p + rng.uniform(-NOISE_KPA, NOISE_KPA):.4f},{kpas[k]}")
+        noisy = p + offset_kpa + rng.uniform(-NOISE_KPA, NOISE_KPA)
+        lines.append(f"{t:.4f},{noisy:.4f},{kpas[k]}")
     path.write_text("\n".join(lines) + "\n")
 
 
@@ -181,7 +184,7 @@ def test_extraction_groups_steps(tmp_path: Path, rng: np.random.Generator) -> No
 
 def test_live_capture_matches_file(tmp_path: Path, rng: np.random.Generator) -> None:
     """The camera path, fed a video file and a fake clock, keeps the file path's frames and
-    stops once the log is back at 0 kPa (the video's trailing frames are not read)."""
+    stops once the log is back at 0 kPa (at rest) (the video's trailing frames are not read)."""
     kpas = [0, 4, 8, 4, 0, 0, 0]  # a long final rest: the capture stops before its end
     make_video(tmp_path / "v.avi", kpas)
     make_log(tmp_path / "log.csv", kpas, rng)
@@ -199,6 +202,24 @@ def test_live_capture_matches_file(tmp_path: Path, rng: np.random.Generator) -> 
     last = live.kept[max(live.kept)]
     assert live.steps[max(live.kept)].pressure_kpa < CFG.tolerance_kpa
     assert last[-1][1] - last[0][1] >= CFG.settle_s
+
+
+def test_live_capture_stops_at_rest_offset(tmp_path: Path, rng: np.random.Generator) -> None:
+    """A gauge reading 0.15 kPa at rest (above --tolerance-kpa, within REST_KPA) still stops
+    the capture once the log is back at rest after the highest step."""
+    kpas = [0, 4, 8, 4, 0, 0, 0]
+    make_video(tmp_path / "v.avi", kpas)
+    make_log(tmp_path / "log.csv", kpas, rng, offset_kpa=0.15)
+    ticks = itertools.count()
+    clock = lambda: next(ticks) / FPS  # noqa: E731
+    with run_outputs() as outs:
+        live = Extractor(CFG, tmp_path / "live" / "frames", outs.stage)
+        frames = capture_frames(cv2.VideoCapture(str(tmp_path / "v.avi")), clock)
+        extract_frames(frames, live, LogPoller(tmp_path / "log.csv"), stop=returned_to_zero)
+    end_s = len(kpas) * (1.2 + 0.5)
+    assert live.last_time_s < end_s - 1.0  # stopped early, not at the video's end
+    last = live.steps[max(live.kept)]
+    assert CFG.tolerance_kpa < last.pressure_kpa < 0.5 and last.index > 2
 
 
 def _unreachable(*args: object) -> None:
@@ -320,6 +341,31 @@ def test_video_areas_equal_stills(
         assert p["area_px"] == still_area[round(p["pressure_kpa"])]
     cap = cv2.VideoCapture(str(next(out.glob("preview.*"))))
     assert cap.isOpened() and cap.read()[0]
+
+
+def test_staging_left_by_a_killed_run_is_no_earlier_recording(tmp_path: Path) -> None:
+    """A ``frames/`` folder holding only the staging entries of a killed run (SIGKILL: its
+    process gone) is fresh: they are removed; a running process's staging is refused, said."""
+    import os
+    import subprocess
+    import sys
+
+    from contactcal.infer.video.command import check_fresh_frames
+
+    dead = subprocess.Popen([sys.executable, "-c", "pass"])
+    dead.wait()
+    frames = tmp_path / "out" / "frames"
+    (frames / f".f000005.png.{dead.pid}.abc123.tmp").mkdir(parents=True)
+    (frames / f".f000005.png.{dead.pid}.abc123.tmp" / "f000005.png").write_bytes(b"x")
+    (frames / f".manifest.csv.{dead.pid}.x_9.tmp").write_text("partial")
+    check_fresh_frames(frames)
+    assert list(frames.iterdir()) == []
+    (frames / f".f000001.png.{os.getpid()}.live.tmp").mkdir()  # a run still going
+    with pytest.raises(ValueError, match=f"another run \\(process {os.getpid()}\\)"):
+        check_fresh_frames(frames)
+    (frames / "f000001.png").write_bytes(b"x")  # a frame: an earlier recording
+    with pytest.raises(ValueError, match="holds the frames of an earlier recording"):
+        check_fresh_frames(frames)
 
 
 def test_a_vent_to_zero_is_left_out_and_a_rerun_is_refused(

@@ -141,7 +141,7 @@ def calibrate_session(
         ManifestError / ImageError: bad manifest or frame (nothing written).
         ValueError: an output that would replace an input, or an ``inverse_phase`` the session
             does not have.
-        RunError: no contact in any frame (nothing written).
+        RunError: no contact in any frame, or none in the inverted pass (nothing written).
     """
     manifest = Path(manifest)
     measure = measure if measure is not None else MeasureOptions()
@@ -155,6 +155,7 @@ def calibrate_session(
     results, checks = _session_points(manifest, points, options.session_rule, method.name)
     unit = PX if measure.scale is None else MM2
     fit = fit_session(results, unit, options.curve, options.inverse_phase, session.phase_source)
+    _check_inverse_contact(manifest, fit)
     recorded = Path(manifest_as if manifest_as is not None else manifest).resolve()
     provenance = replace(
         provenance if provenance is not None else Provenance(),
@@ -264,6 +265,30 @@ def _check_contact(
     raise RunError(
         f"{manifest}: no contact detected in any of its {len(results)} frames "
         f"(method {name}); check the frames, the pressure range or the method{hint}"
+    )
+
+
+def _check_inverse_contact(manifest: Path, fit: SessionFit) -> None:
+    """Raise ``RunError`` when the inverted pass (``--inverse-phase``) has no contact: its curve
+    has no inverse, so the record would hold ``inverse: null`` for a controller.
+
+    Valid inputs with an unusable result: a run-time failure (exit 1), as no contact at all.
+    """
+    name = fit.inverse_phase
+    if fit.curve.has_contact:
+        return
+    others = [ph for ph, f in fit.phases.items() if ph != name and f.curve.has_contact]
+    hint = (
+        f"; the {others[0]} pass has contact: calibrate with --inverse-phase {others[0]} to "
+        "invert it"
+        if others
+        else ""
+    )
+    steps = fit.phases[name].steps
+    raise RunError(
+        f"{manifest}: the {name} pass (the one inverted, --inverse-phase {name}) has no contact "
+        f"in any of its {len(steps)} step(s) (up to {max(s.pressure_kpa for s in steps):g} kPa), "
+        f"so its curve cannot be inverted; record its steps up into contact{hint}"
     )
 
 

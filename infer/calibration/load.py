@@ -57,13 +57,28 @@ def _phase_curve(data: dict[str, Any], phase: str | None, allow_unresolved: bool
     band = None
     if b is not None:
         band = Band(b["pressure_kpa"], b["lo"], b["hi"], b["level"], b["n_resamples"], b["seed"])
-    return _curve(
+    curve = _curve(
         ph["fit"], ph["onset_kpa"], data["area_unit"], ph["inverse"], model=model, band=band
     )
+    return _check_contact(curve, name)
+
+
+def _check_contact(curve: Curve, name: str) -> Curve:
+    """``curve``, or :class:`NoContactCurveError` when it has no contact (no inverse)."""
+    if not curve.has_contact:
+        raise NoContactCurveError(
+            f"the {name} curve has no contact in any step, so it cannot be inverted (the record "
+            "holds no inverse); recalibrate with steps up into contact"
+        )
+    return curve
 
 
 class UnresolvedCurveError(ValueError):
     """The record says the curve does not resolve pressures (``phases.*.resolution``)."""
+
+
+class NoContactCurveError(ValueError):
+    """The curve asked for has no contact (no onset, no inverse): nothing to invert."""
 
 
 class _NoSuchPhase(ValueError):
@@ -95,6 +110,8 @@ def load_curve(
 
     Raises:
         UnresolvedCurveError: the curve does not resolve pressures (and not allowed).
+        NoContactCurveError: the curve has no contact in any step (it cannot be inverted;
+            ``calibrate`` refuses to write such a record for the pass it inverts).
         ValueError: unreadable file, not a contactcal calibration, no such phase, an unknown
             ``area_unit``, or another unit than ``area_unit``.
     """
@@ -140,8 +157,9 @@ def _read_curve(path: str | os.PathLike[str], phase: str | None, allow_unresolve
             return _phase_curve(data, phase, allow_unresolved)
         if phase is not None and phase.lower() != LOADING:
             raise _NoSuchPhase(f"format_version {version} holds the loading pass only, not {phase}")
-        return _curve(data["fit"], data["onset_kpa"], data["area_unit"], data.get("inverse"))
-    except (UnresolvedCurveError, _NoSuchPhase) as exc:
+        curve = _curve(data["fit"], data["onset_kpa"], data["area_unit"], data.get("inverse"))
+        return _check_contact(curve, LOADING)
+    except (UnresolvedCurveError, NoContactCurveError, _NoSuchPhase) as exc:
         raise type(exc)(f"{path}: {exc}") from exc
     except (OSError, ValueError, KeyError, TypeError, AttributeError) as exc:
         raise ValueError(f"{path}: not a readable contactcal calibration ({exc})") from exc

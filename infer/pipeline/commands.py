@@ -41,6 +41,7 @@ def _cmd_measure(args: argparse.Namespace) -> int:
     from contactcal.infer.files.atomic import run_outputs, write_synced
     from contactcal.infer.files.jsonable import json_text
     from contactcal.infer.image.read import SUPPORTED_SUFFIXES
+    from contactcal.infer.pipeline.measure import note_self_reference
     from contactcal.infer.pipeline.overlay import earlier_overlays_note, write_overlays
 
     check_device_id(args.device_id)
@@ -67,6 +68,7 @@ def _cmd_measure(args: argparse.Namespace) -> int:
         options = measure_options(args)
         method = options.method(args.method)
         measured = options.measure(args.images, method, args.reference)
+        measured, warnings = note_self_reference(measured, args.reference)
         # device_id: the display measured, per object (the output stays a list of objects).
         rows = [{**m.to_json(method.name), "device_id": args.device_id} for m in measured]
         text = json_text(rows)
@@ -83,6 +85,8 @@ def _cmd_measure(args: argparse.Namespace) -> int:
         area = f"{mm2:8.1f} mm²" if mm2 is not None else f"{m.result.area_px:10.0f} px"
         line = f"{m.file}  contact={'yes' if m.result.contact else 'no ':3s} area={area}"
         print(line, file=sys.stderr if to_stdout else sys.stdout)
+    for line in warnings:
+        print(line, file=sys.stderr)
     note = earlier_overlays_note(written)
     if note is not None:
         print(note, file=sys.stderr if to_stdout else sys.stdout)

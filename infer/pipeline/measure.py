@@ -6,6 +6,7 @@ the pixel scale, and the check that every frame matches the session's reference 
 
 from __future__ import annotations
 
+import filecmp
 import math
 import os
 from collections.abc import Sequence
@@ -18,7 +19,7 @@ import numpy as np
 
 from contactcal.infer.image.gray import ImageError
 from contactcal.infer.image.read import load_image
-from contactcal.infer.methods.base import AreaResult, Method
+from contactcal.infer.methods.base import UNCHANGED_NOTE, AreaResult, Method
 from contactcal.infer.methods.unet.config import PreprocessConfig
 from contactcal.infer.methods.unet.ring import RingFit, locate_ring
 from contactcal.infer.pipeline.boundary import BoundaryOffset, BoundaryOffsetError, apply_offset
@@ -37,6 +38,15 @@ RING_RADIUS_TOLERANCE = 0.10
 #: frame) and ~0.25 ms at the U-Net's 1/8 decode (~15 ms a frame), is small enough to check
 #: every frame rather than a sample; the fit is still within 0.3 % of the radius.
 RING_CHECK_PX = 160
+
+
+#: Appended to the note of a frame the change gate called unchanged that is the reference frame
+#: itself (``measure --reference X X``; ``{how}``: "path" or "bytes").
+SELF_REFERENCE_NOTE = (
+    "this file is the reference frame itself (same {how}): compared with itself nothing has "
+    "changed, so the change gate cannot show contact here; for a frame under pressure give the "
+    "session's 0 kPa frame as --reference (or measure with --no-change-gate)"
+)
 
 
 @dataclass(frozen=True)
@@ -235,3 +245,44 @@ def measure_files(
         applied = None if active is None else active.mm
         out.append(Measured(path, w, h, res, mm2, None if ref is None else ref.path, applied))
     return out
+
+
+def same_file(path: Path, reference: Path) -> str | None:
+    """How ``path`` is the ``reference`` file: ``"path"`` (the same file, also through another
+    name or a link), ``"bytes"`` (a byte-identical copy), or None (another file)."""
+    try:
+        if path.resolve() == reference.resolve() or os.path.samefile(path, reference):
+            return "path"
+        return "bytes" if filecmp.cmp(path, reference, shallow=False) else None
+    except OSError:
+        return None
+
+
+def note_self_reference(
+    measured: Sequence[Measured], reference: Path | None
+) -> tuple[list[Measured], list[str]]:
+    """Note the frames the change gate called unchanged that are the reference file itself.
+
+    Compared with itself a frame never changes, so its "no contact" says nothing about contact
+    (:data:`SELF_REFERENCE_NOTE`); the result (contact, area) stays as measured.
+
+    Args:
+        measured: the frames as measured against ``reference``.
+        reference: the reference frame (None: nothing to note).
+
+    Returns:
+        ``(measured, warnings)``: every frame, those noted with the note appended; one
+        ``warning: FILE: …`` line per noted frame, for the command to print.
+    """
+    out: list[Measured] = []
+    warnings: list[str] = []
+    for m in measured:
+        how = None
+        if reference is not None and m.result.note.startswith(UNCHANGED_NOTE):
+            how = same_file(m.file, reference)
+        if how is not None:
+            said = SELF_REFERENCE_NOTE.format(how=how)
+            m = replace(m, result=replace(m.result, note=f"{m.result.note}; {said}"))
+            warnings.append(f"warning: {m.file}: {said}")
+        out.append(m)
+    return out, warnings

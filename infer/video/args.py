@@ -43,7 +43,7 @@ def add_video_args(p: argparse.ArgumentParser) -> None:
     g.add_argument(
         "--duration-s",
         type=float,
-        help="--camera: stop after this many s (default: when the log is back at 0 kPa)",
+        help="--camera: stop after this many s (default: when the log is back at rest, <= 0.5 kPa)",
     )
     g.add_argument("--preview", action="store_true", help="--video: also write DIR/preview.mp4")
     g.add_argument("--show", action="store_true", help="show the preview in a window")

@@ -59,7 +59,7 @@ def _source(
     float,
 ]:
     """``(frames, feed, stop, fps)`` of the recording (``--video`` with its whole pressure
-    log) or the camera (``--camera``, the log polled as it grows; stops back at 0 kPa or at
+    log) or the camera (``--camera``, the log polled as it grows; stops back at rest or at
     ``--duration-s``), for :func:`~contactcal.infer.video.extract.extract_frames`; a
     recording's log in another unit than kPa is refused before its video is opened."""
     import cv2
@@ -97,14 +97,33 @@ def check_fresh_frames(frames_dir: Path) -> None:
     """Refuse a ``frames/`` folder that already holds files: an earlier recording's frames would
     stay beside this one's, outside its manifest (and its ``preview`` beside this calibration).
 
+    The staging entries of a killed run (:data:`~contactcal.infer.files.atomic.TEMP_NAME`,
+    their process gone) are no frames: they are removed first, as the next write into the
+    folder would (:func:`~contactcal.infer.files.atomic.remove_stale_temporaries`). Those of a
+    run still going are another recording into the same folder: refused, said so.
+
     Raises:
         ValueError: naming the folder and what to do.
     """
-    if frames_dir.is_dir() and any(frames_dir.iterdir()):
+    from contactcal.infer.files.atomic import TEMP_NAME, remove_stale_temporaries
+
+    if not frames_dir.is_dir():
+        return
+    remove_stale_temporaries(frames_dir)
+    names = [p.name for p in frames_dir.iterdir()]
+    if not names:
+        return
+    staging = [m for m in map(TEMP_NAME.match, names) if m is not None]
+    if len(staging) == len(names):
+        pids = sorted({m["pid"] for m in staging})
         raise ValueError(
-            f"{frames_dir}: holds the frames of an earlier recording; expected a new --out "
-            "folder for each recording (or remove that folder first)"
+            f"{frames_dir}: another run (process {', '.join(pids)}) is writing a recording into "
+            "it; expected a new --out folder for each recording"
         )
+    raise ValueError(
+        f"{frames_dir}: holds the frames of an earlier recording; expected a new --out "
+        "folder for each recording (or remove that folder first)"
+    )
 
 
 def calibrate_video(

@@ -2,7 +2,9 @@
 
 Any ``cv2.VideoCapture`` is a source (a camera index, or a video file, which the tests use), with
 an injectable clock: a frame's time is ``clock()`` when it arrived minus that of the first frame.
-The capture stops when the log has returned to 0 kPa after its highest step and that step has
+The capture stops when the log has returned to rest (a step at or below
+:data:`~contactcal.infer.calibration.gate_check.REST_KPA`, the rule the calibration uses for its
+reference frame: a gauge may read a little above 0) after its highest step and that step has
 been kept for ``settle_s`` (so it has frames too), at ``--duration-s``, or when the camera stops.
 """
 
@@ -19,6 +21,7 @@ from typing import IO, Any
 import cv2
 import numpy as np
 
+from contactcal.infer.calibration.gate_check import REST_KPA
 from contactcal.infer.image.gray import to_gray_u8
 from contactcal.infer.methods.base import Method
 from contactcal.infer.pipeline.overlay import draw_overlay
@@ -97,14 +100,19 @@ class LogPoller:
 
 
 def returned_to_zero(extractor: Extractor, _time_s: float) -> bool:
-    """Whether a step at ~0 kPa after the highest step has been kept for ``settle_s``."""
+    """Whether a step at rest after the highest step has been kept for ``settle_s``.
+
+    At rest: at or below :data:`~contactcal.infer.calibration.gate_check.REST_KPA` (kPa), as for
+    the calibration's reference frame, so a gauge that reads e.g. 0.15 kPa at rest still stops
+    the capture; the highest step must be above it.
+    """
     steps, cfg = extractor.steps, extractor.cfg
     if not steps:
         return False
     top = max(steps, key=lambda s: s.pressure_kpa)
     for s in steps[top.index + 1 :]:
         kept = extractor.kept.get(s.index, [])
-        if s.pressure_kpa <= cfg.tolerance_kpa < top.pressure_kpa and kept:
+        if s.pressure_kpa <= REST_KPA < top.pressure_kpa and kept:
             if kept[-1][1] - kept[0][1] >= cfg.settle_s:
                 return True
     return False
