@@ -8,7 +8,6 @@ frame is pixel-identical to its still.
 
 from __future__ import annotations
 
-import contextlib
 import csv
 import itertools
 import json
@@ -22,9 +21,9 @@ import pytest
 from contactcal.infer.calibration.phases import LOADING, UNLOADING
 from contactcal.infer.cli import main
 from contactcal.infer.files.atomic import run_outputs
+from contactcal.infer.video.coverage import check_coverage
 from contactcal.infer.video.extract import (
     Extractor,
-    check_coverage,
     extract_frames,
     open_video,
     video_frames,
@@ -426,9 +425,10 @@ def _log_file(path: Path, times: np.ndarray, kpa: np.ndarray) -> Path:
 def test_a_log_too_noisy_for_the_tolerance_is_said(
     tmp_path: Path, rng: np.random.Generator, capsys: pytest.CaptureFixture[str]
 ) -> None:
-    """A log scattering by ±0.12 kPa at its holds splits or loses them at --tolerance-kpa 0.1,
-    and the run says so with a tolerance that holds them; the test's usual ±0.03 kPa log, and
-    a log rounded to 0.1 kPa flickering between two values at x.05 kPa, are not warned about."""
+    """A log scattering by ±0.12 kPa at its holds splits or loses them at --tolerance-kpa 0.1:
+    a video is refused with a tolerance that holds them, and with it all three steps are found;
+    the test's usual ±0.03 kPa log, and a log rounded to 0.1 kPa flickering between two values
+    at x.05 kPa, are not refused."""
     kpas = [0, 5, 10]
     make_video(tmp_path / "v.avi", kpas)
     t = np.arange(0.025, 5.1, 1 / LOG_HZ)
@@ -442,10 +442,17 @@ def test_a_log_too_noisy_for_the_tolerance_is_said(
         log = _log_file(tmp_path / f"{name}.csv", t, p)
         scatter = hold_scatter_kpa(read_pressure_log(log), CFG)
         assert (scatter > 0.15) is warned, (name, scatter)
-        with contextlib.suppress(ValueError):  # a lost hold may also stop the run
+        if not warned:
+            ex = _extract(tmp_path / "v.avi", log, tmp_path / f"out_{name}")
+            found = sorted({s.pressure_kpa for s in ex.used_steps()})
+            assert found == pytest.approx([0.0, 5.0, 10.0], abs=0.1), name
+            continue
+        with pytest.raises(ValueError, match=r"too much for --tolerance-kpa 0.1 \(a band") as e:
             _extract(tmp_path / "v.avi", log, tmp_path / f"out_{name}")
-        err = capsys.readouterr().err
-        assert ("too much for --tolerance-kpa 0.1 (a band of ±0.1)" in err) is warned, name
+        given = float(str(e.value).split("give --tolerance-kpa ")[1].split()[0])
+        ex = _extract(tmp_path / "v.avi", log, tmp_path / "out_fixed", StepConfig(given, 0.5))
+        found = sorted({s.pressure_kpa for s in ex.used_steps()})
+        assert found == pytest.approx([0.0, 5.0, 10.0], abs=0.1)
 
 
 def test_a_sliver_of_the_log_between_two_frames_is_left_out_with_a_note(
@@ -486,3 +493,55 @@ def test_a_frameless_sliver_above_the_top_does_not_split_the_passes(
         (5.0, UNLOADING),
         (0.0, UNLOADING),
     ]
+
+
+def test_step_detection_that_cannot_be_right_is_refused_naming_the_option(
+    tmp_path: Path, rng: np.random.Generator
+) -> None:
+    """A second loading cycle (read as unloading), a settle time as long as the holds (the
+    scatter is the ramps'), neighbouring holds closer than the band: each refused, naming the
+    log and the option that fixes it; the same log with fitting options passes."""
+    cycles = [0, 5, 10, 5, 0, 5, 10, 0]
+    make_video(tmp_path / "two.avi", cycles)
+    make_log(tmp_path / "two.csv", cycles, rng)
+    with pytest.raises(
+        ValueError, match=r"two\.csv: the pressure (rises|falls) from .* not one cycle"
+    ):
+        _extract(tmp_path / "two.avi", tmp_path / "two.csv", tmp_path / "o1")
+    kpas = [0, 5, 10, 5, 0]
+    make_video(tmp_path / "v.avi", kpas)
+    make_log(tmp_path / "log.csv", kpas, rng)
+    with pytest.raises(ValueError, match=r"not over --settle-s 1.2 .* give a --settle-s below"):
+        _extract(tmp_path / "v.avi", tmp_path / "log.csv", tmp_path / "o2", StepConfig(0.1, 1.2))
+    with pytest.raises(ValueError, match=r"closer than the band of --tolerance-kpa 3 .*below half"):
+        _extract(tmp_path / "v.avi", tmp_path / "log.csv", tmp_path / "o3", StepConfig(3.0, 0.3))
+    ex = _extract(tmp_path / "v.avi", tmp_path / "log.csv", tmp_path / "o4")
+    assert len(ex.used_steps()) == 5
+
+
+def test_a_live_capture_is_warned_not_refused(
+    tmp_path: Path, rng: np.random.Generator, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """A camera run cannot be run again: the same finding is a warning, the frames are kept."""
+    kpas = [0, 5, 10, 5, 0]
+    make_video(tmp_path / "v.avi", kpas)
+    make_log(tmp_path / "log.csv", kpas, rng)
+    with run_outputs([tmp_path / "v.avi"]) as outs:
+        ex = Extractor(StepConfig(3.0, 0.3), tmp_path / "frames", outs.stage)
+        cap, fps = open_video(tmp_path / "v.avi")
+        logs = iter([read_pressure_log(tmp_path / "log.csv")])
+        extract_frames(video_frames(cap, fps, tmp_path / "v.avi"), ex, lambda: next(logs, None))
+        check_coverage(ex, None)
+    assert "warning: " in capsys.readouterr().err
+
+
+def test_video_step_options_are_refused_for_a_manifest(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    manifest = str(EXAMPLE / "manifest.csv")
+    for option in ("--tolerance-kpa", "--settle-s"):
+        assert main(["calibrate", manifest, option, "0.3", "--out", str(tmp_path / "c")]) == 2
+        err = capsys.readouterr().err
+        assert f"got {option} without them" in err and err.count("\n") == 1
+        assert ("pooled with --step-tolerance-kpa" in err) is (option == "--tolerance-kpa")
+    assert not (tmp_path / "c").exists()

@@ -27,18 +27,16 @@ def add_video_args(p: argparse.ArgumentParser) -> None:
         help="the controller's log: time_s (s since the first frame),pressure_kpa",
     )
     cfg = StepConfig()
-    g.add_argument(
+    g.add_argument(  # None: StepConfig's default; a manifest run refuses it (it would ignore it)
         "--settle-s",
         type=float,
-        default=cfg.settle_s,
-        help="s the pressure must hold before frames are kept (default %(default)s)",
+        help=f"s the pressure must hold before frames are kept (default {cfg.settle_s:g})",
     )
     g.add_argument(
         "--tolerance-kpa",
         type=float,
-        default=cfg.tolerance_kpa,
-        help="± kPa a steady step stays within (default %(default)s: a tenth of 1 kPa steps, "
-        "twice a regulator's noise)",
+        help=f"± kPa a steady step stays within (default {cfg.tolerance_kpa:g}: a tenth of 1 kPa "
+        "steps, twice a regulator's noise)",
     )
     g.add_argument(
         "--duration-s",
@@ -62,12 +60,16 @@ def is_video_run(args: argparse.Namespace) -> bool:
             "--show": args.show,
             "--preview": args.preview,
             "--duration-s": args.duration_s,
+            "--settle-s": args.settle_s,
+            "--tolerance-kpa": args.tolerance_kpa,
         }
         extra = [o for o, v in given.items() if v not in (None, False)]
         if args.manifest is None or extra:
+            hint = " (a manifest's readings are pooled with --step-tolerance-kpa)"
             raise ValueError(
                 "calibrate: expected MANIFEST.csv, or --video VIDEO / --camera INDEX with "
                 f"--pressure-log LOG.csv{f' (got {extra[0]} without them)' if extra else ''}"
+                f"{hint if '--tolerance-kpa' in extra else ''}"
             )
         return False
     if args.manifest is not None:

@@ -142,9 +142,13 @@ def calibrate_video(
     from contactcal.infer.files.atomic import run_outputs, write_synced
     from contactcal.infer.pipeline.args import NO_SCALE_NOTE, VIDEO_SCALE
     from contactcal.infer.pipeline.manifest import check_sweep_top
-    from contactcal.infer.video import extract, live
+    from contactcal.infer.video import coverage, extract, live
 
-    cfg = StepConfig(args.tolerance_kpa, args.settle_s)
+    default = StepConfig()
+    cfg = StepConfig(
+        default.tolerance_kpa if args.tolerance_kpa is None else args.tolerance_kpa,
+        default.settle_s if args.settle_s is None else args.settle_s,
+    )
     check_fresh_frames(args.out / "frames")
     protect = [args.video, args.pressure_log, args.model, args.rig]
     with run_outputs(protect) as outs:
@@ -158,7 +162,7 @@ def calibrate_video(
         finally:
             for o in observers:
                 o.close()
-        extract.check_coverage(ex, args.video if args.video is not None else None)
+        coverage.check_coverage(ex, args.video if args.video is not None else None)
         for step in ex.left_out():
             print(
                 f"note: step {step.label()} left out: a one-pressure unloading pass is no "

@@ -12,10 +12,8 @@ pass at one pressure, whose frames stay in ``frames/``) with columns
 
 from __future__ import annotations
 
-import itertools
 import math
 import os
-import sys
 from collections.abc import Callable, Iterator
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -23,14 +21,13 @@ from pathlib import Path
 import cv2
 import numpy as np
 
-from contactcal.infer.calibration.phases import LOADING, UNLOADING
+from contactcal.infer.calibration.phases import UNLOADING
 from contactcal.infer.image.write import write_image
 from contactcal.infer.video.log import PressureLog
 from contactcal.infer.video.step_config import StepConfig
 from contactcal.infer.video.steps import (
     Step,
     detect_steps,
-    hold_scatter_kpa,
     reference_step,
     step_at,
     with_phases,
@@ -194,101 +191,6 @@ class Extractor:
                 f"{s.index:4d}  {s.pressure_kpa:14.3f}  {s.phase:9s}  {len(kept):6d}  {span}{note}"
             )
         return "\n".join(lines)
-
-
-def _warn_noise(extractor: Extractor, where: str) -> None:
-    """Say on stderr when the log scatters too much at its holds for ``--tolerance-kpa``'s
-    band (:func:`~contactcal.infer.video.steps.hold_scatter_kpa`), or when two steps in a row
-    lie closer than the band (a hold split by its scatter): else a held pressure is split into
-    steps, or lost, without any other sign."""
-    if extractor.log is None:
-        return
-    scatter, tol = hold_scatter_kpa(extractor.log, extractor.cfg), extractor.cfg.tolerance_kpa
-    p = [s.pressure_kpa for s in extractor.kept_steps()]
-    split = [(a, b) for a, b in itertools.pairwise(p) if abs(b - a) < 2 * tol]
-    if scatter <= 1.5 * tol and not split:
-        return
-    what = f"its holds scatter by ~{scatter:.2f} kPa peak to peak"
-    if split:
-        what += f", and steps {split[0][0]:g} and {split[0][1]:g} kPa in a row are one hold split"
-    print(
-        f"warning: {where}: {what}, too much for --tolerance-kpa {tol:g} (a band of ±{tol:g}): "
-        f"held pressures may be split into several steps or lost; give --tolerance-kpa "
-        f"{max(math.ceil(scatter * 100) / 100, 2 * tol):g} or more",
-        file=sys.stderr,
-    )
-
-
-def check_coverage(extractor: Extractor, video: Path | None) -> None:
-    """Every step of the log must hold a frame of the video (else the session is incomplete).
-
-    Args:
-        extractor: after :func:`extract_frames`.
-        video: the video file; None for a live capture, where the steps the capture ended
-            before (the log went on) are left out, said on stderr.
-
-    Raises:
-        ValueError: naming the log: no steady step, the first uncovered step and the video's
-            time span, or fewer than two loading pressures among the used steps.
-    """
-    log = extractor.log
-    where = "the log" if log is None else str(log.path)
-    _warn_noise(extractor, where)
-    if not extractor.steps:
-        density = ""
-        if log is not None and len(log.times_s) > 1:
-            dt = float(np.median(np.diff(log.times_s)))
-            density = (
-                f"; it has {len(log.times_s)} samples, {dt:.2f} s apart (median): a step needs "
-                f"samples within the tolerance over more than the settle time "
-                f"({extractor.cfg.settle_s:g} s), so log the pressure several times a second"
-            )
-        raise ValueError(
-            f"{where}: no steady pressure step found (each step must hold within the "
-            f"tolerance for longer than the settle time){density}; check the log, "
-            "--tolerance-kpa or --settle-s"
-        )
-    source = "the capture" if video is None else f"the video {video}"
-    if log is not None and extractor.last_time_s > float(log.times_s[-1]) + 1.0:
-        print(
-            f"note: {source} runs to {extractor.last_time_s:.1f} s, past the end of {where} at "
-            f"{float(log.times_s[-1]):.1f} s; frames after the log are not used",
-            file=sys.stderr,
-        )
-    for s in extractor.steps:
-        if s.index in extractor.kept:
-            continue
-        if video is None and s.start_s > extractor.last_time_s:
-            print(f"note: step {s.label()} began after the capture ended", file=sys.stderr)
-            continue
-        gap = extractor.frame_interval_s()
-        if gap is not None and s.end_s - s.start_s < 2 * gap and s.end_s < extractor.last_time_s:
-            print(  # a sliver of the log between two frames (noise inside the band): no hold
-                f"note: step {s.label()} of {where} lasts {s.end_s - s.start_s:.2f} s, less than "
-                f"two frames of {source} ({gap:.3f} s apart): no frame to calibrate it with, "
-                "left out",
-                file=sys.stderr,
-            )
-            continue
-        if s.start_s > extractor.last_time_s:  # the frames stop before the step begins
-            raise ValueError(
-                f"{source} ends at {extractor.last_time_s:.2f} s, before step {s.label()} of "
-                f"{where}; expected frames covering every step of the log: is the video cut "
-                "short (a truncated copy), the log another recording's, or its time_s not in "
-                "seconds (ms)?"
-            )
-        raise ValueError(
-            f"{where}: step {s.label()} has no frame in {source} (frames from 0 to "
-            f"{extractor.last_time_s:.2f} s); expected frames covering every step of the log "
-            "(trim the log, give the full video, or lower --settle-s for short steps)"
-        )
-    loading = sorted({s.pressure_kpa for s in extractor.used_steps() if s.phase == LOADING})
-    if len(loading) < 2:
-        raise ValueError(
-            f"{where}: the steady steps found hold {len(loading)} loading pressure(s) "
-            f"({', '.join(f'{p:g}' for p in loading)} kPa); a calibration needs >= 2 from 0 kPa "
-            "up (is the log in kPa? check --tolerance-kpa and --settle-s)"
-        )
 
 
 def extract_frames(
