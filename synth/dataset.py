@@ -32,7 +32,7 @@ from contactcal.synth.layout import (
 )
 from contactcal.synth.randomize import SessionParams, sample_session
 from contactcal.synth.session import FrameOutput, RenderConfig, render_session
-from contactcal.synth.variant import choose_variant
+from contactcal.synth.variant import VARIANTS, choose_variant
 
 #: What changed the frames a given config renders (recorded in ``config.json``; a folder of an
 #: earlier revision is not resumed, since its frames and new ones would differ).
@@ -242,7 +242,14 @@ def _check_config_matches(root: Path, config: DatasetConfig) -> None:
                 f"{path}: is not the config of a `contactcal synth` dataset (a training run's or "
                 "another tool's?); render into a new --out"
             )
-        if old["render"].get("variant") == "auto":
+        was, now = old["render"].get("variant"), config.render.variant
+        if was in VARIANTS and was != now:
+            raise ValueError(
+                f"{path}: rendered with the Mitsuba variant {was}, and this machine renders with "
+                f"{now} (other bytes); resume where {was} works (CONTACTCAL_MI_VARIANT={was}) "
+                "or render into a new --out"
+            )
+        if was == "auto":
             raise ValueError(
                 f"{path}: rendered before the Mitsuba variant was recorded ('auto'), so a resume "
                 f"could mix frames of another variant (this machine's: {config.render.variant}); "

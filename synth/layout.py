@@ -44,6 +44,22 @@ def check_frame_names(pressures_kpa: tuple[float, ...]) -> None:
         seen[name] = p
 
 
+#: Largest departure of a frame's width / height from the rig camera's 4/3 (integer sizes of
+#: small frames, e.g. 48x36 exact, 50x37 within).
+ASPECT_TOLERANCE = 0.03
+
+
+def check_frame_size(width: int, height: int) -> None:
+    """Refuse a frame size that is not the rig camera's 4:3 (the window ring must fit the
+    frame) or is below 16x12 px.
+
+    Raises:
+        ValueError: naming ``--size`` and the size given.
+    """
+    if width < 16 or height < 12 or abs(width / height - 4 / 3) > ASPECT_TOLERANCE:
+        raise ValueError(f"--size: frames must be 4:3 and at least 16x12 px, got {width}x{height}")
+
+
 def check_sweep(fingers: int, pressures_kpa: tuple[float, ...]) -> None:
     """A dataset's fingers (>= 1) and pressures (finite, 0-100 kPa, distinct frame names).
 

@@ -17,6 +17,7 @@ import numpy as np
 
 from contactcal.synth.camera import apply_camera
 from contactcal.synth.fingerprint import Fingerprint, make_fingerprint
+from contactcal.synth.layout import check_frame_size
 from contactcal.synth.mechanics import solve_contact
 from contactcal.synth.membrane_shape import ContactState
 from contactcal.synth.randomize import SessionParams, frame_camera
@@ -42,8 +43,7 @@ class RenderConfig:
     variant: str = "auto"  # Mitsuba variant: auto (llvm when a good LLVM exists), scalar_rgb
 
     def __post_init__(self) -> None:
-        if self.width < 16 or self.height < 12 or abs(self.width / self.height - 4 / 3) > 0.03:
-            raise ValueError(f"size must be 4:3 and at least 16x12, got {self.width}x{self.height}")
+        check_frame_size(self.width, self.height)
         if self.spp < 1:
             raise ValueError(f"spp must be >= 1, got {self.spp}")
 

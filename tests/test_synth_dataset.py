@@ -169,6 +169,10 @@ def test_the_variant_rendered_with_is_recorded_and_held(dataset: Path, tmp_path:
     build_dataset(tmp_path / "a", explicit, progress=False)  # the same variant, named: resumes
     cfg = tmp_path / "a" / "config.json"
     old = json.loads(cfg.read_text())
+    other = next(v for v in VARIANTS if v != used)  # as if rendered on another machine
+    cfg.write_text(json.dumps({**old, "render": {**old["render"], "variant": other}}))
+    with pytest.raises(ValueError, match=f"rendered with the Mitsuba variant {other}, and this"):
+        build_dataset(tmp_path / "a", one, progress=False)
     cfg.write_text(json.dumps({**old, "render": {**old["render"], "variant": "auto"}}))
     with pytest.raises(ValueError, match=r"variant was recorded \('auto'\)"):
         build_dataset(tmp_path / "a", one, progress=False)

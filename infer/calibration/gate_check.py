@@ -24,6 +24,15 @@ ABOVE_CONTACT_NOTE = (
 )
 
 
+def _lowest_contact(points: Sequence[CalibrationPoint]) -> dict[str, float]:
+    """kPa: the lowest pressure in contact of each pass (phase) that has one."""
+    lowest: dict[str, float] = {}
+    for r in points:
+        if r.contact:
+            lowest[r.phase] = min(lowest.get(r.phase, math.inf), r.pressure_kpa)
+    return lowest
+
+
 def flag_gated_above_contact(
     points: Sequence[CalibrationPoint],
 ) -> tuple[list[CalibrationPoint], int]:
@@ -37,10 +46,7 @@ def flag_gated_above_contact(
         :data:`ABOVE_CONTACT_NOTE` appended to their note (decision and area unchanged), and how
         many were flagged.
     """
-    lowest: dict[str, float] = {}
-    for r in points:
-        if r.contact:
-            lowest[r.phase] = min(lowest.get(r.phase, math.inf), r.pressure_kpa)
+    lowest = _lowest_contact(points)
     out, n = [], 0
     for r in points:
         p = lowest.get(r.phase)
@@ -60,10 +66,7 @@ def lost_above_contact(points: Sequence[CalibrationPoint]) -> list[str]:
     Returns:
         Their files, in the order given.
     """
-    lowest: dict[str, float] = {}
-    for r in points:
-        if r.contact:
-            lowest[r.phase] = min(lowest.get(r.phase, math.inf), r.pressure_kpa)
+    lowest = _lowest_contact(points)
     return [
         r.file for r in points if not r.contact and r.pressure_kpa > lowest.get(r.phase, math.inf)
     ]

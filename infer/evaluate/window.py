@@ -62,7 +62,8 @@ def check_label_area(
         label: the label (for its file or CSV row).
         mask: its rasterised mask.
         frame_size: its frame's ``(width, height)``, px.
-        window: the reference frame's ring (None: only the whole frame bounds the contact).
+        window: the reference frame's ring (None: no check here; the frame bounds a label,
+            :mod:`~contactcal.infer.evaluate.labels`).
 
     Raises:
         LabelError: the label covers more than the window ring's area, or lies mostly

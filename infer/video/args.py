@@ -63,13 +63,13 @@ def is_video_run(args: argparse.Namespace) -> bool:
             "--settle-s": args.settle_s,
             "--tolerance-kpa": args.tolerance_kpa,
         }
-        extra = [o for o, v in given.items() if v not in (None, False)]
+        extra = [o for o, v in given.items() if v is not None and v is not False]  # 0.0 given
         if args.manifest is None or extra:
             hint = " (a manifest's readings are pooled with --step-tolerance-kpa)"
             raise ValueError(
                 "calibrate: expected MANIFEST.csv, or --video VIDEO / --camera INDEX with "
                 f"--pressure-log LOG.csv{f' (got {extra[0]} without them)' if extra else ''}"
-                f"{hint if '--tolerance-kpa' in extra else ''}"
+                f"{hint if extra and extra[0] == '--tolerance-kpa' else ''}"
             )
         return False
     if args.manifest is not None:

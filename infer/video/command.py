@@ -162,7 +162,7 @@ def calibrate_video(
         finally:
             for o in observers:
                 o.close()
-        coverage.check_coverage(ex, args.video if args.video is not None else None)
+        warnings = coverage.check_coverage(ex, args.video if args.video is not None else None)
         for step in ex.left_out():
             print(
                 f"note: step {step.label()} left out: a one-pressure unloading pass is no "
@@ -190,4 +190,6 @@ def calibrate_video(
     if measure.scale is None:
         print(NO_SCALE_NOTE.format(looked=VIDEO_SCALE))
     print(ex.summary())
+    for line in warnings:  # under the table, where they are read with the curve
+        print(line)
     return 0

@@ -27,6 +27,7 @@ from contactcal.infer.methods.base import Method
 from contactcal.infer.pipeline.overlay import draw_overlay
 from contactcal.infer.video.extract import Decision, Extractor
 from contactcal.infer.video.log import PressureLog, parse_log, read_log_text
+from contactcal.infer.video.steps import reference_step
 
 #: Preview codecs tried in order (suffix, fourcc): MPEG-4 part 2 in .mp4 plays everywhere; builds
 #: without an MPEG-4 encoder still have Motion-JPEG (in .avi).
@@ -104,15 +105,18 @@ def returned_to_zero(extractor: Extractor, _time_s: float) -> bool:
 
     At rest: at or below :data:`~contactcal.infer.calibration.gate_check.REST_KPA` (kPa), as for
     the calibration's reference frame, so a gauge that reads e.g. 0.15 kPa at rest still stops
-    the capture; the highest step must be above it.
+    the capture, and within the band (2 × tolerance) of the reference step, so an unloading step
+    at 0.5 kPa above a 0 kPa reference does not (its 0 kPa step comes next); the highest step
+    must be above it.
     """
     steps, cfg = extractor.steps, extractor.cfg
     if not steps:
         return False
     top = max(steps, key=lambda s: s.pressure_kpa)
+    rest = min(REST_KPA, reference_step(steps).pressure_kpa + 2 * cfg.tolerance_kpa)
     for s in steps[top.index + 1 :]:
         kept = extractor.kept.get(s.index, [])
-        if s.pressure_kpa <= REST_KPA < top.pressure_kpa and kept:
+        if s.pressure_kpa <= rest < top.pressure_kpa and kept:
             if kept[-1][1] - kept[0][1] >= cfg.settle_s:
                 return True
     return False

@@ -11,7 +11,7 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass, fields, replace
 
-from contactcal.synth.layout import check_sweep
+from contactcal.synth.layout import check_frame_size, check_sweep
 
 Range = tuple[float, float]
 
@@ -92,9 +92,7 @@ class GeneratorConfig:
         check_sweep(self.fingers, self.pressures_kpa)
         if self.seed < 0:  # numpy seeds are >= 0
             raise ValueError(f"--seed must be >= 0, got {self.seed}")
-        if self.width < 16 or self.height < 12 or abs(self.width / self.height - 4 / 3) > 0.03:
-            size = f"{self.width}x{self.height}"  # the rig's camera; the ring must fit the frame
-            raise ValueError(f"--size: frames must be 4:3 and at least 16x12 px, got {size}")
+        check_frame_size(self.width, self.height)
         if self.supersample < 1:
             raise ValueError(f"supersample must be >= 1, got {self.supersample}")
         if not 0.0 <= self.hard_fraction <= 1.0:
