@@ -582,3 +582,19 @@ def test_video_step_options_are_refused_for_a_manifest(
         assert f"got {option} without them" in err and err.count("\n") == 1
         assert ("pooled with --step-tolerance-kpa" in err) is (option == "--tolerance-kpa")
     assert not (tmp_path / "c").exists()
+
+
+def test_a_run_error_names_the_manifest_the_run_writes_not_its_staging_copy(
+    tmp_path: Path, rng: np.random.Generator, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """A recording without contact (0-2 kPa) stops with exit 1; its message names the manifest
+    where the run writes it, not the staging copy that is gone once the run stops."""
+    kpas = [0, 1, 2, 1, 0]
+    make_video(tmp_path / "v.avi", kpas)
+    make_log(tmp_path / "log.csv", kpas, rng)
+    out = tmp_path / "cal"
+    argv = ["calibrate", "--video", str(tmp_path / "v.avi"), "--pressure-log"]
+    assert main([*argv, str(tmp_path / "log.csv"), "--out", str(out)]) == 1
+    err = capsys.readouterr().err
+    assert f"{out / 'frames' / 'manifest.csv'}: " in err and ".tmp" not in err
+    assert not (out / "frames").exists()
