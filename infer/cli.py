@@ -78,8 +78,8 @@ def build_parser(command: str | None = None) -> argparse.ArgumentParser:
 INTERRUPTED = {
     "synth": "the frames written so far stay; run it again with the same arguments to resume",
     "train": (
-        "the last finished epoch's checkpoint (last.pt) stays; continue with --resume (stopped "
-        "before the first epoch ended there is none: start it again without --resume)"
+        "the last finished epoch's checkpoint (last.pt) and config.json stay; continue with "
+        "--resume (stopped before the first epoch ended there are none: start it again)"
     ),
 }
 

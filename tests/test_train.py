@@ -192,6 +192,26 @@ def test_cli_train_refuses_inputs_it_cannot_use_before_any_work(
     )
 
 
+def test_a_run_stopped_in_its_first_epoch_leaves_nothing(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """config.json is written with the first last.pt: a run stopped before leaves no stale
+    config that a later --resume would find without a checkpoint."""
+    from contactcal.train import loop
+
+    def interrupted(*args: object) -> float:
+        raise KeyboardInterrupt
+
+    d = write_dataset(tmp_path / "d", fingers=3)
+    monkeypatch.setattr(loop, "_train_epoch", interrupted)
+    with pytest.raises(KeyboardInterrupt):
+        train([d], tmp_path / "run", tiny_config(epochs=1), progress=False)
+    assert not (tmp_path / "run" / "config.json").exists()
+    monkeypatch.undo()
+    train([d], tmp_path / "run", tiny_config(epochs=1), progress=False)
+    assert (tmp_path / "run" / "config.json").is_file() and (tmp_path / "run" / "last.pt").is_file()
+
+
 def test_config_round_trip() -> None:
     cfg = tiny_config().resolved()
     back = config_from_dict(TrainConfig, config_to_dict(cfg))

@@ -65,6 +65,7 @@ class Run:
     best: float = -math.inf  # best selection score so far
     best_epoch: int = -1  # 1-based epoch of best.pt
     average: WeightAverage | None = None  # the weights' running average (ema_decay > 0)
+    info: dict[str, Any] = field(default_factory=dict)  # config.json, written with last.pt
 
     @property
     def scored(self) -> torch.nn.Module:
@@ -169,7 +170,7 @@ def _prepare(dirs: list[Path], out: Path, cfg: TrainConfig, resume: bool, progre
         "train": sorted({r.finger_key for r in train_rows}),
         "val": sorted({r.finger_key for r in val_rows}),
     }
-    write_json(out / "config.json", _run_info(cfg, dirs, digest, split, device))
+    run.info = _run_info(cfg, dirs, digest, split, device)  # written with the first last.pt
     return run
 
 
@@ -226,6 +227,8 @@ def _save_epoch(run: Run, epoch: int, row: dict[str, Any]) -> None:
         "best_epoch": run.best_epoch,
     }
     save_checkpoint(run.out / "last.pt", {**meta, "model": weights, **state})
+    if epoch == run.start:  # a run killed before its first epoch ends leaves no config.json
+        write_json(run.out / "config.json", run.info)
     write_csv(run.out / "metrics.csv", run.history, METRIC_COLUMNS)
     plot_curves(run.out / "curves.png", run.history, run.best_epoch)
 
