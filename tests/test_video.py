@@ -598,3 +598,28 @@ def test_a_run_error_names_the_manifest_the_run_writes_not_its_staging_copy(
     err = capsys.readouterr().err
     assert f"{out / 'frames' / 'manifest.csv'}: " in err and ".tmp" not in err
     assert not (out / "frames").exists()
+
+
+def test_a_truncated_video_gets_one_line_without_ffmpegs_own(
+    tmp_path: Path, rng: np.random.Generator
+) -> None:
+    """FFmpeg logs its decoder's complaint ("[mjpeg @ …] overread") itself; in a fresh process
+    the video run quiets it, so the command's one line is all that stderr holds."""
+    import os
+    import subprocess
+    import sys
+
+    kpas = [0, 5, 10, 15, 20]
+    make_video(tmp_path / "v.avi", kpas, fourcc="MJPG")
+    make_log(tmp_path / "log.csv", kpas, rng)
+    data = (tmp_path / "v.avi").read_bytes()
+    (tmp_path / "half.avi").write_bytes(data[: len(data) // 2 + 1001])  # cut inside a frame
+    env = {k: v for k, v in os.environ.items() if k != "OPENCV_FFMPEG_LOGLEVEL"}
+    argv = ["calibrate", "--video", str(tmp_path / "half.avi"), "--pressure-log"]
+    argv += [str(tmp_path / "log.csv"), "--out", str(tmp_path / "out")]
+    code = "import sys; from contactcal.infer.cli import main; sys.exit(main(sys.argv[1:]))"
+    res = subprocess.run(
+        [sys.executable, "-c", code, *argv], capture_output=True, text=True, env=env, check=False
+    )
+    assert res.returncode == 2, res.stderr
+    assert res.stderr.count("\n") == 1 and res.stderr.startswith("contactcal: error: ")

@@ -10,6 +10,7 @@ inputs, never replaced.
 from __future__ import annotations
 
 import argparse
+import os
 import sys
 from collections.abc import Callable, Iterator
 from dataclasses import replace
@@ -17,6 +18,9 @@ from pathlib import Path
 from typing import TYPE_CHECKING
 
 from contactcal.infer.video.step_config import StepConfig
+
+#: ``OPENCV_FFMPEG_LOGLEVEL`` of a video run: FFmpeg's AV_LOG_QUIET (the command says what failed).
+FFMPEG_QUIET = "-8"
 
 if TYPE_CHECKING:
     import numpy as np
@@ -144,6 +148,9 @@ def calibrate_video(
     from contactcal.infer.pipeline.manifest import check_sweep_top
     from contactcal.infer.video import coverage, extract, live
 
+    # FFmpeg's own log ("[mjpeg @ …] overread 8" on a truncated file) would precede the one-line
+    # error; OpenCV reads this before its first FFmpeg use in the process. A user's value wins.
+    os.environ.setdefault("OPENCV_FFMPEG_LOGLEVEL", FFMPEG_QUIET)
     default = StepConfig()
     cfg = StepConfig(
         default.tolerance_kpa if args.tolerance_kpa is None else args.tolerance_kpa,
