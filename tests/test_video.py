@@ -190,6 +190,18 @@ def test_extraction_groups_steps(tmp_path: Path, rng: np.random.Generator) -> No
     assert sum(len(v) for v in ex.kept.values()) == len(rows)
 
 
+def _capture_live(tmp_path: Path) -> Extractor:
+    """The camera path on ``v.avi`` and ``log.csv`` in ``tmp_path``, with a fake clock (frame i
+    arrives at i / FPS), stopping as ``calibrate --camera`` does."""
+    ticks = itertools.count()
+    clock = lambda: next(ticks) / FPS  # noqa: E731
+    with run_outputs() as outs:
+        live = Extractor(CFG, tmp_path / "live" / "frames", outs.stage)
+        frames = capture_frames(cv2.VideoCapture(str(tmp_path / "v.avi")), clock)
+        extract_frames(frames, live, LogPoller(tmp_path / "log.csv"), stop=returned_to_zero)
+    return live
+
+
 def test_live_capture_matches_file(tmp_path: Path, rng: np.random.Generator) -> None:
     """The camera path, fed a video file and a fake clock, keeps the file path's frames and
     stops once the log is back at 0 kPa (at rest) (the video's trailing frames are not read)."""
@@ -197,12 +209,7 @@ def test_live_capture_matches_file(tmp_path: Path, rng: np.random.Generator) -> 
     make_video(tmp_path / "v.avi", kpas)
     make_log(tmp_path / "log.csv", kpas, rng)
     by_file = _extract(tmp_path / "v.avi", tmp_path / "log.csv", tmp_path / "file")
-    ticks = itertools.count()
-    clock = lambda: next(ticks) / FPS  # noqa: E731  (frame i arrives at i / FPS)
-    with run_outputs() as outs:
-        live = Extractor(CFG, tmp_path / "live" / "frames", outs.stage)
-        frames = capture_frames(cv2.VideoCapture(str(tmp_path / "v.avi")), clock)
-        extract_frames(frames, live, LogPoller(tmp_path / "log.csv"), stop=returned_to_zero)
+    live = _capture_live(tmp_path)
     assert live.last_time_s < by_file.last_time_s - 1.0  # stopped early
     for step, kept in live.kept.items():
         assert kept == by_file.kept[step][: len(kept)]
@@ -218,12 +225,7 @@ def test_live_capture_stops_at_rest_offset(tmp_path: Path, rng: np.random.Genera
     kpas = [0, 4, 8, 4, 0, 0, 0]
     make_video(tmp_path / "v.avi", kpas)
     make_log(tmp_path / "log.csv", kpas, rng, offset_kpa=0.15)
-    ticks = itertools.count()
-    clock = lambda: next(ticks) / FPS  # noqa: E731
-    with run_outputs() as outs:
-        live = Extractor(CFG, tmp_path / "live" / "frames", outs.stage)
-        frames = capture_frames(cv2.VideoCapture(str(tmp_path / "v.avi")), clock)
-        extract_frames(frames, live, LogPoller(tmp_path / "log.csv"), stop=returned_to_zero)
+    live = _capture_live(tmp_path)
     end_s = len(kpas) * (1.2 + 0.5)
     assert live.last_time_s < end_s - 1.0  # stopped early, not at the video's end
     last = live.steps[max(live.kept)]
@@ -238,12 +240,7 @@ def test_live_capture_goes_on_past_a_low_unloading_step(
     kpas = [0, 4, 8, 4, 0, 0, 0, 0]
     make_video(tmp_path / "v.avi", kpas)
     make_log(tmp_path / "log.csv", [0, 4, 8, 4, 0.4, 0, 0, 0], rng)
-    ticks = itertools.count()
-    clock = lambda: next(ticks) / FPS  # noqa: E731
-    with run_outputs() as outs:
-        live = Extractor(CFG, tmp_path / "live" / "frames", outs.stage)
-        frames = capture_frames(cv2.VideoCapture(str(tmp_path / "v.avi")), clock)
-        extract_frames(frames, live, LogPoller(tmp_path / "log.csv"), stop=returned_to_zero)
+    live = _capture_live(tmp_path)
     kept = sorted(live.steps[i].pressure_kpa for i in live.kept)
     assert kept[0] < 2 * CFG.tolerance_kpa and any(0.3 < p < 0.5 for p in kept)
     assert live.last_time_s < len(kpas) * (1.2 + 0.5) - 1.0  # still stopped early
