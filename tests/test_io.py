@@ -179,3 +179,34 @@ def test_content_of_another_type_than_the_suffix(tmp_path: Path, src: str, named
     with pytest.raises(ImageError, match=rf"renamed\{named}: not a .* file \(its content is a"):
         load_image(wrong)
     assert load_image(real).shape == (32, 48)
+
+
+def _with_thumbnail(jpeg: bytes) -> bytes:
+    """``jpeg`` with an APP1 segment holding a whole small JPEG (an EXIF thumbnail's EOI)."""
+    ok, thumb = cv2.imencode(".jpg", np.full((8, 8), 128, np.uint8))
+    assert ok
+    body = b"Exif\x00\x00" + thumb.tobytes()
+    return jpeg[:2] + b"\xff\xe1" + (len(body) + 2).to_bytes(2, "big") + body + jpeg[2:]
+
+
+@pytest.mark.parametrize("suffix", [".png", ".jpg", "progressive.jpg"])
+def test_data_after_the_image_is_not_a_truncation(tmp_path: Path, suffix: str) -> None:
+    """A Raspberry Pi camera appends its raw Bayer data after the JPEG's end marker: such a
+    file was refused as truncated (the marker was looked for in the last 64 bytes only)."""
+    img = np.random.default_rng(1).integers(0, 255, (48, 64), dtype=np.uint8)
+    params = [cv2.IMWRITE_JPEG_PROGRESSIVE, 1] if suffix.startswith("progressive") else []
+    ok, enc = cv2.imencode(suffix[-4:], img, params)
+    assert ok
+    full = enc.tobytes()
+    if suffix.endswith(".jpg"):
+        full = _with_thumbnail(full)
+    trailer = b"BRCM" + np.random.default_rng(2).bytes(4096) + b"\xff\xd8\xff\xe0"
+    path = tmp_path / f"raw{suffix[-4:]}"
+    path.write_bytes(full + trailer)
+    np.testing.assert_array_equal(load_image(path), cv2.imdecode(enc, cv2.IMREAD_GRAYSCALE))
+    # cut inside the image: still refused, although the file now holds an end marker in its
+    # thumbnail (JPEG) and the trailer follows a damaged body
+    for cut in (full[: len(full) // 2], full[: len(full) - 2]):
+        path.write_bytes(cut)
+        with pytest.raises(ImageError, match="truncated"):
+            load_image(path)

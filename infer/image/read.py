@@ -19,6 +19,7 @@ from pathlib import Path
 import cv2
 import numpy as np
 
+from contactcal.infer.image.complete import jpeg_end, png_end
 from contactcal.infer.image.decode import decode_strict
 from contactcal.infer.image.gray import ImageError, reduce_area, to_gray_u8
 from contactcal.infer.image.png import png_significant_bits
@@ -67,12 +68,19 @@ def _check_content(path: Path, data: bytes) -> None:
 
 
 def _check_complete(path: Path, data: bytes) -> None:
-    """Reject truncated PNG/JPEG files, which OpenCV may decode partially without failing."""
+    """Reject truncated PNG/JPEG files, which OpenCV may decode partially without failing.
+
+    The end marker is looked for at the end of the file first (one comparison); only a file
+    without it there is walked (:mod:`.complete`), so that data a camera appends after the image
+    (a Raspberry Pi's raw trailer) is not taken for a truncation.
+    """
     suffix = path.suffix.lower()
-    if suffix == ".png" and not data.rstrip(b"\x00").endswith(b"IEND\xaeB`\x82"):
-        raise ImageError(f"{path}: truncated PNG (no IEND chunk at the end); re-export the file")
-    if suffix in (".jpg", ".jpeg") and b"\xff\xd9" not in data[-64:]:
-        raise ImageError(f"{path}: truncated JPEG (no end-of-image marker); re-export the file")
+    if suffix == ".png":
+        if not data.rstrip(b"\x00").endswith(b"IEND\xaeB`\x82") and png_end(data) is None:
+            raise ImageError(f"{path}: truncated PNG (no IEND chunk); re-export the file")
+    elif suffix in (".jpg", ".jpeg"):
+        if b"\xff\xd9" not in data[-64:] and jpeg_end(data) is None:
+            raise ImageError(f"{path}: truncated JPEG (no end-of-image marker); re-export the file")
 
 
 def read_file_bytes(path: str | os.PathLike[str]) -> bytes:
