@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import dataclasses
 import itertools
 
 import numpy as np
@@ -9,6 +10,7 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
+from contactcal.infer.calibration.band import Band
 from contactcal.infer.calibration.curve import Curve
 from contactcal.infer.calibration.fit import CurveConfig, estimate_onset, fit_monotone
 from contactcal.infer.calibration.isotonic import despike, isotonic_fit
@@ -224,8 +226,31 @@ def test_inverse_below_first_contact_without_bracket_warns() -> None:
 def test_inverse_table() -> None:
     curve = fit_monotone(P, _quadratic(P), config=CurveConfig(table_step=50.0))
     table = curve.inverse_table()
-    assert [a for a, _ in table] == [0.0, 50.0, 100.0, 150.0, 196.0]
-    assert table[0][1] == curve.onset_kpa and table[2][1] == 8.0 and table[-1][1] == 10.0
+    _, knot_areas = curve.knots()
+    assert [a for a, _ in table] == sorted({0.0, 50.0, 100.0, 150.0, 196.0, *knot_areas})
+    by_area = dict(table)
+    assert by_area[0.0] == curve.onset_kpa and by_area[100.0] == 8.0 and table[-1][1] == 10.0
     auto = fit_monotone(P, _quadratic(P)).inverse_table()
     assert all(b[0] > a[0] and b[1] > a[1] for a, b in itertools.pairwise(auto))
     assert len(auto) <= 102 and auto[1][0] == 2.0  # 196 / 100 -> 1-2-5 step 2
+
+
+def test_inverse_table_interpolates_to_the_curves_own_inverse() -> None:
+    """A controller interpolating the table linearly got pressures up to 2 kPa off the curve:
+    the rows skipped the isotonic fit's breakpoints and the ends of its flat segments."""
+    pressures = np.arange(0.0, 11.0)
+    curve = fit_monotone(pressures, [0, 0, 0, 10, 30, 30, 30, 80, 120, 150, 150])
+    table = curve.inverse_table(step=50.0)
+    areas, kpa = (np.array(col) for col in zip(*table, strict=True))
+    assert np.all(np.diff(areas) >= 0) and np.all(np.diff(kpa) > 0)
+    x, y = curve.knots()
+    flat = float(y[np.diff(y, append=np.inf) == 0][0])  # the fit's flat segment (30 mm²)
+    assert [p for a, p in table if a == flat] == [4.0, 6.0]  # its lowest and highest pressure
+    assert [p for a, p in table if a == y[-1]] == [curve.pressure_for_area(y[-1])[0]]
+    q = np.setdiff1d(np.linspace(0.0, float(y[-1]), 601), areas)
+    exact = [curve.pressure_for_area(a)[0] for a in q]
+    np.testing.assert_allclose(np.interp(q, areas, kpa), exact, atol=1e-9)
+    fit = curve.fit_area
+    band = Band(pressures, np.maximum(fit - 5.0, 0.0), fit + 5.0, 0.9, 10, 0)
+    rows = dataclasses.replace(curve, band=band).inverse_table_with_interval(step=50.0)
+    assert [r[:2] for r in rows] == table and all(lo <= p <= hi for _, p, lo, hi in rows)

@@ -9,6 +9,7 @@ saturating one (``model``), :mod:`.bootstrap` the band.
 
 from __future__ import annotations
 
+import itertools
 import math
 from dataclasses import dataclass
 from typing import TYPE_CHECKING
@@ -198,7 +199,13 @@ class Curve:
     def inverse_table(self, step: float | None = None) -> list[tuple[float, float]]:
         """``[(area, pressure_kpa), ...]`` from the smallest to the largest calibrated area.
 
-        Rows at the smallest area, every multiple of ``step`` in between, and the largest area.
+        Rows at the smallest area, every multiple of ``step`` in between, and the largest area;
+        for the piecewise-linear (isotonic) fit also a row at each of its breakpoints, so that
+        linear interpolation between rows is the curve's own inverse. Where the fit holds an
+        area over a pressure range (a flat segment below a rise) two rows share that area: the
+        range's lowest pressure (the inverse there) and its highest (the start of the rise
+        above it); a lookup that takes the first row reaching an area, or ``numpy.interp``
+        just above it, then follows the curve.
 
         Args:
             step: area step (area_unit) > 0; None uses `default_table_step`.
@@ -219,14 +226,42 @@ class Curve:
                 f"inverse_table: step {s} gives more than 100000 rows; use a larger one"
             )
         areas = [lo, *(k * s for k in range(first, last + 1)), hi]
-        return [(float(a), self.pressure_for_area(a)[0]) for a in areas]
+        rows = [(float(a), self.pressure_for_area(a)[0]) for a in areas]
+        if self.model is not None:  # the smooth form: the step's rows follow it closely
+            return rows
+        return _with_breakpoints(rows, *self.knots())
 
     def inverse_table_with_interval(
         self, step: float | None = None
     ) -> list[tuple[float, float, float, float]]:
         """``[(area, p, p_lo, p_hi), ...]``: `inverse_table` with the band's interval, kPa."""
-        rows = self.inverse_table(step)
-        return [(a, *self.pressure_interval_for_area(a)[:3]) for a, _ in rows]
+        out = []
+        for a, p in self.inverse_table(step):
+            _, lo, hi, _ = self.pressure_interval_for_area(a)
+            out.append((a, p, min(lo, p), max(hi, p)))  # p: a flat's end, past `lo`-`hi`
+        return out
+
+
+def _with_breakpoints(
+    rows: list[tuple[float, float]], x: np.ndarray, y: np.ndarray
+) -> list[tuple[float, float]]:
+    """``rows`` with the knots ``(area y, pressure x)`` in their place, sorted by area.
+
+    A row at a knot's area gives way to the knot (the same point, without interpolation's
+    rounding). An area the knots hold over a pressure range keeps the range's lowest pressure
+    and, unless it is the largest area, its highest (where the curve rises again).
+    """
+    knots = list(zip(map(float, y), map(float, x), strict=True))
+    at_knots = {a for a, _ in knots}
+    merged = sorted([r for r in rows if r[0] not in at_knots] + knots)
+    top = merged[-1][0]
+    out: list[tuple[float, float]] = []
+    for a, group in itertools.groupby(merged, key=lambda r: r[0]):
+        ps = [p for _, p in group]
+        out.append((a, ps[0]))
+        if a < top and ps[-1] > ps[0]:
+            out.append((a, ps[-1]))
+    return out
 
 
 def lowest_reaching(x: np.ndarray, y: np.ndarray, a: float) -> float:
