@@ -243,7 +243,7 @@ def test_inverse_table_interpolates_to_the_curves_own_inverse() -> None:
     table = curve.inverse_table(step=50.0)
     areas, kpa = (np.array(col) for col in zip(*table, strict=True))
     assert np.all(np.diff(areas) >= 0) and np.all(np.diff(kpa) > 0)
-    x, y = curve.knots()
+    _, y = curve.knots()
     flat = float(y[np.diff(y, append=np.inf) == 0][0])  # the fit's flat segment (30 mm²)
     assert [p for a, p in table if a == flat] == [4.0, 6.0]  # its lowest and highest pressure
     assert [p for a, p in table if a == y[-1]] == [curve.pressure_for_area(y[-1])[0]]
