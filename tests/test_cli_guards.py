@@ -412,3 +412,28 @@ def test_bit_depth_out_of_range_and_an_empty_manifest_are_one_line(
     empty.write_text("file,pressure_kpa\n")
     assert main(["calibrate", str(empty), "--out", str(tmp_path / "c")]) == 2
     assert "under the header 'file,pressure_kpa'" in _one_error(capsys)
+
+
+class _FullOnFlush(io.StringIO):
+    """A block-buffered standard output on a full disk: its writes fail when flushed."""
+
+    def flush(self) -> None:
+        raise OSError(errno.ENOSPC, os.strerror(errno.ENOSPC))
+
+
+@pytest.mark.parametrize("stream", [_FullStdout, _FullOnFlush])
+@pytest.mark.parametrize("command", ["measure", "calibrate"])
+def test_a_failing_standard_output_after_the_outputs_says_they_are_whole(
+    command: str, stream: type, tmp_path: Path, capsys: pytest.CaptureFixture[str], monkeypatch
+) -> None:
+    """The summary printed after a run's outputs were moved into place failed with the bare
+    "what it printed is incomplete" and exit 2, as if the run had written nothing."""
+    monkeypatch.setattr(sys, "stdout", stream())
+    out = tmp_path / ("m.json" if command == "measure" else "cal")
+    frames = [str(EXAMPLE / "p05.0kpa.jpg")] if command == "measure" else [MANIFEST]
+    assert main([command, *frames, "--method", "classical", "--out", str(out)]) == 2
+    line = _one_error(capsys)
+    assert "writing to standard output failed (No space left on device)" in line
+    assert line.endswith(f"the run's outputs were written, whole: {out}")
+    written = out if command == "measure" else out / "calibration.json"
+    assert json.loads(written.read_text())

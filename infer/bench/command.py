@@ -56,8 +56,9 @@ def add_parsers(sub: argparse._SubParsersAction) -> None:
 
 def _cmd_bench(args: argparse.Namespace) -> int:
     from contactcal.infer.bench.config import BenchConfig
-    from contactcal.infer.bench.report import REPORT_FILES, ROBUSTNESS_FILES
+    from contactcal.infer.bench.report import REPORT_FILES
     from contactcal.infer.bench.run import run_bench
+    from contactcal.infer.files.stdout import printing_after
     from contactcal.infer.pipeline.args import check_out_folder
 
     if args.repeats < 1 or args.timing_frames < 1:
@@ -77,6 +78,15 @@ def _cmd_bench(args: argparse.Namespace) -> int:
     )
     model = None if args.model is None else str(args.model)
     res = run_bench(args.data, args.out, model, cfg, args.crosscheck)
+    with printing_after([args.out]):
+        _print_summary(res, args.out)
+    return 0
+
+
+def _print_summary(res: dict[str, Any], out: Path) -> None:
+    """The error bins, the robustness line and where the report is, on standard output."""
+    from contactcal.infer.bench.report import ROBUSTNESS_FILES
+
     for row in res["bins"]:
         print(f"{row['method']:>16s} {row['bin_kpa']:>6s} kPa  median |rel err| {_pct(row)}")
     for c in res.get("crosscheck", []):
@@ -84,16 +94,15 @@ def _cmd_bench(args: argparse.Namespace) -> int:
             method, kpa = row["method"], row["bin_kpa"]
             print(f"[{c['label']}] {method:>16s} {kpa:>6s} kPa  median |rel err| {_pct(row)}")
     if "robustness" in res:
-        print(_robustness_line(res["robustness"], args.out / "robustness.png"))
+        print(_robustness_line(res["robustness"], out / "robustness.png"))
     else:
-        earlier = [n for n in ROBUSTNESS_FILES if (args.out / n).exists()]
+        earlier = [n for n in ROBUSTNESS_FILES if (out / n).exists()]
         if earlier:
             print(
-                f"note: {', '.join(earlier)} in {args.out} are an earlier run's (this one ran "
+                f"note: {', '.join(earlier)} in {out} are an earlier run's (this one ran "
                 "without --robustness; report.md has no robustness section)"
             )
-    print(f"report: {args.out / 'report.md'}")
-    return 0
+    print(f"report: {out / 'report.md'}")
 
 
 def _variant(text: str) -> tuple[str, str]:

@@ -95,6 +95,7 @@ def _cmd_calibrate(args: argparse.Namespace) -> int:
     from contactcal.infer.calibration.provenance import Provenance
     from contactcal.infer.calibration.record import earlier_record_note
     from contactcal.infer.files.atomic import run_outputs
+    from contactcal.infer.files.stdout import printing_after
     from contactcal.infer.pipeline.manifest import beside_manifest
     from contactcal.infer.pipeline.overlay import earlier_overlays_note, write_overlays
     from contactcal.infer.video.args import is_video_run
@@ -107,7 +108,8 @@ def _cmd_calibrate(args: argparse.Namespace) -> int:
     if is_video_run(args):  # --video / --camera: contactcal.infer.video.command
         code = calibrate_video(args, measure_options(args), provenance)
         if code == 0 and replaced is not None:
-            print(replaced)
+            with printing_after([args.out]):
+                print(replaced)
         return code
     measure = measure_options(args, beside_manifest(args.manifest))
     written: list[Path] = []
@@ -128,10 +130,11 @@ def _cmd_calibrate(args: argparse.Namespace) -> int:
             written = write_overlays(
                 runs, args.overlay, titles, outputs=outs, bit_depth=args.bit_depth
             )
-    print(rep.table)
-    if measure.scale is None:
-        print(NO_SCALE_NOTE.format(looked=MANIFEST_SCALE))
-    for note in (replaced, earlier_overlays_note(written)):
-        if note is not None:
-            print(note)
+    with printing_after([args.out, *([] if args.overlay is None else [args.overlay])]):
+        print(rep.table)
+        if measure.scale is None:
+            print(NO_SCALE_NOTE.format(looked=MANIFEST_SCALE))
+        for note in (replaced, earlier_overlays_note(written)):
+            if note is not None:
+                print(note)
     return 0

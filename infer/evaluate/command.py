@@ -51,6 +51,7 @@ def add_parsers(sub: argparse._SubParsersAction) -> None:
 
 def _cmd_evaluate(args: argparse.Namespace) -> int:
     from contactcal.infer.evaluate.run import evaluate_session
+    from contactcal.infer.files.stdout import printing_after
     from contactcal.infer.pipeline.manifest import beside_manifest
 
     check_change_gate(args)
@@ -61,8 +62,9 @@ def _cmd_evaluate(args: argparse.Namespace) -> int:
     rep = evaluate_session(
         args.manifest, args.labels, args.out, args.method, measure, also_read=[rig] if rig else []
     )
-    print(rep.table)
-    print(f"evaluation: {rep.files['json']}, {rep.files['png']}")
+    with printing_after([args.out]):
+        print(rep.table)
+        print(f"evaluation: {rep.files['json']}, {rep.files['png']}")
     return 0
 
 

@@ -5,16 +5,24 @@ from __future__ import annotations
 import contextlib
 import os
 import sys
-from collections.abc import Iterator
+from collections.abc import Iterator, Sequence
 from typing import Any, TextIO
 
 
 class StdoutError(OSError):
     """Writing to standard output failed: its message says so, unlike the bare OSError's
-    ``[Errno 28] No space left on device``."""
+    ``[Errno 28] No space left on device``; and, where the run had already written its outputs
+    (``written``: files or folders), that those are whole."""
+
+    def __init__(self, errno: int | None, strerror: str | None, written: Sequence[str] = ()):
+        super().__init__(errno, strerror)
+        self.written = tuple(written)
 
     def __str__(self) -> str:
-        return f"writing to standard output failed ({self.strerror}): what it printed is incomplete"
+        said = f"writing to standard output failed ({self.strerror}): what it printed is incomplete"
+        if self.written:
+            said += f"; the run's outputs were written, whole: {', '.join(self.written)}"
+        return said
 
 
 class _Named:
@@ -41,6 +49,21 @@ class _Named:
 
 def _named(exc: OSError) -> StdoutError:
     return StdoutError(exc.errno, exc.strerror)
+
+
+@contextlib.contextmanager
+def printing_after(written: Sequence[str | os.PathLike[str]]) -> Iterator[None]:
+    """A block that prints a run's summary after the run's outputs were moved into place: a
+    failed write to standard output there says that ``written`` (files or folders) are whole
+    (the exit status is still that of a failed standard output). The block's lines are flushed
+    at its end, so that their failure surfaces here."""
+    try:
+        yield
+        if sys.stdout is not None:
+            sys.stdout.flush()
+    except StdoutError as exc:
+        names = [*exc.written, *(os.fspath(w) for w in written)]
+        raise StdoutError(exc.errno, exc.strerror, names) from exc
 
 
 @contextlib.contextmanager

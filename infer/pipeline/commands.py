@@ -40,6 +40,7 @@ def _cmd_measure(args: argparse.Namespace) -> int:
     from contactcal.infer.calibration.provenance import check_device_id
     from contactcal.infer.files.atomic import run_outputs, write_synced
     from contactcal.infer.files.jsonable import json_text
+    from contactcal.infer.files.stdout import printing_after
     from contactcal.infer.image.read import SUPPORTED_SUFFIXES
     from contactcal.infer.pipeline.measure import note_self_reference
     from contactcal.infer.pipeline.overlay import earlier_overlays_note, write_overlays
@@ -78,18 +79,20 @@ def _cmd_measure(args: argparse.Namespace) -> int:
         if args.overlay is not None:
             runs = overlay_runs(args, options, measured, args.images, args.reference)
             written = write_overlays(runs, args.overlay, outputs=outs, bit_depth=args.bit_depth)
-    if to_stdout:
-        sys.stdout.write(text)
-    for m in measured:
-        mm2 = m.area_mm2
-        area = f"{mm2:8.1f} mm²" if mm2 is not None else f"{m.result.area_px:10.0f} px"
-        line = f"{m.file}  contact={'yes' if m.result.contact else 'no ':3s} area={area}"
-        print(line, file=sys.stderr if to_stdout else sys.stdout)
-    for line in warnings:
-        print(line, file=sys.stderr)
-    note = earlier_overlays_note(written)
-    if note is not None:
-        print(note, file=sys.stderr if to_stdout else sys.stdout)
+    overlays = [] if args.overlay is None else [args.overlay]
+    with printing_after([*([] if to_stdout else [args.out]), *overlays]):
+        if to_stdout:
+            sys.stdout.write(text)
+        for m in measured:
+            mm2 = m.area_mm2
+            area = f"{mm2:8.1f} mm²" if mm2 is not None else f"{m.result.area_px:10.0f} px"
+            line = f"{m.file}  contact={'yes' if m.result.contact else 'no ':3s} area={area}"
+            print(line, file=sys.stderr if to_stdout else sys.stdout)
+        for line in warnings:
+            print(line, file=sys.stderr)
+        note = earlier_overlays_note(written)
+        if note is not None:
+            print(note, file=sys.stderr if to_stdout else sys.stdout)
     return 0
 
 

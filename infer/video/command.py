@@ -144,6 +144,7 @@ def calibrate_video(
     from contactcal.infer.calibration.calibrate import calibrate_session
     from contactcal.infer.calibration.command import session_options
     from contactcal.infer.files.atomic import run_outputs, write_synced
+    from contactcal.infer.files.stdout import printing_after
     from contactcal.infer.pipeline.args import NO_SCALE_NOTE, VIDEO_SCALE
     from contactcal.infer.pipeline.manifest import check_sweep_top
     from contactcal.infer.video import coverage, extract, live
@@ -193,10 +194,11 @@ def calibrate_video(
             outputs=outs,
             manifest_as=final_manifest,
         )
-    print(rep.table)
-    if measure.scale is None:
-        print(NO_SCALE_NOTE.format(looked=VIDEO_SCALE))
-    print(ex.summary())
-    for line in warnings:  # under the table, where they are read with the curve
-        print(line)
+    with printing_after([args.out]):
+        print(rep.table)
+        if measure.scale is None:
+            print(NO_SCALE_NOTE.format(looked=VIDEO_SCALE))
+        print(ex.summary())
+        for line in warnings:  # under the table, where they are read with the curve
+            print(line)
     return 0
