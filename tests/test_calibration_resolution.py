@@ -6,13 +6,18 @@ from __future__ import annotations
 
 import json
 import shutil
+import warnings
 from pathlib import Path
 
 import numpy as np
 import pytest
 
 from contactcal.infer.calibration.fit import CurveConfig, fit_monotone, fit_parametric
-from contactcal.infer.calibration.load import UnresolvedCurveError, load_curve
+from contactcal.infer.calibration.load import (
+    UnassessedCurveWarning,
+    UnresolvedCurveError,
+    load_curve,
+)
 from contactcal.infer.calibration.onset import (
     EXTRAPOLATED_RULE,
     FITTED_RULE,
@@ -219,5 +224,11 @@ def test_a_coarse_session_records_its_bracket_and_warns(
     assert loading["onset_bracket_kpa"] == [0.0, 5.0]
     assert loading["onset_rule"] == MIDPOINT_BELOW_RULE
     assert loading["resolution"]["resolves"] is None and loading["resolution"]["reason"]
-    _, p_lo, p_hi, _ = load_curve(out / "calibration.json").pressure_interval_for_area(5.0)
+    # read back with a warning (it was read silently, although calibrate warned)
+    with pytest.warns(UnassessedCurveWarning, match="not assessed: no cross-validated error"):
+        curve = load_curve(out / "calibration.json")
+    _, p_lo, p_hi, _ = curve.pressure_interval_for_area(5.0)
     assert p_lo < 0.01 and p_hi > 4.99
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        load_curve(out / "calibration.json", allow_unresolved=True)

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import json
 import os
+import warnings
 from pathlib import Path
 from typing import Any
 
@@ -52,6 +53,14 @@ def _phase_curve(data: dict[str, Any], phase: str | None, allow_unresolved: bool
             "arbitrary pressures; recalibrate (check the overlays), or read it anyway with "
             "allow_unresolved=True"
         )
+    if "resolves" in res and res["resolves"] is None and not allow_unresolved:
+        why = str(res.get("reason") or "not assessed").removeprefix("not assessed: ")
+        warnings.warn(
+            f"whether the {name} curve tells pressures apart was not assessed: {why} (pass "
+            "allow_unresolved=True to read it without this warning)",
+            UnassessedCurveWarning,
+            stacklevel=4,
+        )
     m, b = ph.get("parametric"), ph.get("band")
     model = None if m is None else Saturating(m["p0_kpa"], m["k_kpa"], m["a_max"])
     band = None
@@ -81,6 +90,10 @@ class NoContactCurveError(ValueError):
     """The curve asked for has no contact (no onset, no inverse): nothing to invert."""
 
 
+class UnassessedCurveWarning(UserWarning):
+    """The record could not assess whether the curve tells pressures apart (too few steps)."""
+
+
 class _NoSuchPhase(ValueError):
     """A readable record without the pass asked for."""
 
@@ -101,7 +114,10 @@ def load_curve(
             have no band.
         allow_unresolved: read a curve the record says does not resolve pressures (its rise
             over the contact steps no larger than its cross-validated error; ``calibrate``
-            warned); by default that is an error, not a silently flat curve.
+            warned); by default that is an error, not a silently flat curve. A curve whose
+            resolution the record could not assess (fewer than two steps in contact above the
+            onset, or no cross-validated error: few steps, as in a short unloading pass) is
+            read with an :class:`UnassessedCurveWarning` unless this is True.
         area_unit: the unit the caller's areas are in (``"mm²"``, also written ``"mm2"``, or
             ``"px"``): a record in
             another unit is refused (a session calibrated without a pixel scale holds px, and
