@@ -360,3 +360,12 @@ def test_a_curve_that_does_not_resolve_is_not_read_silently(tmp_path: Path) -> N
     assert curve.onset_kpa == rep.curve.onset_kpa
     unet = calibrate_session(example, tmp_path / "u", "unet")
     assert load_curve(unet.files["json"], phase="LOADING").onset_kpa == unet.curve.onset_kpa
+
+
+def test_a_replaced_record_without_a_device_id_is_said_so(tmp_path: Path) -> None:
+    """The note read "device id None" for a record made without --device-id."""
+    record = {"created": "2024-05-01T10:00:00+00:00", "device_id": None}
+    (tmp_path / "calibration.json").write_text(json.dumps(record))
+    note = calibration_io.earlier_record_note(tmp_path)
+    assert note is not None and "None" not in note
+    assert f"(created {record['created']}, no device id)" in note

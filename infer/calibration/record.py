@@ -265,8 +265,10 @@ def earlier_record_note(out_dir: str | os.PathLike[str]) -> str | None:
         return None
     try:
         old = json.loads(path.read_text(encoding="utf-8"))
-        what = f"created {old['created']}, device id {old.get('device_id')!r}"
-    except (OSError, ValueError, KeyError, TypeError):
+        device = old.get("device_id")
+        named = "no device id" if device is None else f"device id {device!r}"
+        what = f"created {old['created']}, {named}"
+    except (OSError, ValueError, KeyError, TypeError, AttributeError):
         what = "unreadable as a record"
     return (
         f"note: replaced the calibration {out_dir} held ({what}); give each run its own --out "
