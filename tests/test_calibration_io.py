@@ -369,3 +369,12 @@ def test_a_replaced_record_without_a_device_id_is_said_so(tmp_path: Path) -> Non
     note = calibration_io.earlier_record_note(tmp_path)
     assert note is not None and "None" not in note
     assert f"(created {record['created']}, no device id)" in note
+
+
+def test_a_foreign_calibration_csv_replaced_is_said_so(tmp_path: Path) -> None:
+    """A calibration.csv without a calibration.json beside it was overwritten without a word."""
+    assert calibration_io.earlier_record_note(tmp_path) is None
+    (tmp_path / "calibration.csv").write_text("pressure,area\n1,2\n")
+    note = calibration_io.earlier_record_note(tmp_path)
+    assert note is not None
+    assert note.startswith(f"note: replaced the calibration.csv {tmp_path} held (no calibration")
