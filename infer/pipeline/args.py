@@ -58,7 +58,8 @@ def bit_depth_arg(p: argparse.ArgumentParser) -> None:
         type=int,
         metavar="N",
         help="significant bits of 16-bit images (e.g. 12 for a 12-bit camera's PNGs holding "
-        "0-4095; 16 for full-range); default: the PNG sBIT chunk, else required when ambiguous",
+        "0-4095; 16 for full-range; refused for 8-bit images, which are full range); default: "
+        "the PNG sBIT chunk, else required when ambiguous",
     )
 
 
