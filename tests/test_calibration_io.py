@@ -378,3 +378,26 @@ def test_a_foreign_calibration_csv_replaced_is_said_so(tmp_path: Path) -> None:
     note = calibration_io.earlier_record_note(tmp_path)
     assert note is not None
     assert note.startswith(f"note: replaced the calibration.csv {tmp_path} held (no calibration")
+
+
+def test_a_pooled_reading_is_a_number_in_the_record(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """pressure_kpa_read was written as a string ("5.98") in the points' extras; a manifest's
+    own column of that name that is no number exits 2 naming the row."""
+    s = copy_session(tmp_path, ("p00.0kpa.jpg", "p05.0kpa.jpg", "p06.0kpa.jpg", "p12.0kpa.jpg"))
+    rows = "p00.0kpa.jpg,0\np05.0kpa.jpg,5.98\np06.0kpa.jpg,6.02\np12.0kpa.jpg,12\n"
+    (s / "manifest.csv").write_text("file,pressure_kpa\n" + rows)
+    out = tmp_path / "c"
+    argv = ["calibrate", str(s / "manifest.csv"), "--method", "classical", "--out", str(out)]
+    assert main(argv) == 0
+    points = json.loads((out / "calibration.json").read_text())["points"]
+    reads = sorted(p["extras"]["pressure_kpa_read"] for p in points if p["extras"])
+    assert reads == [5.98, 6.02]
+    (s / "manifest.csv").write_text(
+        "file,pressure_kpa,pressure_kpa_read\np00.0kpa.jpg,0,0\np12.0kpa.jpg,12,12 kPa\n"
+    )
+    capsys.readouterr()
+    assert main([*argv[:-1], str(tmp_path / "d")]) == 2
+    err = capsys.readouterr().err
+    assert "row 2" in err and "pressure_kpa_read '12 kPa' is not a number" in err
