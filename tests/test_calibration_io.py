@@ -360,3 +360,44 @@ def test_a_curve_that_does_not_resolve_is_not_read_silently(tmp_path: Path) -> N
     assert curve.onset_kpa == rep.curve.onset_kpa
     unet = calibrate_session(example, tmp_path / "u", "unet")
     assert load_curve(unet.files["json"], phase="LOADING").onset_kpa == unet.curve.onset_kpa
+
+
+def test_a_replaced_record_without_a_device_id_is_said_so(tmp_path: Path) -> None:
+    """The note read "device id None" for a record made without --device-id."""
+    record = {"created": "2024-05-01T10:00:00+00:00", "device_id": None}
+    (tmp_path / "calibration.json").write_text(json.dumps(record))
+    note = calibration_io.earlier_record_note(tmp_path)
+    assert note is not None and "None" not in note
+    assert f"(created {record['created']}, no device id)" in note
+
+
+def test_a_foreign_calibration_csv_replaced_is_said_so(tmp_path: Path) -> None:
+    """A calibration.csv without a calibration.json beside it was overwritten without a word."""
+    assert calibration_io.earlier_record_note(tmp_path) is None
+    (tmp_path / "calibration.csv").write_text("pressure,area\n1,2\n")
+    note = calibration_io.earlier_record_note(tmp_path)
+    assert note is not None
+    assert note.startswith(f"note: replaced the calibration.csv {tmp_path} held (no calibration")
+
+
+def test_a_pooled_reading_is_a_number_in_the_record(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """pressure_kpa_read was written as a string ("5.98") in the points' extras; a manifest's
+    own column of that name that is no number exits 2 naming the row."""
+    s = copy_session(tmp_path, ("p00.0kpa.jpg", "p05.0kpa.jpg", "p06.0kpa.jpg", "p12.0kpa.jpg"))
+    rows = "p00.0kpa.jpg,0\np05.0kpa.jpg,5.98\np06.0kpa.jpg,6.02\np12.0kpa.jpg,12\n"
+    (s / "manifest.csv").write_text("file,pressure_kpa\n" + rows)
+    out = tmp_path / "c"
+    argv = ["calibrate", str(s / "manifest.csv"), "--method", "classical", "--out", str(out)]
+    assert main(argv) == 0
+    points = json.loads((out / "calibration.json").read_text())["points"]
+    reads = sorted(p["extras"]["pressure_kpa_read"] for p in points if p["extras"])
+    assert reads == [5.98, 6.02]
+    (s / "manifest.csv").write_text(
+        "file,pressure_kpa,pressure_kpa_read\np00.0kpa.jpg,0,0\np12.0kpa.jpg,12,12 kPa\n"
+    )
+    capsys.readouterr()
+    assert main([*argv[:-1], str(tmp_path / "d")]) == 2
+    err = capsys.readouterr().err
+    assert "row 2" in err and "pressure_kpa_read '12 kPa' is not a number" in err

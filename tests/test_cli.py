@@ -8,6 +8,7 @@ import shutil
 from pathlib import Path
 
 import cv2
+import numpy as np
 import pytest
 
 from contactcal.infer import cli
@@ -157,3 +158,29 @@ def test_core_commands_skip_the_plugin_commands(monkeypatch: pytest.MonkeyPatch)
     for command in (None, "--help", "train", "synth"):
         cli.build_parser(command)
     assert len(calls) == 4
+
+
+def test_demo_takes_bit_depth_and_says_which_calibration_it_replaced(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """``demo --manifest`` of a 12-bit camera's 16-bit PNGs needs ``--bit-depth 12`` as
+    ``calibrate`` does; a second run into one ``--out`` names each record it replaced."""
+    session = tmp_path / "s"
+    session.mkdir()
+    rows = ["file,pressure_kpa"]
+    for kpa in (0, 6, 12, 18):
+        gray = cv2.imread(str(EXAMPLE / f"p{kpa:04.1f}kpa.jpg"), cv2.IMREAD_GRAYSCALE)
+        data = np.rint(gray * (4095 / 255)).astype(np.uint16)  # 12-bit data in 16 bits
+        assert cv2.imwrite(str(session / f"p{kpa}.png"), data)
+        rows.append(f"p{kpa}.png,{kpa}")
+    (session / "manifest.csv").write_text("\n".join(rows) + "\n")
+    out = tmp_path / "demo"
+    argv = ["demo", "--manifest", str(session / "manifest.csv"), "--out", str(out)]
+    assert main(argv) == 2
+    assert "--bit-depth" in capsys.readouterr().err
+    assert main([*argv, "--bit-depth", "12"]) == 0
+    assert "replaced" not in capsys.readouterr().out
+    assert main([*argv, "--bit-depth", "12"]) == 0
+    printed = capsys.readouterr().out
+    for method in METHODS:
+        assert f"note: replaced the calibration {out / method} held (created " in printed

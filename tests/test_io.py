@@ -146,6 +146,15 @@ def test_bit_depth_rules(tmp_path: Path) -> None:
         load_image(dark16, bit_depth=17)
 
 
+@pytest.mark.parametrize("bits", [6, 8, 12])
+def test_bit_depth_is_refused_for_8bit_files(tmp_path: Path, bits: int) -> None:
+    """--bit-depth 6 brightened an 8-bit file 4-fold; 8-bit samples are full range."""
+    dark = _write(tmp_path / "dark8.png", np.full((30, 40), 50, np.uint8))
+    with pytest.raises(ImageError, match=rf"dark8\.png: --bit-depth {bits} .*8-bit samples"):
+        load_image(dark, bit_depth=bits)
+    assert load_image(dark).max() == 50
+
+
 def test_float_tiff_range(tmp_path: Path) -> None:
     ramp = np.tile(np.linspace(0.0, 1.0, 64, dtype=np.float32), (20, 1))
     out = load_image(_write(tmp_path / "unit.tif", ramp))

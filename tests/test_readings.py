@@ -65,7 +65,7 @@ def _readings_manifest(folder: Path, pressures: list[float], extra: str = "") ->
     lines = ["file,pressure_kpa" + ("," + extra if extra else "")]
     for k, p in enumerate(pressures):
         (folder / f"f{k:03d}.png").write_bytes(b"x")
-        lines.append(f"f{k:03d}.png,{p:.4f}" + (",x" if extra else ""))
+        lines.append(f"f{k:03d}.png,{p:.4f}" + (f",{p:.4f}" if extra else ""))
     (folder / "manifest.csv").write_text("\n".join(lines) + "\n", encoding="utf-8")
     return folder / "manifest.csv"
 
@@ -227,7 +227,7 @@ def test_a_gauge_offset_at_rest_is_read_as_0_kpa(tmp_path: Path) -> None:
     session = read_session(rest)
     zero = [f for f in session.frames if f.step == 0]
     assert [f.pressure_kpa for f in zero] == [0.0, 0.0, 0.0]
-    assert sorted(dict(f.extras)[READING_COLUMN] for f in zero) == ["-0.01", "-0.03", "0.01"]
+    assert sorted(dict(f.extras)[READING_COLUMN] for f in zero) == [-0.03, -0.01, 0.01]
     assert session.at_rest == AtRest(3, -0.03)
     assert session.pooled == Pooled(3, 1, (-0.03, 0.01))
     (tmp_path / "b").mkdir()

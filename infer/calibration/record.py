@@ -257,16 +257,26 @@ def earlier_record_note(out_dir: str | os.PathLike[str]) -> str | None:
         out_dir: the run's output folder, before the run.
 
     Returns:
-        ``None`` without an earlier ``calibration.json``, else a one-line note naming its
-        creation time and device id as recorded ("unreadable" when it is not a record).
+        ``None`` without an earlier ``calibration.json``, ``.csv`` or ``curve.png``, else a
+        one-line note naming the record's creation time and device id ("unreadable" when it is
+        not a record), or, without a ``calibration.json``, the files replaced.
     """
     path = Path(out_dir) / "calibration.json"
     if not path.is_file():
-        return None
+        held = [n for n in ("calibration.csv", "curve.png") if (Path(out_dir) / n).is_file()]
+        if not held:
+            return None
+        return (
+            f"note: replaced the {' and '.join(held)} {out_dir} held (no calibration.json beside "
+            f"{'them' if len(held) > 1 else 'it'}: not a contactcal record); give each run its "
+            "own --out to keep both"
+        )
     try:
         old = json.loads(path.read_text(encoding="utf-8"))
-        what = f"created {old['created']}, device id {old.get('device_id')!r}"
-    except (OSError, ValueError, KeyError, TypeError):
+        device = old.get("device_id")
+        named = "no device id" if device is None else f"device id {device!r}"
+        what = f"created {old['created']}, {named}"
+    except (OSError, ValueError, KeyError, TypeError, AttributeError):
         what = "unreadable as a record"
     return (
         f"note: replaced the calibration {out_dir} held ({what}); give each run its own --out "

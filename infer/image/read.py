@@ -5,10 +5,11 @@ works on (its ROI threshold of 150 is an 8-bit grey level). Colour is converted 
 ITU-R BT.601 luma (``cv2.cvtColor(..., COLOR_BGR2GRAY)``), alpha is dropped, float arrays are
 taken as ``[0, 1]`` intensities (values outside are an error).
 
-Bit depth is never guessed silently. 8-bit samples are full range. 16-bit samples holding N-bit
-data (10- or 12-bit cameras) are scaled by ``255 / (2**N - 1)``; N comes from the PNG ``sBIT``
-chunk or from the caller (``--bit-depth``). Without either, a 16-bit file is full range
-(255/65535) only when its maximum exceeds :data:`LOW_BITS_MAX`; otherwise it is an error.
+Bit depth is never guessed silently. 8-bit samples are full range (``--bit-depth`` is refused
+for them). 16-bit samples holding N-bit data (10- or 12-bit cameras) are scaled by
+``255 / (2**N - 1)``; N comes from the PNG ``sBIT`` chunk or from the caller (``--bit-depth``).
+Without either, a 16-bit file is full range (255/65535) only when its maximum exceeds
+:data:`LOW_BITS_MAX`; otherwise it is an error.
 """
 
 from __future__ import annotations
@@ -148,6 +149,11 @@ def _scale_depth(p: Path, img: np.ndarray, depth: int | None, source: str) -> np
     if img.dtype not in (np.uint8, np.uint16):
         return img  # float (intensities in [0, 1]) or a dtype to_gray_u8 reports
     bits = 8 * img.dtype.itemsize
+    if bits == 8 and depth is not None and source == "--bit-depth":
+        raise ImageError(
+            f"{p}: --bit-depth {depth} states the depth of 16-bit files, and this file holds "
+            "8-bit samples (full range); drop the option, or export every frame as 16-bit"
+        )
     if depth is None and bits == 8:
         return img  # 8-bit samples are full range (no scan of the frame for its maximum)
     colour = img[..., :3] if img.ndim == 3 and img.shape[2] == 4 else img  # alpha is dropped
@@ -185,9 +191,9 @@ def load_image(
         reduce: 1, 2, 4 or 8. For JPEG, decode at 1/reduce resolution directly (libjpeg's
             DCT scaling: several times cheaper); other formats are decoded fully and
             area-resized. The result is about ``(H/reduce, W/reduce)``.
-        bit_depth: significant bits of the integer samples (1-16), e.g. 12 for a 12-bit
+        bit_depth: significant bits of 16-bit integer samples (1-16), e.g. 12 for a 12-bit
             camera's 16-bit PNG holding 0-4095; None → from the PNG ``sBIT`` chunk, else the
-            rule of the module docstring. Ignored for float files.
+            rule of the module docstring. Ignored for float files; an error for 8-bit ones.
 
     Returns:
         ``(H, W) uint8`` grayscale image.

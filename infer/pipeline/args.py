@@ -58,8 +58,24 @@ def bit_depth_arg(p: argparse.ArgumentParser) -> None:
         type=int,
         metavar="N",
         help="significant bits of 16-bit images (e.g. 12 for a 12-bit camera's PNGs holding "
-        "0-4095; 16 for full-range); default: the PNG sBIT chunk, else required when ambiguous",
+        "0-4095; 16 for full-range; refused for 8-bit images, which are full range); default: "
+        "the PNG sBIT chunk, else required when ambiguous",
     )
+
+
+def check_bit_depth(bit_depth: int | None) -> None:
+    """Refuse a ``--bit-depth`` outside 1 to the deepest sample read.
+
+    Raises:
+        ValueError: ``"--bit-depth N: expected 1-16 significant bits per sample ..."``.
+    """
+    from contactcal.infer.image.read import MAX_BIT_DEPTH
+
+    if bit_depth is not None and not 1 <= bit_depth <= MAX_BIT_DEPTH:
+        raise ValueError(
+            f"--bit-depth {bit_depth}: expected 1-{MAX_BIT_DEPTH} significant bits per "
+            f"sample (e.g. 12 for a 12-bit camera's PNGs, {MAX_BIT_DEPTH} for full range)"
+        )
 
 
 def method_args(p: argparse.ArgumentParser) -> None:
@@ -183,14 +199,9 @@ def measure_options(args: argparse.Namespace, default_rig: Path | None = None) -
     line: ``--model``, the scale and boundary offset (:func:`resolve_rig`; ``default_rig``: the
     ``rig.json`` read when no option names one),
     ``--bit-depth``, ``--no-change-gate``, ``--threads`` and ``--overlay`` (outlines)."""
-    from contactcal.infer.image.read import MAX_BIT_DEPTH
     from contactcal.infer.pipeline.options import MeasureOptions
 
-    if args.bit_depth is not None and not 1 <= args.bit_depth <= MAX_BIT_DEPTH:
-        raise ValueError(
-            f"--bit-depth {args.bit_depth}: expected 1-{MAX_BIT_DEPTH} significant bits per "
-            f"sample (e.g. 12 for a 12-bit camera's PNGs, {MAX_BIT_DEPTH} for full range)"
-        )
+    check_bit_depth(args.bit_depth)
     scale, boundary = resolve_rig(args, default_rig)
     return MeasureOptions(
         model=args.model,

@@ -8,6 +8,8 @@ from pathlib import Path
 
 from contactcal.infer.calibration.command import add_step_tolerance_arg, step_tolerance
 from contactcal.infer.pipeline.args import (
+    bit_depth_arg,
+    check_bit_depth,
     check_change_gate,
     check_out_folder,
     measure_options,
@@ -33,6 +35,7 @@ def add_parsers(sub: argparse._SubParsersAction) -> None:
     d.add_argument("--out", type=Path, default=Path("out/demo"), help="output folder")
     d.add_argument("--manifest", type=Path, help="another session instead of the example")
     add_step_tolerance_arg(d)
+    bit_depth_arg(d)
     d.set_defaults(func=_cmd_demo)
 
 
@@ -98,9 +101,16 @@ def _cmd_measure(args: argparse.Namespace) -> int:
 
 def _cmd_demo(args: argparse.Namespace) -> int:
     from contactcal.infer.calibration.calibrate import SessionOptions
+    from contactcal.infer.calibration.record import earlier_record_note
+    from contactcal.infer.methods.registry import METHODS
     from contactcal.infer.pipeline.demo import run_demo
 
     options = SessionOptions(step_tolerance_kpa=step_tolerance(args))
+    check_bit_depth(args.bit_depth)
     check_out_folder(args.out, "demo")
-    print(run_demo(args.out, args.manifest, args.argv, options))
+    replaced = [earlier_record_note(args.out / method) for method in METHODS]
+    print(run_demo(args.out, args.manifest, args.argv, options, args.bit_depth))
+    for note in replaced:
+        if note is not None:
+            print(note)
     return 0

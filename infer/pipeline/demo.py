@@ -35,6 +35,7 @@ def run_demo(
     manifest: str | os.PathLike[str] | None = None,
     argv: Sequence[str] | None = None,
     options: SessionOptions | None = None,
+    bit_depth: int | None = None,
 ) -> str:
     """Calibrate a session (default: the bundled example) with every method.
 
@@ -47,6 +48,8 @@ def run_demo(
         argv: the command line, recorded in each ``calibration.json`` (None: not run from it).
         options: how the measurements become curves (``--step-tolerance-kpa``); None: the
             defaults, as ``calibrate``'s.
+        bit_depth: significant bits of the session's 16-bit frames (``--bit-depth``); None:
+            from each file.
 
     Returns:
         The printed summary (one table per method).
@@ -54,7 +57,7 @@ def run_demo(
     out = Path(out_dir)
     manifest = Path(manifest) if manifest is not None else example_manifest()
     rig = beside_manifest(manifest)
-    measure = MeasureOptions(outline=True)
+    measure = MeasureOptions(bit_depth=bit_depth, outline=True)
     if rig.is_file():  # as `calibrate` reads the rig.json beside a manifest (once)
         data = read_rig_json(rig)
         measure = replace(
@@ -77,7 +80,8 @@ def run_demo(
         for i in picks:
             contours = {name: rep.measured[i].result.contour for name, rep in reports.items()}
             title = f"{frames[i].pressure_kpa:g} kPa"
-            tiles.append(draw_overlay(load_image(frames[i].file), contours, title))
+            gray = load_image(frames[i].file, bit_depth=bit_depth)
+            tiles.append(draw_overlay(gray, contours, title))
         write_image(outs.stage(out / "overlay_montage.png"), montage(tiles, columns=3))
         lines.append(f"\noverlays: {out / 'overlay_montage.png'}")
         text = "\n".join(lines) + "\n"

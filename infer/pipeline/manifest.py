@@ -188,7 +188,7 @@ def _check_phase_elsewhere(where: str, names: list[str], frames: list[Frame]) ->
     """Refuse a column of another name that holds only passes (``phases``, ``pass``): read
     from the row order instead, the passes it states would be lost without a word."""
     for name in names:
-        cells = [dict(f.extras).get(name, "") for f in frames]
+        cells = [str(dict(f.extras).get(name, "")) for f in frames]
         if name in REQUIRED_COLUMNS or not all(parse_phase(c) for c in cells):
             continue
         raise ManifestError(

@@ -17,6 +17,9 @@ from contactcal.infer.calibration.phases import LOADING, PHASES, parse_phase
 REQUIRED_COLUMNS: tuple[str, ...] = ("file", "pressure_kpa")
 PHASE_COLUMN = "phase"
 KNOWN_COLUMNS = (*REQUIRED_COLUMNS, PHASE_COLUMN)
+#: The extra a frame gets when its reading is read as its step's pressure: the reading, a
+#: number of kPa (a manifest's own column of this name is read as one too).
+READING_COLUMN = "pressure_kpa_read"
 HEADER = ",".join(REQUIRED_COLUMNS)
 #: Highest plausible chamber gauge pressure, kPa. The display works at 0-20 kPa; 100 kPa (1 bar
 #: above the atmosphere on a 70 µm membrane) is five times that, so a larger value is a unit slip
@@ -45,7 +48,8 @@ class Frame:
         row: 1-based data row number in the manifest (header and blank lines not counted).
         phase: ``"loading"`` or ``"unloading"``.
         step: 0-based index of the frame's pressure step within its phase (ascending pressure).
-        extras: the row's other columns as ``(name, cell)`` pairs, in header order.
+        extras: the row's other columns as ``(name, cell)`` pairs, in header order; the cell
+            of :data:`READING_COLUMN` is a number of kPa.
     """
 
     file: Path
@@ -53,7 +57,7 @@ class Frame:
     row: int
     phase: str = LOADING
     step: int = 0
-    extras: tuple[tuple[str, str], ...] = ()
+    extras: tuple[tuple[str, str | float], ...] = ()
 
 
 def read_rows(mpath: Path) -> list[tuple[int, list[str]]]:
@@ -175,8 +179,24 @@ def parse_row(
     file = Path(row["file"]).expanduser()
     if not file.is_absolute():
         file = mpath.resolve().parent / file
-    extras = tuple((n, row[n]) for n in names if n not in KNOWN_COLUMNS)
+    extras = tuple(_extra(at, n, row[n]) for n in names if n not in KNOWN_COLUMNS)
     return Frame(file.resolve(), pressure, row_no, phase, 0, extras)
+
+
+def _extra(at: str, name: str, cell: str) -> tuple[str, str | float]:
+    """A row's other column: :data:`READING_COLUMN` as a number of kPa, any other as written."""
+    if name != READING_COLUMN:
+        return name, cell
+    try:
+        value = float(cell) + 0.0
+    except ValueError:
+        value = math.nan
+    if not math.isfinite(value):
+        raise ManifestError(
+            f"{at}: {READING_COLUMN} {cell!r} is not a number; expected the gauge reading in "
+            "kPa, e.g. 4.02 (decimal point, no unit)"
+        )
+    return name, value
 
 
 def with_changes(frame: Frame, **changes: object) -> Frame:

@@ -13,6 +13,7 @@ import numpy as np
 from contactcal.infer.calibration.phases import PHASES
 from contactcal.infer.pipeline.manifest_rows import (
     MIN_SWEEP_TOP_KPA,
+    READING_COLUMN,
     Frame,
     ManifestError,
     sweep_top_warning,
@@ -27,8 +28,6 @@ from contactcal.infer.pipeline.readings import (
     step_pressure,
 )
 
-#: The extra a frame gets when its reading is read as its step's pressure: the reading.
-READING_COLUMN = "pressure_kpa_read"
 #: The refusal of a step whose readings span the step tolerance or more (readings.is_chain).
 CHAINED = (
     "{where}: the {phase} pass's pressures {lo:g} to {hi:g} kPa ({n} distinct values) chain "
@@ -70,7 +69,7 @@ def pool_readings(
             continue
         level = max(median, 0.0)
         for k in mine:
-            reading = (READING_COLUMN, repr(frames[k].pressure_kpa))
+            reading = (READING_COLUMN, frames[k].pressure_kpa)
             out[k] = with_changes(
                 frames[k], pressure_kpa=level, extras=(*frames[k].extras, reading)
             )
