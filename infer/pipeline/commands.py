@@ -102,6 +102,7 @@ def _cmd_measure(args: argparse.Namespace) -> int:
 def _cmd_demo(args: argparse.Namespace) -> int:
     from contactcal.infer.calibration.calibrate import SessionOptions
     from contactcal.infer.calibration.record import earlier_record_note
+    from contactcal.infer.files.stdout import printing_after
     from contactcal.infer.methods.registry import METHODS
     from contactcal.infer.pipeline.demo import run_demo
 
@@ -109,8 +110,10 @@ def _cmd_demo(args: argparse.Namespace) -> int:
     check_bit_depth(args.bit_depth)
     check_out_folder(args.out, "demo")
     replaced = [earlier_record_note(args.out / method) for method in METHODS]
-    print(run_demo(args.out, args.manifest, args.argv, options, args.bit_depth))
-    for note in replaced:
-        if note is not None:
-            print(note)
+    summary = run_demo(args.out, args.manifest, args.argv, options, args.bit_depth)
+    with printing_after([args.out]):
+        print(summary)
+        for note in replaced:
+            if note is not None:
+                print(note)
     return 0
