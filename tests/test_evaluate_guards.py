@@ -129,6 +129,10 @@ def test_sessions_with_identical_manifests_still_pool(
         for e in (inputs["reference"], *inputs["frames"]):
             e["sha256"] = hashlib.sha256(f"{i}{e['sha256']}".encode()).hexdigest()
         runs.append(_rewrite(twice[0], tmp_path / f"s{i}", inputs))
+        record = _record(runs[-1])  # other contacts: other label areas
+        for f in record["frames"]:
+            f["label_area_px"] += i * bool(f["label_area_px"])
+        (runs[-1] / "evaluation.json").write_text(json.dumps(record))
     pooled = pool_offsets(runs)
     assert len(pooled["sessions"]) == 5
 

@@ -3,6 +3,7 @@ crop with no network pixel inside the image measures nothing (never more than th
 
 from __future__ import annotations
 
+import re
 import warnings
 from pathlib import Path
 
@@ -99,6 +100,50 @@ def test_wrong_output_channels_is_rejected(tmp_path: Path) -> None:
     path = _identity_model(tmp_path / "two_out.onnx", channels_in=2, channels_meta=2)
     with pytest.raises(ModelError, match=r"expected one float output of shape \(N, 1, "):
         OnnxSegmenter(path)
+
+
+def _dynamic_output_model(path: Path, pool: bool) -> Path:
+    """A two-channel model whose output shape onnxruntime cannot infer before a run: the input
+    itself (two channels) or its channel mean max-pooled to half the size."""
+    onnx = pytest.importorskip("onnx")
+    helper = onnx.helper
+    nodes = [
+        helper.make_node("Shape", ["input"], ["shape"]),  # Reshape to a runtime shape hides it
+        helper.make_node("Reshape", ["input", "shape"], ["same" if pool else "logits"]),
+    ]
+    if pool:
+        nodes += [
+            helper.make_node("ReduceMean", ["same"], ["mean"], axes=[1], keepdims=1),
+            helper.make_node("MaxPool", ["mean"], ["logits"], kernel_shape=[2, 2], strides=[2, 2]),
+        ]
+    graph = helper.make_graph(
+        nodes,
+        "dynamic",
+        [helper.make_tensor_value_info("input", onnx.TensorProto.FLOAT, ["n", 2, "h", "w"])],
+        [helper.make_tensor_value_info("logits", onnx.TensorProto.FLOAT, None)],
+    )
+    proto = helper.make_model(graph, opset_imports=[helper.make_opsetid("", 17)])
+    proto.ir_version = 8
+    meta = {p.key: p.value for p in onnx.load(str(DEFAULT_MODEL)).metadata_props}
+    meta["channels"] = "2"
+    meta.pop("min_change", None)
+    helper.set_model_props(proto, meta)
+    onnx.save(proto, str(path))
+    return path
+
+
+@pytest.mark.parametrize(("pool", "got"), [(False, "(1, 2, S, S)"), (True, "(1, 1, H, H)")])
+def test_wrong_output_shape_at_run_time_is_one_clear_line(
+    pool: bool, got: str, tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    path = _dynamic_output_model(tmp_path / "dynamic.onnx", pool)
+    s = OnnxSegmenter().spec.preprocess.input_size  # the metadata is the shipped model's
+    got = got.replace("S", str(s)).replace("H", str(s // 2))
+    with pytest.raises(ModelError, match=re.escape(f"(1, 1, {s}, {s})") + ".*" + re.escape(got)):
+        OnnxSegmenter(path)
+    code, err = _measure(path, tmp_path, capsys)
+    assert code == 2 and str(path) in err and got in err
+    assert len(err.strip().splitlines()) == 1, err
 
 
 def test_shipped_model_passes_the_graph_check() -> None:

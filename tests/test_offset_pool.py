@@ -34,7 +34,7 @@ def _evaluation(
 ) -> Path:
     folder.mkdir(parents=True)
     off = {"model_sha256": sha, "applied_mm": applied, "frame_offsets_mm": offsets}
-    record = {"inputs": _inputs(folder), "boundary_offset": off}
+    record = {"inputs": _inputs(folder), "frames": [], "boundary_offset": off}
     (folder / "evaluation.json").write_text(json.dumps(record))
     return folder
 

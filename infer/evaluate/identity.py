@@ -11,6 +11,12 @@ have byte-identical manifests (the same file names and pressures in their own fo
 five sessions of ``contactcal procedural`` in ``docs/evaluate.md``). Frames differ between
 sessions (a camera's noise alone makes every capture unique), so the frames decide.
 
+A session whose frames were re-encoded (the same captures saved once as JPEG and once as PNG)
+shares no byte-identical frame with its first encoding, but it shares its labels: the same masks
+(matched by stem) or ellipses give the same pixel count at the same pressure. Two evaluations with
+:data:`SHARED_LABELS` or more contact labels of equal area at equal pressures are one session (or
+one session's labels given to another), and are refused with both files named.
+
 An ``evaluation.json`` without ``inputs`` (written by an older ``evaluate``) cannot be checked,
 and is refused with a line saying to run ``evaluate`` on that session again (seconds), rather
 than pooled unchecked.
@@ -26,6 +32,9 @@ from typing import Any
 from contactcal.infer.calibration.provenance import input_digests as frame_digests
 
 _HEX64 = re.compile(r"[0-9a-f]{64}")
+#: Contact labels (pressure, label area in px) two evaluations must share to be one session's:
+#: one equal pixel count at one pressure can happen by chance (areas of ~10⁴ px), three cannot.
+SHARED_LABELS = 3
 
 
 def input_digests(manifest: Path, reference: Path, labelled: Sequence[Path]) -> dict[str, Any]:
@@ -113,3 +122,51 @@ def check_distinct_sessions(runs: Sequence[dict[str, Any]]) -> None:
                 f"{sha[:12]}…: evaluations of one session, which counts once; pool one "
                 "evaluation per session"
             )
+
+
+def read_label_areas(file: str, record: dict[str, Any]) -> set[tuple[float, int]]:
+    """The contact labels an evaluation scored: ``(pressure kPa, label area px)`` of each frame
+    labelled in contact (``frames`` of ``evaluation.json``).
+
+    Raises:
+        ValueError: no or malformed ``frames`` (naming ``file``).
+    """
+    frames = record.get("frames")
+    ok = isinstance(frames, list) and all(
+        isinstance(f, dict)
+        and isinstance(f.get("pressure_kpa"), int | float)
+        and not isinstance(f.get("label_area_px"), bool)
+        and isinstance(f.get("label_area_px"), int)
+        for f in frames
+    )
+    if not ok:
+        raise ValueError(
+            f"{file}: its frames are malformed; expected each frame's pressure_kpa and "
+            "label_area_px, as `contactcal evaluate` writes them"
+        )
+    return {(float(f["pressure_kpa"]), f["label_area_px"]) for f in frames if f["label_area_px"]}
+
+
+def check_distinct_labels(runs: Sequence[dict[str, Any]]) -> None:
+    """Refuse two evaluations sharing :data:`SHARED_LABELS` or more contact labels (equal area at
+    equal pressure): one session's frames in two encodings, or its labels given to another.
+
+    Args:
+        runs: each with ``file`` (its ``evaluation.json``) and ``labels``
+            (:func:`read_label_areas`).
+
+    Raises:
+        ValueError: naming both files and one shared label.
+    """
+    for i, first in enumerate(runs):
+        for second in runs[i + 1 :]:
+            shared = sorted(first["labels"] & second["labels"])
+            if len(shared) >= SHARED_LABELS:
+                kpa, area = shared[0]
+                raise ValueError(
+                    f"{first['file']} and {second['file']}: {len(shared)} frames labelled with "
+                    f"the same areas at the same pressures (e.g. {area} px at {kpa:g} kPa): one "
+                    "session evaluated twice (its frames in another encoding, e.g. JPEG and PNG, "
+                    "or another copy), or one session's labels given to another; it counts "
+                    "once: pool one evaluation per session"
+                )

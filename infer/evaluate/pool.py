@@ -9,7 +9,8 @@ pooled here over sessions: the median of the sessions' medians with the same dis
 applied only when that interval excludes 0. That interval needs five sessions.
 
 Each session counts once: evaluations that read a byte-identical frame (a copied evaluation
-folder, ``evaluate`` run twice on one session) are refused with both files named, and an
+folder, ``evaluate`` run twice on one session) or the same contact labels (one session's frames
+re-encoded, e.g. as JPEG and as PNG) are refused with both files named, and an
 evaluation without the frames' digests (an older ``evaluate``) is refused as unverifiable
 (:mod:`~contactcal.infer.evaluate.identity`).
 """
@@ -25,7 +26,12 @@ from typing import Any
 
 import numpy as np
 
-from contactcal.infer.evaluate.identity import check_distinct_sessions, read_frame_digests
+from contactcal.infer.evaluate.identity import (
+    check_distinct_labels,
+    check_distinct_sessions,
+    read_frame_digests,
+    read_label_areas,
+)
 from contactcal.infer.evaluate.offset import (
     MIN_FRAMES,
     UNRESOLVED,
@@ -71,7 +77,8 @@ def _load(path: Path) -> dict[str, Any]:
         applied is None or _finite_list([applied])
     ):
         raise ValueError(f"{file}: boundary_offset holds values that are not finite numbers")
-    return {**off, "file": str(file), "digests": read_frame_digests(str(file), record)}
+    digests, labels = read_frame_digests(str(file), record), read_label_areas(str(file), record)
+    return {**off, "file": str(file), "digests": digests, "labels": labels}
 
 
 def _same(runs: Sequence[dict[str, Any]], key: str, what: str) -> Any:
@@ -90,6 +97,7 @@ def _sessions(paths: Sequence[str | os.PathLike[str]]) -> tuple[list[dict], list
         raise ValueError(f"{sorted(map(str, twice))[0]}: given twice; each session counts once")
     runs = [_load(f) for f in files]
     check_distinct_sessions(runs)
+    check_distinct_labels(runs)
     kept = [r for r in runs if len(r["frame_offsets_mm"]) >= MIN_FRAMES]
     return kept, [r["file"] for r in runs if r not in kept]
 
@@ -121,8 +129,9 @@ def pool_offsets(paths: Sequence[str | os.PathLike[str]]) -> dict[str, Any]:
         applied + pooled; None when the interval includes 0) and a ``note``.
 
     Raises:
-        ValueError: a file given twice, evaluations of one session (a frame read by both), an
-            unusable evaluation (one without frame digests too), evaluations of different models
+        ValueError: a file given twice, evaluations of one session (a frame read by both, or
+            the same contact labels), an unusable evaluation (one without frame digests or
+            labels too), evaluations of different models
             or applied offsets, fewer than :data:`MIN_SESSIONS` usable sessions, or a session
             whose own offset is beyond ``MAX_OFFSET_MM``.
     """

@@ -26,9 +26,12 @@ from contactcal.infer.evaluate.offset import current_offset, offset_line, unet_o
 from contactcal.infer.evaluate.plots import plot_evaluation
 from contactcal.infer.evaluate.report import format_table
 from contactcal.infer.evaluate.score import frame_records, onset_summary, score_frames
-from contactcal.infer.evaluate.window import Window, check_label_area, find_window
+from contactcal.infer.evaluate.window import check_label_area, find_window
 from contactcal.infer.files.atomic import OutputSet, run_outputs, write_synced
 from contactcal.infer.files.jsonable import json_text
+from contactcal.infer.image.gray import ImageError
+from contactcal.infer.image.jpeg import jpeg_size
+from contactcal.infer.image.read import load_image
 from contactcal.infer.methods.registry import METHODS
 from contactcal.infer.pipeline.manifest import (
     Frame,
@@ -86,15 +89,29 @@ def _measure(
     return out, described, stale
 
 
-def _label_masks(
-    labs: list[Label], measured: list[Measured], window: Window | None
-) -> list[LabelMask]:
-    """The labels rasterised at their frames' sizes, each checked to fit the window ring
-    (:func:`~contactcal.infer.evaluate.window.check_label_area`)."""
+def _frame_size(path: Path, bit_depth: int | None) -> tuple[int, int]:
+    """``(width, height)`` of a frame file as ``measure`` reads it: a JPEG's from its header (no
+    pixel decoded), another format's (or a file named .jpg that is not one) decoded."""
+    if path.suffix.lower() in (".jpg", ".jpeg"):
+        try:
+            h, w = jpeg_size(path)
+            return w, h
+        except ImageError:
+            pass  # OpenCV decodes by content, as measure does below
+    h, w = load_image(path, bit_depth=bit_depth).shape
+    return w, h
+
+
+def _label_masks(labs: list[Label], reference: Path, bit_depth: int | None) -> list[LabelMask]:
+    """The labels rasterised at their frames' sizes (read before any frame is measured, so a
+    mask of another size is refused up front), each checked to fit the window ring of
+    ``reference`` (:func:`~contactcal.infer.evaluate.window.check_label_area`)."""
+    window = find_window(reference, bit_depth)
     masks = []
-    for lab, m in zip(labs, measured, strict=True):
-        mask = label_mask(lab, (m.width, m.height))
-        check_label_area(lab, mask, (m.width, m.height), window)
+    for lab in labs:
+        size = _frame_size(lab.frame, bit_depth)
+        mask = label_mask(lab, size)
+        check_label_area(lab, mask, size, window)
         masks.append(mask)
     return masks
 
@@ -103,20 +120,19 @@ def _score(
     manifest: Path,
     frames: list[Frame],
     labelled: list[Frame],
-    labs: list[Label],
+    masks: list[LabelMask],
     names: list[str],
     measure: MeasureOptions,
-) -> tuple[list[ScoredFrame], list[LabelMask], dict[str, Any] | None]:
+) -> tuple[list[ScoredFrame], dict[str, Any] | None]:
     """The labelled frames measured by each method and scored against their labels' masks;
-    the masks; the U-Net's boundary offset record (None without a U-Net run)."""
+    the U-Net's boundary offset record (None without a U-Net run)."""
     measured, described, stale = _measure(names, frames, [f.file for f in labelled], measure)
-    masks = _label_masks(labs, measured[names[0]], find_window(frames[0].file, measure.bit_depth))
     areas = [float(mask.area_px) for mask in masks]
     source = None if measure.boundary is None else measure.boundary.source
     offset = unet_offset(measured.get("unet", []), areas, measure.scale, described, stale, source)
     pressures = [f.pressure_kpa for f in labelled]
     scored = score_frames(str(manifest), pressures, masks, measured, measure.scale)
-    return scored, masks, offset
+    return scored, offset
 
 
 def _table(
@@ -166,10 +182,11 @@ def evaluate_session(
 ) -> Evaluation:
     """Score ``method`` on the frames of ``manifest`` labelled in ``labels``.
 
-    Every labelled frame is measured (reference: the manifest's lowest-pressure frame) and
-    compared with its label's rasterised mask: area (relative error against the rasterised
-    pixel count, for ellipses too, so that it agrees with the IoU) and IoU of the method's
-    filled outline. Frames without a label are listed under ``"unlabelled"`` (and in the
+    Every label is rasterised at its frame's size and checked first, before any frame is
+    measured. Every labelled frame is then measured (reference: the manifest's lowest-pressure
+    frame) and compared with its label's rasterised mask: area (relative error against the
+    rasterised pixel count, for ellipses too, so that it agrees with the IoU) and IoU of the
+    method's filled outline. Frames without a label are listed under ``"unlabelled"`` (and in the
     table), never silently dropped. A boundary offset in ``measure`` is applied as
     ``calibrate`` applies it; the offset measured here (``boundary_offset``,
     :mod:`~contactcal.infer.evaluate.offset`) is then what remains.
@@ -204,12 +221,13 @@ def evaluate_session(
     base = manifest.resolve().parent
     labs = read_labels(labels, frames, manifest)
     labelled, labs, unlabelled = _labelled(frames, labs, labels, base)
+    masks = _label_masks(labs, frames[0].file, measure.bit_depth)  # before any measuring
     protect = [manifest, measure.model, *also_read, *(f.file for f in frames)]
     protect += list({lab.source for lab in labs})
     with run_outputs(protect, join=outputs) as outs:
         paths = {"png": out / "evaluation.png", "json": out / "evaluation.json"}
         staged = {k: outs.stage(p) for k, p in paths.items()}  # refused here, before work
-        scored, masks, offset = _score(manifest, frames, labelled, labs, names, measure)
+        scored, offset = _score(manifest, frames, labelled, masks, names, measure)
         onset, bins = onset_summary(scored), bin_table(scored, OPEN_BINS)
         record = {
             "manifest": str(manifest.resolve()),

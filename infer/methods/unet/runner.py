@@ -74,6 +74,42 @@ def check_graph_io(ort_session: InferenceSession, spec: ModelSpec, path: Path) -
         )
 
 
+def check_output_shape(
+    ort_session: InferenceSession, input_name: str, spec: ModelSpec, path: Path
+) -> None:
+    """Run the network once on a zero input: its output must be ``(1, 1, S, S)`` logits.
+
+    :func:`check_graph_io` accepts dynamic output dimensions, which only a run resolves: a graph
+    that gives two channels, another spatial size or another rank would otherwise fail (or
+    measure a wrong map) on the first frame.
+
+    Args:
+        ort_session: the ``onnxruntime.InferenceSession`` that will run the frames.
+        input_name: its input's name.
+        spec: the model's metadata (channels, input size).
+        path: the model file, for messages.
+
+    Raises:
+        ModelError: the run fails or gives another shape; the message names the file and both
+            shapes.
+    """
+    s = spec.preprocess.input_size
+    want = (1, 1, s, s)
+    x = np.zeros((1, spec.channels, s, s), np.float32)
+    try:
+        got = tuple(np.shape(ort_session.run(None, {input_name: x})[0]))
+    except Exception as exc:  # onnxruntime raises its own exception types
+        raise ModelError(
+            f"{path}: the model fails on a {_dims(list(x.shape))} input ({exc})"
+        ) from exc
+    if got != want:
+        raise ModelError(
+            f"{path}: expected an output of shape {_dims(list(want))} for a "
+            f"{_dims(list(x.shape))} input (as its metadata says), got {_dims(list(got))}; "
+            "use a model written by `contactcal export`"
+        )
+
+
 def static_dims(shape: list[object], spec: ModelSpec) -> dict[str, int]:
     """Values for the input's named free dimensions: deployment runs one ``(1, C, S, S)`` input.
 
@@ -127,7 +163,7 @@ class OnnxSegmenter:
 
     Raises:
         ModelError: missing, unloadable, without valid contactcal metadata, or with a graph
-            input/output that does not match it.
+            input/output that does not match it (the output's shape checked by one run).
     """
 
     def __init__(self, path: str | os.PathLike[str] | None = None, threads: int = 1) -> None:
@@ -157,6 +193,7 @@ class OnnxSegmenter:
             opts.add_free_dimension_override_by_name(name, value)
         self.ort_session = _session(self.path, opts)  # checked above: same graph, fixed dims
         self.input_name = self.ort_session.get_inputs()[0].name
+        check_output_shape(self.ort_session, self.input_name, self.spec, self.path)
 
     def probabilities(self, x: np.ndarray) -> np.ndarray:
         """Run the network on a ``(C, S, S)`` input; returns ``(S, S) float32`` probabilities."""
