@@ -139,8 +139,10 @@ def test_wrong_output_shape_at_run_time_is_one_clear_line(
     path = _dynamic_output_model(tmp_path / "dynamic.onnx", pool)
     s = OnnxSegmenter().spec.preprocess.input_size  # the metadata is the shipped model's
     got = got.replace("S", str(s)).replace("H", str(s // 2))
+    net = OnnxSegmenter(path)
+    x = np.zeros((net.spec.channels, s, s), np.float32)
     with pytest.raises(ModelError, match=re.escape(f"(1, 1, {s}, {s})") + ".*" + re.escape(got)):
-        OnnxSegmenter(path)
+        net.probabilities(x)
     code, err = _measure(path, tmp_path, capsys)
     assert code == 2 and str(path) in err and got in err
     assert len(err.strip().splitlines()) == 1, err
