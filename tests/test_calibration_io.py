@@ -308,7 +308,7 @@ def test_a_second_run_into_one_out_says_which_calibration_it_replaced(
     assert "replaced" not in capsys.readouterr().out
     assert main(argv) == 0
     printed = capsys.readouterr().out
-    held = f"note: replaced the calibration {out} held (created {first['created']}, device id "
+    held = f"note: replaced the calibration that {out} held (created {first['created']}, device id "
     assert held + "'display-07'); give each run its own --out to keep both" in printed
     assert json.loads((out / "calibration.json").read_text())["device_id"] is None
 
@@ -377,7 +377,8 @@ def test_a_foreign_calibration_csv_replaced_is_said_so(tmp_path: Path) -> None:
     (tmp_path / "calibration.csv").write_text("pressure,area\n1,2\n")
     note = calibration_io.earlier_record_note(tmp_path)
     assert note is not None
-    assert note.startswith(f"note: replaced the calibration.csv {tmp_path} held (no calibration")
+    want = f"note: replaced the calibration.csv that {tmp_path} held (no calibration"
+    assert note.startswith(want)
 
 
 def test_a_pooled_reading_is_a_number_in_the_record(

@@ -183,4 +183,4 @@ def test_demo_takes_bit_depth_and_says_which_calibration_it_replaced(
     assert main([*argv, "--bit-depth", "12"]) == 0
     printed = capsys.readouterr().out
     for method in METHODS:
-        assert f"note: replaced the calibration {out / method} held (created " in printed
+        assert f"note: replaced the calibration that {out / method} held (created " in printed

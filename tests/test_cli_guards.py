@@ -427,13 +427,22 @@ def test_a_failing_standard_output_after_the_outputs_says_they_are_whole(
     command: str, stream: type, tmp_path: Path, capsys: pytest.CaptureFixture[str], monkeypatch
 ) -> None:
     """The summary printed after a run's outputs were moved into place failed with the bare
-    "what it printed is incomplete" and exit 2, as if the run had written nothing."""
-    monkeypatch.setattr(sys, "stdout", stream())
+    "what it printed is incomplete" and exit 2, as if the run had written nothing; and the
+    note on the calibration a run replaced, printed there, was lost."""
     out = tmp_path / ("m.json" if command == "measure" else "cal")
     frames = [str(EXAMPLE / "p05.0kpa.jpg")] if command == "measure" else [MANIFEST]
-    assert main([command, *frames, "--method", "classical", "--out", str(out)]) == 2
+    argv = [command, *frames, "--method", "classical", "--out", str(out)]
+    if command == "calibrate":  # an earlier calibration, which the failing run replaces
+        assert main(argv) == 0
+        capsys.readouterr()
+    monkeypatch.setattr(sys, "stdout", stream())
+    assert main(argv) == 2
     line = _one_error(capsys)
     assert "writing to standard output failed (No space left on device)" in line
-    assert line.endswith(f"the run's outputs were written, whole: {out}")
+    written = f"the run's outputs were written, whole: {out}"
+    if command == "calibrate":
+        assert f"{written}; replaced the calibration that {out} held (created " in line
+    else:
+        assert line.endswith(written)
     written = out if command == "measure" else out / "calibration.json"
     assert json.loads(written.read_text())

@@ -419,7 +419,7 @@ def test_a_vent_to_zero_is_left_out_and_a_rerun_is_refused(
     assert main(["calibrate", manifest, "--method", "classical", "--out", str(stills)]) == 0
     capsys.readouterr()
     assert main([*argv, str(tmp_path / "log.csv"), "--out", str(stills)]) == 0
-    assert f"note: replaced the calibration {stills} held (created " in capsys.readouterr().out
+    assert f"note: replaced the calibration that {stills} held (created " in capsys.readouterr().out
     for flat, expected in (  # one steady step only: at rest (no sweep), or at 5 kPa
         ([0, 0], "flat.csv: the highest pressure_kpa is 0.0"),
         ([5, 5], "flat.csv: the steady steps found hold 1 loading pressure"),

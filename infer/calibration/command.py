@@ -106,11 +106,7 @@ def _cmd_calibrate(args: argparse.Namespace) -> int:
     check_out_folder(args.out, "calibrate")
     replaced = earlier_record_note(args.out)
     if is_video_run(args):  # --video / --camera: contactcal.infer.video.command
-        code = calibrate_video(args, measure_options(args), provenance)
-        if code == 0 and replaced is not None:
-            with printing_after([args.out]):
-                print(replaced)
-        return code
+        return calibrate_video(args, measure_options(args), provenance, replaced)
     measure = measure_options(args, beside_manifest(args.manifest))
     written: list[Path] = []
     with run_outputs(run_inputs(args)) as outs:
@@ -130,7 +126,8 @@ def _cmd_calibrate(args: argparse.Namespace) -> int:
             written = write_overlays(
                 runs, args.overlay, titles, outputs=outs, bit_depth=args.bit_depth
             )
-    with printing_after([args.out, *([] if args.overlay is None else [args.overlay])]):
+    overlays = [] if args.overlay is None else [args.overlay]
+    with printing_after([args.out, *overlays], [replaced]):
         print(rep.table)
         if measure.scale is None:
             print(NO_SCALE_NOTE.format(looked=MANIFEST_SCALE))

@@ -267,9 +267,9 @@ def earlier_record_note(out_dir: str | os.PathLike[str]) -> str | None:
         if not held:
             return None
         return (
-            f"note: replaced the {' and '.join(held)} {out_dir} held (no calibration.json beside "
-            f"{'them' if len(held) > 1 else 'it'}: not a contactcal record); give each run its "
-            "own --out to keep both"
+            f"note: replaced the {' and '.join(held)} that {out_dir} held (no calibration.json "
+            f"beside {'them' if len(held) > 1 else 'it'}: not a contactcal record); give each run "
+            "its own --out to keep both"
         )
     try:
         old = json.loads(path.read_text(encoding="utf-8"))
@@ -279,6 +279,6 @@ def earlier_record_note(out_dir: str | os.PathLike[str]) -> str | None:
     except (OSError, ValueError, KeyError, TypeError, AttributeError):
         what = "unreadable as a record"
     return (
-        f"note: replaced the calibration {out_dir} held ({what}); give each run its own --out "
+        f"note: replaced the calibration that {out_dir} held ({what}); give each run its own --out "
         "to keep both"
     )

@@ -14,15 +14,22 @@ class StdoutError(OSError):
     ``[Errno 28] No space left on device``; and, where the run had already written its outputs
     (``written``: files or folders), that those are whole."""
 
-    def __init__(self, errno: int | None, strerror: str | None, written: Sequence[str] = ()):
+    def __init__(
+        self,
+        errno: int | None,
+        strerror: str | None,
+        written: Sequence[str] = (),
+        notes: Sequence[str] = (),
+    ) -> None:
         super().__init__(errno, strerror)
         self.written = tuple(written)
+        self.notes = tuple(notes)
 
     def __str__(self) -> str:
         said = f"writing to standard output failed ({self.strerror}): what it printed is incomplete"
         if self.written:
             said += f"; the run's outputs were written, whole: {', '.join(self.written)}"
-        return said
+        return "; ".join([said, *(n.removeprefix("note: ") for n in self.notes)])
 
 
 class _Named:
@@ -52,18 +59,22 @@ def _named(exc: OSError) -> StdoutError:
 
 
 @contextlib.contextmanager
-def printing_after(written: Sequence[str | os.PathLike[str]]) -> Iterator[None]:
+def printing_after(
+    written: Sequence[str | os.PathLike[str]], notes: Sequence[str | None] = ()
+) -> Iterator[None]:
     """A block that prints a run's summary after the run's outputs were moved into place: a
-    failed write to standard output there says that ``written`` (files or folders) are whole
-    (the exit status is still that of a failed standard output). The block's lines are flushed
-    at its end, so that their failure surfaces here."""
+    failed write to standard output there says that ``written`` (files or folders) are whole,
+    and repeats ``notes`` the block would print that must not be lost (an earlier calibration
+    replaced; None: no note). The exit status stays that of a failed standard output. The
+    block's lines are flushed at its end, so that their failure surfaces here."""
     try:
         yield
         if sys.stdout is not None:
             sys.stdout.flush()
     except StdoutError as exc:
         names = [*exc.written, *(os.fspath(w) for w in written)]
-        raise StdoutError(exc.errno, exc.strerror, names) from exc
+        kept = [*exc.notes, *(n for n in notes if n is not None)]
+        raise StdoutError(exc.errno, exc.strerror, names, kept) from exc
 
 
 @contextlib.contextmanager

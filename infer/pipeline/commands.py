@@ -111,7 +111,7 @@ def _cmd_demo(args: argparse.Namespace) -> int:
     check_out_folder(args.out, "demo")
     replaced = [earlier_record_note(args.out / method) for method in METHODS]
     summary = run_demo(args.out, args.manifest, args.argv, options, args.bit_depth)
-    with printing_after([args.out]):
+    with printing_after([args.out], replaced):
         print(summary)
         for note in replaced:
             if note is not None:

@@ -131,7 +131,10 @@ def check_fresh_frames(frames_dir: Path) -> None:
 
 
 def calibrate_video(
-    args: argparse.Namespace, measure: MeasureOptions, provenance: Provenance
+    args: argparse.Namespace,
+    measure: MeasureOptions,
+    provenance: Provenance,
+    replaced: str | None = None,
 ) -> int:
     """Extract the steady frames, then calibrate them (see the module docstring).
 
@@ -140,6 +143,8 @@ def calibrate_video(
         measure: how the extracted frames are measured (no outlines:
             :func:`~contactcal.infer.video.args.is_video_run` refused --overlay).
         provenance: the command line and the display's id, recorded.
+        replaced: the note on an earlier calibration in ``--out`` this run replaces (printed
+            last), or None.
     """
     from contactcal.infer.calibration.calibrate import calibrate_session
     from contactcal.infer.calibration.command import session_options
@@ -194,11 +199,13 @@ def calibrate_video(
             outputs=outs,
             manifest_as=final_manifest,
         )
-    with printing_after([args.out]):
+    with printing_after([args.out], [replaced]):
         print(rep.table)
         if measure.scale is None:
             print(NO_SCALE_NOTE.format(looked=VIDEO_SCALE))
         print(ex.summary())
         for line in warnings:  # under the table, where they are read with the curve
             print(line)
+        if replaced is not None:
+            print(replaced)
     return 0
