@@ -253,4 +253,5 @@ def test_inverse_table_interpolates_to_the_curves_own_inverse() -> None:
     fit = curve.fit_area
     band = Band(pressures, np.maximum(fit - 5.0, 0.0), fit + 5.0, 0.9, 10, 0)
     rows = dataclasses.replace(curve, band=band).inverse_table_with_interval(step=50.0)
-    assert [r[:2] for r in rows] == table and all(lo <= p <= hi for _, p, lo, hi in rows)
+    assert set(table) <= {r[:2] for r in rows}  # and rows where the band's edges bend
+    assert all(lo <= p <= hi for _, p, lo, hi in rows)

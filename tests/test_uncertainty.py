@@ -134,3 +134,24 @@ def test_band_coverage_on_synthetic_repeat_sessions() -> None:
     coverage = float(np.mean(hits))
     print(f"synthetic coverage of the 90 % band: {coverage:.3f} over {len(hits)} steps")
     assert coverage >= 0.7
+
+
+@pytest.mark.parametrize("model", ["isotonic", "parametric"])
+@pytest.mark.parametrize("seed", [2, 5, 7])
+def test_inverse_table_columns_interpolate_to_the_interval(seed: int, model: str) -> None:
+    """A controller interpolating ``pressure_lo_kpa``/``pressure_hi_kpa`` linearly was up to
+    10 kPa off `pressure_interval_for_area` (no rows where the band's edges bend or jump), and
+    ``pressure_kpa`` up to 17 kPa off a nearly flat parametric curve (rows every step only)."""
+    cfg = CurveConfig(curve_model=model, n_bootstrap=60)
+    c = fit_session(_noisy_session(seed, sigma=12.0), "mm²", cfg).curve
+    assert c.band is not None and (c.model is not None) == (model == "parametric")
+    table = np.array(c.inverse_table_with_interval())
+    assert np.all(np.diff(table[:, 0]) >= 0) and np.all(np.diff(table[:, 1:], axis=0) >= 0)
+    lo, hi = c.area_range()
+    q = np.setdiff1d(np.random.default_rng(seed).uniform(lo, hi, 2000), table[:, 0])
+    exact = np.array([c.pressure_interval_for_area(a)[:3] for a in q])
+    # exact for the piecewise-linear fit; the smooth form between its 257 samples
+    atol = 1e-9 if c.model is None else 0.02
+    for k in range(3):
+        got = np.interp(q, table[:, 0], table[:, k + 1])
+        np.testing.assert_allclose(got, exact[:, k], atol=atol, err_msg=f"column {k + 1}")

@@ -11,7 +11,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from contactcal.infer.calibration.curve import lowest_reaching
+from contactcal.infer.calibration.curve import highest_at, lowest_reaching
 
 
 @dataclass(frozen=True, eq=False)
@@ -61,18 +61,21 @@ class Band:
         x = self.pressures_kpa
         return float(np.interp(p_kpa, x, self.lo)), float(np.interp(p_kpa, x, self.hi))
 
-    def pressure_bounds(self, area: float) -> tuple[float, float, str | None]:
+    def pressure_bounds(self, area: float, above: bool = False) -> tuple[float, float, str | None]:
         """``(p_lo, p_hi, warning)``: pressures (kPa) where the upper / lower edge reach ``area``.
 
         ``area == 0`` gives where each edge leaves 0 (the band of the onset). An end the band
         does not reach within its grid is clamped to the grid's top pressure, and the warning
-        says so; otherwise the warning is None.
+        says so; otherwise the warning is None. ``above``: the bounds just above ``area``
+        (where an edge holds ``area`` over a pressure range, the range's end, where the edge
+        rises again; :func:`~contactcal.infer.calibration.curve.highest_at`).
         """
         x = self.pressures_kpa
         # area 0: where each edge leaves 0 (its onset), not the grid's first pressure
         target = max(area, 1e-12 * max(float(self.hi[-1]), 1.0))
-        p_lo = lowest_reaching(x, self.hi, target)
-        p_hi = lowest_reaching(x, self.lo, target)
+        reach = highest_at if above else lowest_reaching
+        p_lo = reach(x, self.hi, target)
+        p_hi = reach(x, self.lo, target)
         notes = []
         for edge, top in (("upper", self.hi[-1]), ("lower", self.lo[-1])):
             if area > top:

@@ -9,7 +9,6 @@ saturating one (``model``), :mod:`.bootstrap` the band.
 
 from __future__ import annotations
 
-import itertools
 import math
 from dataclasses import dataclass
 from typing import TYPE_CHECKING
@@ -213,55 +212,26 @@ class Curve:
         Raises:
             ValueError: bad step, or a curve without contact.
         """
-        if not self.has_contact:
-            raise ValueError("no contact in this calibration; cannot invert")
-        s = self.default_table_step() if step is None else float(step)
-        if not (math.isfinite(s) and s > 0):
-            raise ValueError(f"inverse_table: expected a finite step > 0, got {step}")
-        lo, hi = self.area_range()
-        first = math.floor(lo / s) + 1
-        last = math.ceil(hi / s) - 1
-        if last - first > 100_000:
-            raise ValueError(
-                f"inverse_table: step {s} gives more than 100000 rows; use a larger one"
-            )
-        areas = [lo, *(k * s for k in range(first, last + 1)), hi]
-        rows = [(float(a), self.pressure_for_area(a)[0]) for a in areas]
-        if self.model is not None:  # the smooth form: the step's rows follow it closely
-            return rows
-        return _with_breakpoints(rows, *self.knots())
+        from contactcal.infer.calibration.inverse import inverse_rows
+
+        return inverse_rows(self, self.default_table_step() if step is None else float(step))
 
     def inverse_table_with_interval(
         self, step: float | None = None
     ) -> list[tuple[float, float, float, float]]:
-        """``[(area, p, p_lo, p_hi), ...]``: `inverse_table` with the band's interval, kPa."""
-        out = []
-        for a, p in self.inverse_table(step):
-            _, lo, hi, _ = self.pressure_interval_for_area(a)
-            out.append((a, p, min(lo, p), max(hi, p)))  # p: a flat's end, past `lo`-`hi`
-        return out
+        """``[(area, p, p_lo, p_hi), ...]``: `inverse_table` with the band's interval, kPa.
 
+        Besides `inverse_table`'s rows, a row at each breakpoint of the band's edges, and a
+        second row at an area where ``p_lo`` or ``p_hi`` jumps (an edge flat below a rise), so
+        that each column interpolates linearly to `pressure_interval_for_area`
+        (:mod:`~contactcal.infer.calibration.inverse`).
 
-def _with_breakpoints(
-    rows: list[tuple[float, float]], x: np.ndarray, y: np.ndarray
-) -> list[tuple[float, float]]:
-    """``rows`` with the knots ``(area y, pressure x)`` in their place, sorted by area.
+        Raises:
+            ValueError: as `inverse_table`, or a curve without a band.
+        """
+        from contactcal.infer.calibration.inverse import interval_rows
 
-    A row at a knot's area gives way to the knot (the same point, without interpolation's
-    rounding). An area the knots hold over a pressure range keeps the range's lowest pressure
-    and, unless it is the largest area, its highest (where the curve rises again).
-    """
-    knots = list(zip(map(float, y), map(float, x), strict=True))
-    at_knots = {a for a, _ in knots}
-    merged = sorted([r for r in rows if r[0] not in at_knots] + knots)
-    top = merged[-1][0]
-    out: list[tuple[float, float]] = []
-    for a, group in itertools.groupby(merged, key=lambda r: r[0]):
-        ps = [p for _, p in group]
-        out.append((a, ps[0]))
-        if a < top and ps[-1] > ps[0]:
-            out.append((a, ps[-1]))
-    return out
+        return interval_rows(self, self.default_table_step() if step is None else float(step))
 
 
 def lowest_reaching(x: np.ndarray, y: np.ndarray, a: float) -> float:
@@ -279,6 +249,19 @@ def lowest_reaching(x: np.ndarray, y: np.ndarray, a: float) -> float:
     k = int(np.searchsorted(y, a, side="left"))  # y[k-1] < a <= y[k]
     t = (a - y[k - 1]) / (y[k] - y[k - 1])
     return float(x[k - 1] + t * (x[k] - x[k - 1]))
+
+
+def highest_at(x: np.ndarray, y: np.ndarray, a: float) -> float:
+    """Where `lowest_reaching` goes just above ``a``: the highest ``x`` at which ``y`` equals
+    ``a`` (the end of a flat segment at ``a``), else ``lowest_reaching(x, y, a)``.
+
+    Args:
+        x: ``(N,)`` increasing abscissae (kPa).
+        y: ``(N,)`` non-decreasing values.
+        a: target.
+    """
+    at = np.flatnonzero(y == a)
+    return float(x[at[-1]]) if at.size else lowest_reaching(x, y, a)
 
 
 def _nice_step(raw: float) -> float:
