@@ -184,3 +184,5 @@ def test_demo_takes_bit_depth_and_says_which_calibration_it_replaced(
     printed = capsys.readouterr().out
     for method in METHODS:
         assert f"note: replaced the calibration that {out / method} held (created " in printed
+    # no rig.json beside that manifest: areas in px, said as calibrate says it
+    assert "note: no pixel scale (no rig.json beside the manifest): areas are in px" in printed

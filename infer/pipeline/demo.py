@@ -19,6 +19,7 @@ from contactcal.infer.files.atomic import run_outputs, write_synced
 from contactcal.infer.image.read import load_image
 from contactcal.infer.image.write import write_image
 from contactcal.infer.methods.registry import METHODS
+from contactcal.infer.pipeline.args import NO_SCALE_NOTE
 from contactcal.infer.pipeline.boundary import rig_boundary
 from contactcal.infer.pipeline.examples import example_manifest
 from contactcal.infer.pipeline.manifest import beside_manifest
@@ -84,6 +85,8 @@ def run_demo(
             tiles.append(draw_overlay(gray, contours, title))
         write_image(outs.stage(out / "overlay_montage.png"), montage(tiles, columns=3))
         lines.append(f"\noverlays: {out / 'overlay_montage.png'}")
+        if measure.scale is None:  # as calibrate says it
+            lines.append(NO_SCALE_NOTE.format(looked="no rig.json beside the manifest"))
         text = "\n".join(lines) + "\n"
         write_synced(outs.stage(out / "summary.txt"), text)
     return text
