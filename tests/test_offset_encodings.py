@@ -42,3 +42,20 @@ def test_one_session_in_two_encodings_is_refused_naming_both(
     assert err.count("\n") == 1, err
     assert all(str(out / "evaluation.json") in err for out in outs)
     assert "same areas at the same pressures" in err and "counts once" in err
+
+
+def test_sessions_sharing_a_few_labels_still_pool() -> None:
+    """Two sessions of one display whose contact fills the ring at the top pressures can share
+    those labels (the ring's interior) by right; one session twice shares all of them."""
+    from contactcal.infer.evaluate.identity import check_distinct_labels
+
+    def labels(areas: list[int]) -> set[tuple[float, int]]:
+        return {(float(kpa), a) for kpa, a in enumerate(areas, start=3)}
+
+    ring = [9000, 9000, 9000]  # the last three pressures: both fill the ring
+    one = {"file": "a/evaluation.json", "labels": labels([100, 400, 900, 2500, 5000, *ring])}
+    two = {"file": "b/evaluation.json", "labels": labels([120, 430, 950, 2400, 5100, *ring])}
+    check_distinct_labels([one, two])  # 3 of 8 shared: two sessions
+    again = {"file": "c/evaluation.json", "labels": set(one["labels"])}
+    with pytest.raises(ValueError, match="a/evaluation.json and c/evaluation.json: 8 frames"):
+        check_distinct_labels([one, two, again])

@@ -14,8 +14,10 @@ sessions (a camera's noise alone makes every capture unique), so the frames deci
 A session whose frames were re-encoded (the same captures saved once as JPEG and once as PNG)
 shares no byte-identical frame with its first encoding, but it shares its labels: the same masks
 (matched by stem) or ellipses give the same pixel count at the same pressure. Two evaluations with
-:data:`SHARED_LABELS` or more contact labels of equal area at equal pressures are one session (or
-one session's labels given to another), and are refused with both files named.
+:data:`SHARED_LABELS` or more contact labels of equal area at equal pressures, and at least
+:data:`SHARED_FRACTION` of the smaller one's, are one session (or one session's labels given to
+another), and are refused with both files named. Two sessions of one display whose contact fills
+the ring at the top pressures may share a few such labels (the ring's interior), not most.
 
 An ``evaluation.json`` without ``inputs`` (written by an older ``evaluate``) cannot be checked,
 and is refused with a line saying to run ``evaluate`` on that session again (seconds), rather
@@ -35,6 +37,9 @@ _HEX64 = re.compile(r"[0-9a-f]{64}")
 #: Contact labels (pressure, label area in px) two evaluations must share to be one session's:
 #: one equal pixel count at one pressure can happen by chance (areas of ~10⁴ px), three cannot.
 SHARED_LABELS = 3
+#: Fraction of the smaller evaluation's contact labels two must share as well: a re-encoded
+#: session shares all of them; distinct sessions only by chance or where both fill the ring.
+SHARED_FRACTION = 0.5
 
 
 def input_digests(manifest: Path, reference: Path, labelled: Sequence[Path]) -> dict[str, Any]:
@@ -149,7 +154,8 @@ def read_label_areas(file: str, record: dict[str, Any]) -> set[tuple[float, int]
 
 def check_distinct_labels(runs: Sequence[dict[str, Any]]) -> None:
     """Refuse two evaluations sharing :data:`SHARED_LABELS` or more contact labels (equal area at
-    equal pressure): one session's frames in two encodings, or its labels given to another.
+    equal pressure), and :data:`SHARED_FRACTION` of the smaller one's: one session's frames in
+    two encodings, or its labels given to another.
 
     Args:
         runs: each with ``file`` (its ``evaluation.json``) and ``labels``
@@ -161,7 +167,8 @@ def check_distinct_labels(runs: Sequence[dict[str, Any]]) -> None:
     for i, first in enumerate(runs):
         for second in runs[i + 1 :]:
             shared = sorted(first["labels"] & second["labels"])
-            if len(shared) >= SHARED_LABELS:
+            fewest = min(len(first["labels"]), len(second["labels"]))
+            if len(shared) >= max(SHARED_LABELS, SHARED_FRACTION * fewest):
                 kpa, area = shared[0]
                 raise ValueError(
                     f"{first['file']} and {second['file']}: {len(shared)} frames labelled with "
