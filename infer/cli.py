@@ -119,7 +119,9 @@ def main(argv: Sequence[str] | None = None) -> int:
         print(f"contactcal: error: {exc}", file=sys.stderr)
         return 2
     except KeyboardInterrupt as exc:  # staged outputs were discarded on the way out
-        said = INTERRUPTED.get(args.command, "its outputs are all or nothing: none was written")
+        said = getattr(exc, "after_outputs", None) or INTERRUPTED.get(
+            args.command, "its outputs are all or nothing: none was written"
+        )
         if isinstance(exc, Terminated):  # SIGTERM, SIGHUP: the shell's status for the signal
             print(f"contactcal {args.command}: stopped by {exc}; {said}", file=sys.stderr)
             return 128 + exc.signum

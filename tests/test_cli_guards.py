@@ -446,3 +446,27 @@ def test_a_failing_standard_output_after_the_outputs_says_they_are_whole(
         assert line.endswith(written)
     written = out if command == "measure" else out / "calibration.json"
     assert json.loads(written.read_text())
+
+
+class _InterruptedStdout(io.StringIO):
+    """Ctrl-C while the summary is printed (e.g. blocked on a stalled pipe)."""
+
+    def write(self, text: str) -> int:
+        raise KeyboardInterrupt
+
+
+def test_an_interrupt_after_the_outputs_says_they_are_written(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str], monkeypatch
+) -> None:
+    """Ctrl-C while the summary was printed said "none was written" of a calibration already
+    moved into place, and lost the note on the one it replaced."""
+    out = tmp_path / "cal"
+    argv = ["calibrate", MANIFEST, "--method", "classical", "--out", str(out)]
+    assert main(argv) == 0
+    capsys.readouterr()
+    monkeypatch.setattr(sys, "stdout", _InterruptedStdout())
+    assert main(argv) == 130
+    line = _one_error(capsys)
+    written = f"interrupted; the run's outputs were written, whole: {out}; replaced the calibration"
+    assert written in line and "none was written" not in line
+    assert json.loads((out / "calibration.json").read_text())

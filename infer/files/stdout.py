@@ -27,9 +27,14 @@ class StdoutError(OSError):
 
     def __str__(self) -> str:
         said = f"writing to standard output failed ({self.strerror}): what it printed is incomplete"
-        if self.written:
-            said += f"; the run's outputs were written, whole: {', '.join(self.written)}"
-        return "; ".join([said, *(n.removeprefix("note: ") for n in self.notes)])
+        return "; ".join(s for s in (said, written_text(self.written, self.notes)) if s)
+
+
+def written_text(written: Sequence[str], notes: Sequence[str]) -> str:
+    """What a run stopped after its outputs were moved into place must still say: that they are
+    written, whole, and the notes it had yet to print ("" when there is nothing to say)."""
+    said = [f"the run's outputs were written, whole: {', '.join(written)}"] if written else []
+    return "; ".join([*said, *(n.removeprefix("note: ") for n in notes)])
 
 
 class _Named:
@@ -66,7 +71,9 @@ def printing_after(
     failed write to standard output there says that ``written`` (files or folders) are whole,
     and repeats ``notes`` the block would print that must not be lost (an earlier calibration
     replaced; None: no note). The exit status stays that of a failed standard output. The
-    block's lines are flushed at its end, so that their failure surfaces here."""
+    block's lines are flushed at its end, so that their failure surfaces here. An interrupt
+    (Ctrl-C, a stop signal) there carries the same words as ``after_outputs``, which the
+    command line says instead of "none was written"."""
     try:
         yield
         if sys.stdout is not None:
@@ -75,6 +82,12 @@ def printing_after(
         names = [*exc.written, *(os.fspath(w) for w in written)]
         kept = [*exc.notes, *(n for n in notes if n is not None)]
         raise StdoutError(exc.errno, exc.strerror, names, kept) from exc
+    except KeyboardInterrupt as exc:
+        if not hasattr(exc, "after_outputs"):
+            kept = [n for n in notes if n is not None]
+            said = written_text([os.fspath(w) for w in written], kept)
+            exc.after_outputs = said  # type: ignore[attr-defined]
+        raise
 
 
 @contextlib.contextmanager
