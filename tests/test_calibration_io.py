@@ -402,3 +402,11 @@ def test_a_pooled_reading_is_a_number_in_the_record(
     assert main([*argv[:-1], str(tmp_path / "d")]) == 2
     err = capsys.readouterr().err
     assert "row 2" in err and "pressure_kpa_read '12 kPa' is not a number" in err
+    # a blank cell is a frame without a reading (null), not an error
+    (s / "manifest.csv").write_text(
+        "file,pressure_kpa,pressure_kpa_read\np00.0kpa.jpg,0,\np05.0kpa.jpg,5,5.0\n"
+        "p06.0kpa.jpg,6, \np12.0kpa.jpg,12,12.01\n"
+    )
+    assert main([*argv[:-1], str(tmp_path / "e")]) == 0
+    points = json.loads((tmp_path / "e" / "calibration.json").read_text())["points"]
+    assert [p["extras"]["pressure_kpa_read"] for p in points] == [None, 5.0, None, 12.01]

@@ -25,7 +25,7 @@ class CalibrationPoint:
         phase: ``"loading"`` or ``"unloading"``.
         step: 0-based pressure step within the phase (frames of one step share its pressure).
         extras: the manifest row's other columns, ``(name, cell)`` pairs (a reading, kPa, as a
-            number).
+            number, or None where its cell is blank).
         area_interval_px: the method's stated 90 % interval of the area, px, or None.
         area_interval_mm2: the same in mm², or None (no interval or no pixel scale).
     """
@@ -38,7 +38,7 @@ class CalibrationPoint:
     note: str = ""
     phase: str = LOADING
     step: int = 0
-    extras: tuple[tuple[str, str | float], ...] = ()
+    extras: tuple[tuple[str, str | float | None], ...] = ()
     area_interval_px: tuple[float, float] | None = None
     area_interval_mm2: tuple[float, float] | None = None
 

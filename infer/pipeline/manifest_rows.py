@@ -49,7 +49,7 @@ class Frame:
         phase: ``"loading"`` or ``"unloading"``.
         step: 0-based index of the frame's pressure step within its phase (ascending pressure).
         extras: the row's other columns as ``(name, cell)`` pairs, in header order; the cell
-            of :data:`READING_COLUMN` is a number of kPa.
+            of :data:`READING_COLUMN` is a number of kPa (None: blank).
     """
 
     file: Path
@@ -57,7 +57,7 @@ class Frame:
     row: int
     phase: str = LOADING
     step: int = 0
-    extras: tuple[tuple[str, str | float], ...] = ()
+    extras: tuple[tuple[str, str | float | None], ...] = ()
 
 
 def read_rows(mpath: Path) -> list[tuple[int, list[str]]]:
@@ -183,10 +183,13 @@ def parse_row(
     return Frame(file.resolve(), pressure, row_no, phase, 0, extras)
 
 
-def _extra(at: str, name: str, cell: str) -> tuple[str, str | float]:
-    """A row's other column: :data:`READING_COLUMN` as a number of kPa, any other as written."""
+def _extra(at: str, name: str, cell: str) -> tuple[str, str | float | None]:
+    """A row's other column: :data:`READING_COLUMN` as a number of kPa (None where the cell is
+    blank: a frame without a reading), any other as written."""
     if name != READING_COLUMN:
         return name, cell
+    if not cell.strip():
+        return name, None
     try:
         value = float(cell) + 0.0
     except ValueError:
