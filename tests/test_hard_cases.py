@@ -12,6 +12,7 @@ import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
+from contactcal.infer.image.frame import MAX_ASPECT_RATIO, MIN_FRAME_SIDE_PX
 from contactcal.infer.image.gray import ImageError, to_gray_u8
 from contactcal.infer.image.read import load_image
 from contactcal.infer.methods.classical import ClassicalMethod
@@ -141,7 +142,13 @@ def test_random_images_no_undocumented_exception(
     else:
         arr = rng.integers(0, np.iinfo(dtype).max, shape, endpoint=True).astype(dtype)
     gray = to_gray_u8(arr)
+    short, long = min(h, w), max(h, w)
+    too_small = short < MIN_FRAME_SIDE_PX or long > MAX_ASPECT_RATIO * short
     for method in (unet, ClassicalMethod()):
         method.set_reference(None)
+        if too_small:  # refused as a file of that size is (it gave "no contact")
+            with pytest.raises(ImageError, match="is not a rig frame"):
+                method.measure(gray)
+            continue
         res = method.measure(gray)
         assert np.isfinite(res.area_px) and 0.0 <= res.area_px <= max(_bound(method, gray), 1.0)

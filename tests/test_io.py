@@ -13,6 +13,8 @@ import pytest
 from contactcal.infer.image.gray import ImageError, to_gray_u8
 from contactcal.infer.image.read import load_image
 
+EXAMPLE_FRAME = Path(__file__).resolve().parents[1] / "examples" / "session" / "p12.0kpa.jpg"
+
 
 def _write(path: Path, img: np.ndarray) -> Path:
     assert cv2.imwrite(str(path), img)
@@ -219,3 +221,32 @@ def test_data_after_the_image_is_not_a_truncation(tmp_path: Path, suffix: str) -
         path.write_bytes(cut)
         with pytest.raises(ImageError, match="truncated"):
             load_image(path)
+
+
+def test_arrays_given_to_a_method_are_checked_as_files_are() -> None:
+    """Through the Python API a 16-bit array of 12-bit data was read 16 times too dark (no
+    ring, area 0), a 3×3 array gave "no contact", and the classical routine measured a frame
+    of another size than its reference with the reference's ROI."""
+    from contactcal.infer.methods.classical import ClassicalMethod
+    from contactcal.infer.methods.unet.method import UnetMethod
+
+    frame = load_image(EXAMPLE_FRAME)
+    twelve_bit = np.rint(frame * (4095 / 255)).astype(np.uint16)
+    ambiguous = r"frame: uint16 samples with maximum 40.. .<= 16383."
+    for method in (ClassicalMethod(), UnetMethod()):
+        with pytest.raises(ImageError, match=f"reference {ambiguous}"):
+            method.set_reference(twelve_bit)
+        method.set_reference(frame)
+        with pytest.raises(ImageError, match=f"^{ambiguous}"):
+            method.measure(twelve_bit)
+        with pytest.raises(ImageError, match="frame: 3×3 px is not a rig frame"):
+            method.measure(np.zeros((3, 3), np.uint8))
+        full = frame.astype(np.uint16) * 257  # full-range 16-bit: the same frame
+        assert method.measure(full).area_px == method.measure(frame).area_px
+        with pytest.raises(ImageError, match="reference frame: 1×1 px is not a rig frame"):
+            method.set_reference(np.zeros((1, 1), np.uint8))
+    classical = ClassicalMethod()
+    classical.set_reference(frame)
+    h, w = frame.shape
+    with pytest.raises(ImageError, match=f"frame: {h}×{w} px, but the reference frame is {w}×{h}"):
+        classical.measure(np.ascontiguousarray(frame.T))

@@ -22,24 +22,12 @@ import numpy as np
 
 from contactcal.infer.image.complete import jpeg_end, png_end
 from contactcal.infer.image.decode import decode_strict
+from contactcal.infer.image.frame import LOW_BITS_MAX, check_frame_shape
 from contactcal.infer.image.gray import ImageError, reduce_area, to_gray_u8
 from contactcal.infer.image.png import png_significant_bits
 
 #: File suffixes accepted by :func:`load_image` (lower case).
 SUPPORTED_SUFFIXES = (".png", ".jpg", ".jpeg", ".tif", ".tiff", ".bmp")
-#: Largest maximum a 16-bit file without stated depth may have before it is ambiguous: 10-,
-#: 12- and 14-bit data stored in the low bits never exceed 16383 (= 2**14 - 1), and a genuine
-#: 16-bit rig frame (bright ring near saturation) does. Read such data as 16-bit and it comes
-#: out 4 to 64 times too dark (areas off by +6 to +17 %, or no ring found).
-LOW_BITS_MAX = 16383
-#: Smallest width and height of a frame, px. The bundled tests' frames are 64×48, rig frames
-#: thousands of px; below 16 px no ring or contact patch is resolvable, and a 3 px strip makes
-#: the U-Net's ring fit ask for terabytes.
-MIN_FRAME_SIDE_PX = 16
-#: Largest long/short side ratio of a frame: sensors are 1:1 to 16:9 (1.8), panoramic ones
-#: 21:9 (2.3); a more elongated image is a strip or a raw buffer read with the wrong width.
-MAX_ASPECT_RATIO = 4.0
-
 #: Bits per sample of the deepest image read (16-bit PNG or TIFF); ``--bit-depth`` states
 #: 1 to this many significant bits.
 MAX_BIT_DEPTH = 16
@@ -117,16 +105,6 @@ def read_file_bytes(path: str | os.PathLike[str]) -> bytes:
     _check_content(p, data)
     _check_complete(p, data)
     return data
-
-
-def _check_frame_shape(p: Path, height: int, width: int) -> None:
-    """Reject images too small or too elongated to be a rig frame (sizes in file pixels)."""
-    short, long = min(height, width), max(height, width)
-    if short < MIN_FRAME_SIDE_PX or long > MAX_ASPECT_RATIO * short:
-        raise ImageError(
-            f"{p}: {width}×{height} px is not a rig frame; expected both sides >= "
-            f"{MIN_FRAME_SIDE_PX} px and a long/short side ratio <= {MAX_ASPECT_RATIO:g}"
-        )
 
 
 def _stated_depth(p: Path, data: bytes, bit_depth: int | None) -> tuple[int | None, str]:
@@ -224,7 +202,7 @@ def load_image(
     if img is None or img.size == 0:
         raise ImageError(f"{p}: not a decodable image (corrupt or unsupported content)")
     k = reduce if jpeg else 1  # the JPEG was decoded at 1/k
-    _check_frame_shape(p, img.shape[0] * k, img.shape[1] * k)
+    check_frame_shape(str(p), img.shape[0] * k, img.shape[1] * k)
     img = _scale_depth(p, img, *_stated_depth(p, data, bit_depth))
     gray = to_gray_u8(img, name=str(p), bgr=True)
     return gray if jpeg else reduce_area(gray, reduce)

@@ -97,7 +97,8 @@ class Method(Protocol):
     def describe(self) -> dict[str, Any]:
         """The method's configuration as plain JSON values, for records (``calibration.json``)."""
 
-    #: What the method does without the session's reference frame, said in every result then.
+    #: What the method does without the session's reference frame: the pipeline (``measure``,
+    #: ``calibrate``) notes it in every result then; ``measure()`` itself does not.
     NO_REFERENCE: str
 
 

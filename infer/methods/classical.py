@@ -27,7 +27,8 @@ from typing import Any
 import cv2
 import numpy as np
 
-from contactcal.infer.image.gray import to_gray_u8
+from contactcal.infer.image.frame import as_frame
+from contactcal.infer.image.gray import ImageError, to_gray_u8
 from contactcal.infer.methods.base import AreaResult, Started, load_reference
 
 
@@ -201,6 +202,7 @@ class ClassicalMethod:
     def __init__(self, config: ClassicalConfig | None = None) -> None:
         self.config = config or ClassicalConfig()
         self.roi: Roi | None = None
+        self.shape: tuple[int, int] | None = None  # the reference frame's (H, W), px
 
     def start(
         self, files: Sequence[Path], reference: Path | None, bit_depth: int | None = None
@@ -214,14 +216,30 @@ class ClassicalMethod:
         """Take the ROI from the reference frame; without one, each frame finds its own."""
         if reduction != 1:
             raise ValueError("the classical routine runs on fully decoded frames (reduction 1)")
-        self.roi = None if reference is None else find_roi(reference, self.config)
+        if reference is None:
+            self.roi, self.shape = None, None
+            return
+        gray = as_frame(reference, "reference frame")
+        self.roi, self.shape = find_roi(gray, self.config), gray.shape
+
+    def _frame(self, image: np.ndarray) -> np.ndarray:
+        """The checked frame (:func:`as_frame`), of the reference frame's size when there is one
+        (its ROI would fall elsewhere on a frame of another size)."""
+        gray = as_frame(image, "frame")
+        if self.shape is not None and gray.shape != self.shape:
+            (h, w), (rh, rw) = gray.shape, self.shape
+            raise ImageError(
+                f"frame: {w}×{h} px, but the reference frame is {rw}×{rh} px; measure a "
+                "session's frames against its own reference (same camera and size)"
+            )
+        return gray
 
     def measure(self, image: np.ndarray) -> AreaResult:
         """Run the routine; the contour is the fitted ellipse.
 
         The routine states no interval of its area: ``area_interval_px`` is None.
         """
-        res = measure_classical(image, self.roi, self.config)
+        res = measure_classical(self._frame(image), self.roi, self.config)
         contour = None
         if res.ellipse is not None:
             (cx, cy), (w, h), ang = res.ellipse

@@ -206,7 +206,7 @@ def measure_files(
 
     Args:
         files: image paths.
-        method: a prepared-on-demand method (:func:`contactcal.infer.methods.make_method`).
+        method: a prepared-on-demand method (:func:`contactcal.infer.methods.registry.make_method`).
         reference: the session's zero-pressure frame; None → each frame is its own reference.
         scale: pixel scale for mm² (None → ``area_mm2`` is None).
         progress: show a progress bar on stderr.

@@ -18,7 +18,8 @@ import cv2
 import numpy as np
 
 from contactcal.infer.files.digest import sha256_file
-from contactcal.infer.image.gray import reduce_area, to_gray_u8
+from contactcal.infer.image.frame import as_frame
+from contactcal.infer.image.gray import reduce_area
 from contactcal.infer.image.jpeg import jpeg_size
 from contactcal.infer.image.read import load_image
 from contactcal.infer.methods.base import UNCHANGED_NOTE, AreaResult, Started, load_reference
@@ -132,13 +133,13 @@ class UnetMethod:
         if reference is None:
             self.reference = session_reference(None, cfg)
             return
-        gray = to_gray_u8(reference, name="reference frame")
+        gray = as_frame(reference, "reference frame")
         self.reference, self.shrink = shrunk_reference(gray, cfg)
 
     def _shrunk(self, image: np.ndarray) -> tuple[np.ndarray, int]:
         """The frame at the session's shrink factor, and that factor (decided here when there
         is no reference; a frame whose sides it does not divide is not shrunk)."""
-        gray = to_gray_u8(image, name="frame")
+        gray = as_frame(image, "frame")
         if self.shrink is None:
             self.shrink = deployed_shrink(gray, self.segmenter.spec.preprocess)
         k, full = self.shrink, self.reference.gray
