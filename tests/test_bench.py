@@ -443,3 +443,23 @@ def test_a_mask_that_contradicts_the_index_is_named(tmp_path: Path) -> None:
     cv2.imwrite(str(row.mask), np.zeros(shape, np.uint8))
     with pytest.raises(ValueError, match=rf"{row.mask.name}: holds 0 contact px but index.csv"):
         accuracy._truth(row)
+
+
+def test_cli_refuses_a_crosscheck_that_is_the_data_or_another_crosscheck(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """Once scored again as ``<name>#2`` beside itself."""
+    data = write_dataset(tmp_path / "d", fingers=1)
+    (tmp_path / "link").symlink_to(data)
+    other = write_dataset(tmp_path / "o", fingers=1)
+    for cross, says in (
+        ([data], f"--crosscheck {data}: dataset folder given twice (also as --data {data})"),
+        ([f"{data}/./"], "also as --data"),
+        ([tmp_path / "link"], "also as --data"),
+        ([other, f"{other}/"], f"(also as --crosscheck {other})"),
+    ):
+        argv = ["bench", "--data", str(data), "--out", str(tmp_path / "out")]
+        assert main([*argv, *(a for c in cross for a in ("--crosscheck", str(c)))]) == 2
+        err = capsys.readouterr().err.strip().splitlines()
+        assert len(err) == 1 and says in err[0], err
+    assert not (tmp_path / "out").exists()

@@ -142,15 +142,32 @@ def read_datasets(folders: Sequence[str | os.PathLike[str]]) -> list[IndexRow]:
     """
     if not folders:
         raise ValueError("no dataset folder given")
+    check_distinct(folders)
+    return [row for f in folders for row in read_index(f)]
+
+
+def check_distinct(
+    folders: Sequence[str | os.PathLike[str]], names: Sequence[str] | None = None
+) -> None:
+    """Refuse a dataset folder given twice under any spelling (``./d/``, a link to ``d``).
+
+    Args:
+        folders: the dataset folders.
+        names: how each is named in a message (default: the folder as given), e.g.
+            ``"--crosscheck d"``.
+
+    Raises:
+        ValueError: naming both spellings of the folder.
+    """
+    names = [str(f) for f in folders] if names is None else names
     seen: dict[Path, int] = {}
     for i, f in enumerate(folders):
         first = seen.setdefault(Path(f).resolve(), i)
         if first != i:
             raise ValueError(
-                f"{f}: dataset folder given twice (also as {folders[first]}); expected each "
-                "folder once"
+                f"{names[i]}: dataset folder given twice (also as {names[first]}); expected "
+                "each folder once"
             )
-    return [row for f in folders for row in read_index(f)]
 
 
 def sessions_of(rows: Sequence[IndexRow]) -> dict[str, list[IndexRow]]:

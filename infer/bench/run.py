@@ -23,7 +23,7 @@ from contactcal.infer.bench.crosscheck import (
     score_dataset,
     side_by_side,
 )
-from contactcal.infer.bench.dataset import IndexRow, read_index, sessions_of
+from contactcal.infer.bench.dataset import IndexRow, check_distinct, read_index, sessions_of
 from contactcal.infer.bench.report import write_report
 from contactcal.infer.bench.robustness import run_robustness
 from contactcal.infer.bench.scoring import ScoredFrame
@@ -59,9 +59,12 @@ def run_bench(
         (:func:`~contactcal.infer.bench.robustness.run_robustness`).
 
     Raises:
-        ValueError: unusable dataset folder (the message names the file).
+        ValueError: unusable dataset folder (the message names the file), or a cross-check
+            folder that is ``data`` or another cross-check folder.
     """
     config = config or BenchConfig()
+    names = [f"--data {data}", *(f"--crosscheck {c}" for c in crosscheck)]
+    check_distinct([data, *crosscheck], names)  # a copy would be scored as "<name>#2"
     sessions = sessions_of(read_index(data))
     others = [read_sessions(c) for c in crosscheck]  # every folder checked before any work
     frames = evaluate(sessions, model, config.use_reference, config.variants)
