@@ -463,3 +463,21 @@ def test_cli_refuses_a_crosscheck_that_is_the_data_or_another_crosscheck(
         err = capsys.readouterr().err.strip().splitlines()
         assert len(err) == 1 and says in err[0], err
     assert not (tmp_path / "out").exists()
+
+
+def test_a_session_without_a_zero_pressure_frame_is_refused(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """Its lowest (contact) frame was the reference while the report said "zero-pressure"."""
+    data = write_dataset(tmp_path / "d", fingers=1)
+    index = data / "index.csv"
+    _rewrite_index(index, lambda rows: [rows[0], *(r for r in rows[1:] if float(r[4]) >= 4)])
+    argv = ["bench", "--data", str(data), "--out", str(tmp_path / "out"), "--repeats", "1"]
+    assert main(argv) == 2
+    (err,) = capsys.readouterr().err.strip().splitlines()
+    assert f"{index}: session finger_0000 has no 0 kPa frame (its lowest pressure is 4 kPa)" in err
+    assert "--no-reference" in err and not (tmp_path / "out").exists()
+    with pytest.raises(ValueError, match="no 0 kPa frame"):  # a cross-check set too
+        run_bench(write_dataset(tmp_path / "ok", fingers=1), tmp_path / "o", None, TINY, [data])
+    res = run_bench(data, tmp_path / "out", config=dataclasses_replace(TINY, use_reference=False))
+    assert res["reference"] == "none" and res["frames"] == 3

@@ -24,6 +24,7 @@ from contactcal.infer.bench.scoring import (
     session_revised,
 )
 from contactcal.infer.calibration.fit import estimate_onset
+from contactcal.infer.calibration.gate_check import REST_KPA
 from contactcal.infer.image.read import load_image
 from contactcal.infer.methods.base import Method
 from contactcal.infer.methods.registry import METHODS, make_method
@@ -68,6 +69,26 @@ def score_session(
             soft = float(res.soft_area_px) if res.soft_area_px is not None else 0.0
             out.append(_renamed(scored, name + SOFT_SUFFIX, soft))
     return out + session_ruled([f for f in out if f.method == name])
+
+
+def check_references(sessions: Mapping[str, Sequence[IndexRow]]) -> None:
+    """Refuse a session without a frame at rest (at most :data:`REST_KPA`) to be its reference.
+
+    Args:
+        sessions: rows per session, sorted by pressure (the first is the reference).
+
+    Raises:
+        ValueError: naming the ``index.csv``, the session and its lowest pressure.
+    """
+    for rows in sessions.values():
+        ref = rows[0]
+        if ref.pressure_kpa > REST_KPA:
+            raise ValueError(
+                f"{ref.dataset / 'index.csv'}: session {ref.session} has no 0 kPa frame (its "
+                f"lowest pressure is {ref.pressure_kpa:g} kPa); bench needs each session's 0 kPa "
+                f"frame (at most {REST_KPA:g} kPa) as reference: add one, or run with "
+                "--no-reference (and without --robustness)"
+            )
 
 
 def _truth(row: IndexRow) -> np.ndarray | None:

@@ -14,7 +14,12 @@ from collections.abc import Sequence
 from pathlib import Path
 from typing import Any
 
-from contactcal.infer.bench.accuracy import evaluate, onset_errors, to_record
+from contactcal.infer.bench.accuracy import (
+    check_references,
+    evaluate,
+    onset_errors,
+    to_record,
+)
 from contactcal.infer.bench.config import BenchConfig
 from contactcal.infer.bench.crosscheck import (
     crosscheck_text,
@@ -60,13 +65,18 @@ def run_bench(
 
     Raises:
         ValueError: unusable dataset folder (the message names the file), or a cross-check
-            folder that is ``data`` or another cross-check folder.
+            folder that is ``data`` or another cross-check folder, or a session without a 0 kPa
+            reference frame (:func:`~contactcal.infer.bench.accuracy.check_references`).
     """
     config = config or BenchConfig()
     names = [f"--data {data}", *(f"--crosscheck {c}" for c in crosscheck)]
     check_distinct([data, *crosscheck], names)  # a copy would be scored as "<name>#2"
     sessions = sessions_of(read_index(data))
     others = [read_sessions(c) for c in crosscheck]  # every folder checked before any work
+    if config.use_reference or config.robustness_frames:  # robustness always uses references
+        check_references(sessions)
+    for other in others if config.use_reference else []:
+        check_references(other)
     frames = evaluate(sessions, model, config.use_reference, config.variants)
     onset = onset_errors(frames)
     results: dict[str, Any] = {
