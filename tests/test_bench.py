@@ -370,6 +370,7 @@ def test_index_rows_that_cannot_be_scored_are_named(tmp_path: Path) -> None:
         (lambda rows: [*rows, rows[-1][:3]], r"line \d+: no value in column"),  # a short row
         (column("onset_kpa", "nan"), "onset_kpa is nan; expected a finite number"),
         (column("onset_kpa", "inf"), "onset_kpa is inf"),
+        (column("pressure_kpa", "-2"), r"line 2: pressure_kpa is -2; expected >= 0 kPa"),
         (column("finger", "inf"), "unparsable value"),  # int(inf): OverflowError once escaped
         (lambda rows: [*rows, rows[-1]], "has a frame at .* kPa already"),  # a repeated frame
     )

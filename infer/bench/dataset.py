@@ -85,6 +85,8 @@ def _parse(folder: Path, line: int, r: dict[str, str | None]) -> IndexRow:
     for name in ("pressure_kpa", "area_px", "mm_per_px", "onset_kpa"):
         if not math.isfinite(getattr(row, name)):
             raise ValueError(f"{where}: {name} is {r[name]}; expected a finite number")
+    if row.pressure_kpa < 0:
+        raise ValueError(f"{where}: pressure_kpa is {r['pressure_kpa']}; expected >= 0 kPa")
     for p in (row.frame, row.mask):
         if not p.is_file():
             raise ValueError(f"{where}: missing file {p}")
