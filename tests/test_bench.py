@@ -371,6 +371,8 @@ def test_index_rows_that_cannot_be_scored_are_named(tmp_path: Path) -> None:
         (column("onset_kpa", "nan"), "onset_kpa is nan; expected a finite number"),
         (column("onset_kpa", "inf"), "onset_kpa is inf"),
         (column("pressure_kpa", "-2"), r"line 2: pressure_kpa is -2; expected >= 0 kPa"),
+        (column("mm_per_px", "0"), r"line 2: mm_per_px is 0; expected a scale > 0 mm/px"),
+        (column("mm_per_px", "-0.1"), "mm_per_px is -0.1"),
         (column("finger", "inf"), "unparsable value"),  # int(inf): OverflowError once escaped
         (lambda rows: [*rows, rows[-1]], "has a frame at .* kPa already"),  # a repeated frame
     )

@@ -87,6 +87,8 @@ def _parse(folder: Path, line: int, r: dict[str, str | None]) -> IndexRow:
             raise ValueError(f"{where}: {name} is {r[name]}; expected a finite number")
     if row.pressure_kpa < 0:
         raise ValueError(f"{where}: pressure_kpa is {r['pressure_kpa']}; expected >= 0 kPa")
+    if row.mm_per_px <= 0:
+        raise ValueError(f"{where}: mm_per_px is {r['mm_per_px']}; expected a scale > 0 mm/px")
     for p in (row.frame, row.mask):
         if not p.is_file():
             raise ValueError(f"{where}: missing file {p}")
