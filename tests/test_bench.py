@@ -484,3 +484,20 @@ def test_a_session_without_a_zero_pressure_frame_is_refused(
         run_bench(write_dataset(tmp_path / "ok", fingers=1), tmp_path / "o", None, TINY, [data])
     res = run_bench(data, tmp_path / "out", config=dataclasses_replace(TINY, use_reference=False))
     assert res["reference"] == "none" and res["frames"] == 3
+
+
+def test_a_mask_of_another_size_than_its_frame_is_named(tmp_path: Path) -> None:
+    """Once scored when its pixel count matched the index, else blamed on the count."""
+    import cv2
+    import numpy as np
+
+    from contactcal.infer.bench import accuracy
+    from contactcal.infer.bench.dataset import read_index
+
+    row = next(r for r in read_index(write_dataset(tmp_path / "d", fingers=1)) if r.contact)
+    mask = cv2.imread(str(row.mask), cv2.IMREAD_GRAYSCALE)
+    for pad in (0, 255):  # the same contact pixel count, then another one
+        cv2.imwrite(str(row.mask), np.pad(mask, ((0, 3), (0, 4)), constant_values=pad))
+        with pytest.raises(ValueError) as err:
+            accuracy._truth(row)
+        assert str(err.value).startswith(f"{row.mask}: 68x51 px but its frame {row.frame} is 64x48")

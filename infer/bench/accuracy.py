@@ -96,11 +96,18 @@ def _truth(row: IndexRow) -> np.ndarray | None:
     index: a damaged dataset would otherwise score a 0/0 IoU.
 
     Raises:
-        ValueError: the mask's pixel count is not the index's ``area_px`` (naming both).
+        ValueError: the mask is not of its frame's size, or its pixel count is not the index's
+            ``area_px`` (naming both).
     """
     if not row.contact:
         return None
     truth = load_image(row.mask) > 0
+    (mh, mw), (fh, fw) = truth.shape, load_image(row.frame).shape
+    if (mh, mw) != (fh, fw):
+        raise ValueError(
+            f"{row.mask}: {mw}x{mh} px but its frame {row.frame} is {fw}x{fh} px; expected a "
+            "mask of its frame's size (render the session again)"
+        )
     if int(np.count_nonzero(truth)) != round(row.area_px):
         raise ValueError(
             f"{row.mask}: holds {int(np.count_nonzero(truth))} contact px but index.csv of "
