@@ -14,7 +14,11 @@ def add_parsers(sub: argparse._SubParsersAction) -> None:
     s = sub.add_parser("synth", help="render a synthetic dataset of calibration sessions")
     s.add_argument("--fingers", type=int, required=True, help="sessions in the whole set")
     s.add_argument("--pressures", default="0:20:1", help="kPa, start:stop:step or a,b,c")
-    s.add_argument("--size", default="320x240", help="frame size W[xH], 4:3 (default 320x240)")
+    s.add_argument(
+        "--size",
+        default="320x240",
+        help="frame size W[xH], 4:3, at most 2592x1944 (default 320x240)",
+    )
     s.add_argument("--spp", type=int, default=8, help="samples per pixel (default 8)")
     s.add_argument("--seed", type=int, default=0, help="dataset seed (default 0)")
     s.add_argument("--hard-fraction", type=float, default=0.25, help="share of hard sessions")
@@ -92,7 +96,11 @@ def add_fidelity_parser(sub: argparse._SubParsersAction) -> None:
     )
     s.add_argument("--sessions", type=int, default=12, help="nominal sessions (default 12)")
     s.add_argument("--seed", type=int, default=9000, help="dataset seed (default 9000)")
-    s.add_argument("--size", default="400x300", help="frame size W[xH], 4:3 (default 400x300)")
+    s.add_argument(
+        "--size",
+        default="400x300",
+        help="frame size W[xH], 4:3, at most 2592x1944 (default 400x300)",
+    )
     s.add_argument("--spp", type=int, default=8, help="samples per pixel (default 8)")
     s.add_argument("--pressures", default="0,1,2,3,4,5,7.5,10,12.5,15,17.5,20", help="kPa")
     s.add_argument("--workers", type=int, default=1, help="worker processes (default 1)")

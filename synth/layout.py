@@ -49,15 +49,28 @@ def check_frame_names(pressures_kpa: tuple[float, ...]) -> None:
 ASPECT_TOLERANCE = 0.03
 
 
+#: Largest frame, px: the rig camera's sensor. No frame the methods measure is larger, and the
+#: generators' memory grows with the pixels (``procedural``, one frame here: ~3.2 GB peak,
+#: ~23 s; 20000x15000 took 23 GB, 40000x30000 ended in a MemoryError).
+MAX_FRAME_SIZE = (2592, 1944)
+
+
 def check_frame_size(width: int, height: int) -> None:
     """Refuse a frame size that is not the rig camera's 4:3 (the window ring must fit the
-    frame) or is below 16x12 px.
+    frame), is below 16x12 px or above :data:`MAX_FRAME_SIZE`.
 
     Raises:
         ValueError: naming ``--size`` and the size given.
     """
-    if width < 16 or height < 12 or abs(width / height - 4 / 3) > ASPECT_TOLERANCE:
-        raise ValueError(f"--size: frames must be 4:3 and at least 16x12 px, got {width}x{height}")
+    max_w, max_h = MAX_FRAME_SIZE
+    if (
+        not (16 <= width <= max_w and 12 <= height <= max_h)
+        or abs(width / height - 4 / 3) > ASPECT_TOLERANCE
+    ):
+        raise ValueError(
+            f"--size: frames must be 4:3, at least 16x12 and at most {max_w}x{max_h} px (the "
+            f"rig camera's), got {width}x{height}"
+        )
 
 
 def check_sweep(fingers: int, pressures_kpa: tuple[float, ...]) -> None:

@@ -146,6 +146,10 @@ def test_bad_arguments() -> None:
         GeneratorConfig(fingers=0, pressures_kpa=(0.0,), seed=0)
     with pytest.raises(ValueError, match="--size: frames must be 4:3"):
         GeneratorConfig(fingers=1, pressures_kpa=(0.0,), seed=0, width=64, height=12)
+    for w, h in ((2600, 1950), (40000, 30000)):  # once a MemoryError after minutes
+        with pytest.raises(ValueError, match=r"--size: .* at most 2592x1944 px .* got"):
+            GeneratorConfig(fingers=1, pressures_kpa=(0.0,), seed=0, width=w, height=h)
+    GeneratorConfig(fingers=1, pressures_kpa=(0.0,), seed=0, width=2592, height=1944)
     with pytest.raises(ValueError, match="--seed must be >= 0"):
         GeneratorConfig(fingers=1, pressures_kpa=(0.0,), seed=-1)
 

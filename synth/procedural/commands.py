@@ -14,7 +14,11 @@ def add_parsers(sub: argparse._SubParsersAction) -> None:
     )
     s.add_argument("--fingers", type=int, required=True, help="sessions in the set")
     s.add_argument("--pressures", default="0:20:1", help="kPa, start:stop:step or a,b,c")
-    s.add_argument("--size", default="400x300", help="frame size W[xH] (default 400x300)")
+    s.add_argument(
+        "--size",
+        default="400x300",
+        help="frame size W[xH], 4:3, at most 2592x1944 (default 400x300)",
+    )
     s.add_argument("--seed", type=int, default=7000, help="dataset seed (default 7000)")
     s.add_argument("--hard-fraction", type=float, default=0.25, help="share of hard sessions")
     s.add_argument("--out", type=Path, required=True, help="dataset folder (must not exist)")
