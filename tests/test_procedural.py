@@ -164,6 +164,13 @@ def test_cli(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
     assert "already exists" in capsys.readouterr().err
     assert main([*args[:-2], "--size", "64y48", "--out", str(tmp_path / "x")]) == 2
     assert not (tmp_path / "x").exists()
+    afile = tmp_path / "afile"
+    afile.write_text("kept")
+    capsys.readouterr()
+    assert main([*args, "--out", str(afile / "x")]) == 2  # once a raw "[Errno 17] File exists"
+    (err,) = capsys.readouterr().err.strip().splitlines()
+    assert err == f"contactcal: error: {afile}: is not a folder; cannot write outputs into it"
+    assert afile.read_text() == "kept"
 
 
 def test_bench_crosscheck(dataset: Path, tmp_path: Path) -> None:

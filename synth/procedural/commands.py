@@ -26,10 +26,12 @@ def add_parsers(sub: argparse._SubParsersAction) -> None:
 
 
 def _cmd_procedural(args: argparse.Namespace) -> int:
+    from contactcal.infer.pipeline.args import check_out_folder
     from contactcal.synth.layout import parse_pressures, parse_size
     from contactcal.synth.procedural.config import GeneratorConfig
     from contactcal.synth.procedural.dataset import build_dataset
 
+    check_out_folder(args.out, "procedural", ("index.csv",))  # e.g. a file above it: named
     width, height = parse_size(args.size)
     config = GeneratorConfig(
         fingers=args.fingers,
