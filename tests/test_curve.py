@@ -255,3 +255,15 @@ def test_inverse_table_interpolates_to_the_curves_own_inverse() -> None:
     rows = dataclasses.replace(curve, band=band).inverse_table_with_interval(step=50.0)
     assert set(table) <= {r[:2] for r in rows}  # and rows where the band's edges bend
     assert all(lo <= p <= hi for _, p, lo, hi in rows)
+
+
+def test_a_clamp_warning_tells_the_target_from_the_limit() -> None:
+    """A target just above the largest area read "target 143.8 mm² above calibrated maximum
+    143.8 mm²"."""
+    curve = fit_monotone(P, _quadratic(P))
+    top = curve.area_range()[1]
+    _, warning = curve.pressure_for_area(top + 0.004)
+    assert warning is not None and f"target {top + 0.004:.6g} mm² above" in warning
+    assert f"calibrated maximum {top:.6g} mm²" in warning
+    _, warning = curve.pressure_for_area(top + 5.0)  # 4 digits where they suffice
+    assert f"target {top + 5.0:.4g} mm² above calibrated maximum {top:.4g} mm²" in warning

@@ -150,15 +150,14 @@ class Curve:
         u = self.area_unit
         if a > y[-1]:
             k = int(np.searchsorted(y, y[-1], side="left"))
-            msg = (
-                f"target {a:.4g} {u} above calibrated maximum {y[-1]:.4g} {u} at "
-                f"{x[k]:.4g} kPa; clamped"
-            )
+            t, m = _apart(a, float(y[-1]))
+            msg = f"target {t} {u} above calibrated maximum {m} {u} at {x[k]:.4g} kPa; clamped"
             return float(x[k]), msg
         if a <= y[0]:
             if a < y[0]:
+                t, m = _apart(a, float(y[0]))
                 msg = (
-                    f"target {a:.4g} {u} below smallest calibrated area {y[0]:.4g} {u} at "
+                    f"target {t} {u} below smallest calibrated area {m} {u} at "
                     f"{x[0]:.4g} kPa (no frame without contact below it); clamped"
                 )
                 return float(x[0]), msg
@@ -262,6 +261,16 @@ def highest_at(x: np.ndarray, y: np.ndarray, a: float) -> float:
     """
     at = np.flatnonzero(y == a)
     return float(x[at[-1]]) if at.size else lowest_reaching(x, y, a)
+
+
+def _apart(a: float, b: float) -> tuple[str, str]:
+    """``a`` and ``b`` (``a != b``) written to 4 significant digits, or as many more as tell them
+    apart ("target 143.8 above calibrated maximum 143.8" said nothing)."""
+    for digits in range(4, 17):
+        ta, tb = f"{a:.{digits}g}", f"{b:.{digits}g}"
+        if ta != tb:
+            return ta, tb
+    return repr(a), repr(b)
 
 
 def _nice_step(raw: float) -> float:
