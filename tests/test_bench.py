@@ -296,7 +296,13 @@ def test_cli(
     assert main([*args, "--timing-frames", "1"]) == 0
     assert (out / "report.md").is_file() and (out / "results.json").is_file()
     printed = capsys.readouterr().out
-    assert "unet" in printed and "report.md" in printed
+    assert "unet" in printed and "report.md" in printed and "replaced" not in printed
+    assert main([*args, "--timing-frames", "1"]) == 0  # again: replaced without a word before
+    assert f"note: replaced the report that {out} held (results.json, " in capsys.readouterr().out
+    inside = ["bench", "--data", str(data), "--out", str(data / "report"), "--repeats", "1"]
+    assert main(inside) == 2  # the report would mix with the dataset's frames
+    assert f"--out {data / 'report'}: inside the dataset folder {data}" in capsys.readouterr().err
+    assert not (data / "report").exists()
     assert main(["bench", "--data", str(tmp_path / "none"), "--out", str(out)]) == 2
     assert "none" in capsys.readouterr().err
     assert main([*args, "--timing-frames", "0"]) == 2

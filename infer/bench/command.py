@@ -64,6 +64,8 @@ def _cmd_bench(args: argparse.Namespace) -> int:
     if args.repeats < 1 or args.timing_frames < 1:
         raise ValueError("--repeats and --timing-frames must be >= 1")
     check_out_folder(args.out, "bench", REPORT_FILES)  # before the work, not after
+    _check_out_outside_data(args.out, [args.data, *args.crosscheck])
+    earlier = [n for n in REPORT_FILES if (args.out / n).is_file()]
     variants = tuple(_variant(v) for v in args.variant)
     if len({label for label, _ in variants}) < len(variants):
         labels = [label for label, _ in variants]
@@ -78,9 +80,27 @@ def _cmd_bench(args: argparse.Namespace) -> int:
     )
     model = None if args.model is None else str(args.model)
     res = run_bench(args.data, args.out, model, cfg, args.crosscheck)
-    with printing_after([args.out]):
+    replaced = None
+    if earlier:
+        replaced = f"note: replaced the report that {args.out} held ({', '.join(earlier)})"
+    with printing_after([args.out], [replaced]):
         _print_summary(res, args.out)
+        if replaced is not None:
+            print(replaced)
     return 0
+
+
+def _check_out_outside_data(out: Path, datasets: list[Path]) -> None:
+    """Refuse a report folder that is a dataset folder or inside one: the report's files would
+    mix with the frames (and be read as a dataset's files by a later run)."""
+    where = out.resolve()
+    for data in datasets:
+        folder = data.resolve()
+        if where == folder or folder in where.parents:
+            raise ValueError(
+                f"--out {out}: inside the dataset folder {data}; give the report a folder of "
+                "its own (e.g. out/bench)"
+            )
 
 
 def _print_summary(res: dict[str, Any], out: Path) -> None:
