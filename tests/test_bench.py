@@ -35,6 +35,7 @@ from contactcal.infer.bench.scoring import (
     covering_bins,
 )
 from contactcal.infer.cli import main
+from contactcal.infer.image.read import load_image
 
 #: A benchmark small enough for a unit test (timing numbers are not checked).
 TINY = BenchConfig(repeats=1, timing_frames=1, full_size=(128, 96), threads=(1,))
@@ -297,8 +298,12 @@ def test_cli(
     assert (out / "report.md").is_file() and (out / "results.json").is_file()
     printed = capsys.readouterr().out
     assert "unet" in printed and "report.md" in printed and "replaced" not in printed
+    (out / "robustness.png").write_bytes(b"an earlier --robustness run's")
     assert main([*args, "--timing-frames", "1"]) == 0  # again: replaced without a word before
-    assert f"note: replaced the report that {out} held (results.json, " in capsys.readouterr().out
+    printed = capsys.readouterr().out
+    assert f"note: replaced the report that {out} held (results.json, " in printed
+    replaced = printed.split("replaced the report")[1].splitlines()[0]
+    assert "robustness" not in replaced  # this run, without --robustness, wrote none
     inside = ["bench", "--data", str(data), "--out", str(data / "report"), "--repeats", "1"]
     assert main(inside) == 2  # the report would mix with the dataset's frames
     assert f"--out {data / 'report'}: inside the dataset folder {data}" in capsys.readouterr().err
@@ -447,11 +452,12 @@ def test_a_mask_that_contradicts_the_index_is_named(tmp_path: Path) -> None:
     from contactcal.infer.bench.dataset import read_index
 
     row = next(r for r in read_index(write_dataset(tmp_path / "d", fingers=1)) if r.contact)
-    assert accuracy._truth(row) is not None  # as written: mask and index agree
+    frame_shape = load_image(row.frame).shape
+    assert accuracy._truth(row, frame_shape) is not None  # as written: mask and index agree
     shape = cv2.imread(str(row.mask), cv2.IMREAD_GRAYSCALE).shape
     cv2.imwrite(str(row.mask), np.zeros(shape, np.uint8))
     with pytest.raises(ValueError, match=rf"{row.mask.name}: holds 0 contact px but index.csv"):
-        accuracy._truth(row)
+        accuracy._truth(row, frame_shape)
 
 
 def test_cli_refuses_a_crosscheck_that_is_the_data_or_another_crosscheck(
@@ -505,5 +511,5 @@ def test_a_mask_of_another_size_than_its_frame_is_named(tmp_path: Path) -> None:
     for pad in (0, 255):  # the same contact pixel count, then another one
         cv2.imwrite(str(row.mask), np.pad(mask, ((0, 3), (0, 4)), constant_values=pad))
         with pytest.raises(ValueError) as err:
-            accuracy._truth(row)
+            accuracy._truth(row, load_image(row.frame).shape)
         assert str(err.value).startswith(f"{row.mask}: 68x51 px but its frame {row.frame} is 64x48")

@@ -46,8 +46,9 @@ def score_session(
     k = method.start([r.frame for r in rows], rows[0].frame if use_reference else None).reduction
     out: list[ScoredFrame] = []
     for r in rows:
-        res = method.measure(load_image(r.frame, reduce=k))
-        truth = _truth(r)
+        gray = load_image(r.frame, reduce=k)
+        res = method.measure(gray)
+        truth = _truth(r, (gray.shape[0] * k, gray.shape[1] * k))  # k divides the file's size
         scored = ScoredFrame(
             method=name,
             session=r.session_key,
@@ -91,9 +92,10 @@ def check_references(sessions: Mapping[str, Sequence[IndexRow]]) -> None:
             )
 
 
-def _truth(row: IndexRow) -> np.ndarray | None:
-    """``(H, W)`` bool exact mask of a frame with contact (None without), checked against the
-    index: a damaged dataset would otherwise score a 0/0 IoU.
+def _truth(row: IndexRow, frame_shape: tuple[int, int]) -> np.ndarray | None:
+    """``(H, W)`` bool exact mask of a frame with contact (None without), checked against its
+    frame's ``(H, W)`` (px of the file) and the index: a damaged dataset would otherwise score a
+    0/0 IoU.
 
     Raises:
         ValueError: the mask is not of its frame's size, or its pixel count is not the index's
@@ -102,7 +104,7 @@ def _truth(row: IndexRow) -> np.ndarray | None:
     if not row.contact:
         return None
     truth = load_image(row.mask) > 0
-    (mh, mw), (fh, fw) = truth.shape, load_image(row.frame).shape
+    (mh, mw), (fh, fw) = truth.shape, frame_shape
     if (mh, mw) != (fh, fw):
         raise ValueError(
             f"{row.mask}: {mw}x{mh} px but its frame {row.frame} is {fw}x{fh} px; expected a "

@@ -56,7 +56,7 @@ def add_parsers(sub: argparse._SubParsersAction) -> None:
 
 def _cmd_bench(args: argparse.Namespace) -> int:
     from contactcal.infer.bench.config import BenchConfig
-    from contactcal.infer.bench.report import REPORT_FILES
+    from contactcal.infer.bench.report import REPORT_FILES, ROBUSTNESS_FILES
     from contactcal.infer.bench.run import run_bench
     from contactcal.infer.files.stdout import printing_after
     from contactcal.infer.pipeline.args import check_out_folder
@@ -65,7 +65,6 @@ def _cmd_bench(args: argparse.Namespace) -> int:
         raise ValueError("--repeats and --timing-frames must be >= 1")
     check_out_folder(args.out, "bench", REPORT_FILES)  # before the work, not after
     _check_out_outside_data(args.out, [args.data, *args.crosscheck])
-    earlier = [n for n in REPORT_FILES if (args.out / n).is_file()]
     variants = tuple(_variant(v) for v in args.variant)
     if len({label for label, _ in variants}) < len(variants):
         labels = [label for label, _ in variants]
@@ -79,6 +78,8 @@ def _cmd_bench(args: argparse.Namespace) -> int:
         variants=variants,
     )
     model = None if args.model is None else str(args.model)
+    writes = [n for n in REPORT_FILES if args.robustness or n not in ROBUSTNESS_FILES]
+    earlier = [n for n in writes if (args.out / n).is_file()]
     res = run_bench(args.data, args.out, model, cfg, args.crosscheck)
     replaced = None
     if earlier:
