@@ -10,6 +10,7 @@ from typing import Any
 
 import numpy as np
 
+from contactcal.infer.image.frame import MIN_FRAME_SIDE_PX
 from contactcal.infer.pipeline.manifest import MAX_PRESSURE_KPA
 
 #: ``index.csv`` columns, in order.
@@ -57,19 +58,21 @@ MAX_FRAME_SIZE = (2592, 1944)
 
 def check_frame_size(width: int, height: int) -> None:
     """Refuse a frame size that is not the rig camera's 4:3 (the window ring must fit the
-    frame), is below 16x12 px or above :data:`MAX_FRAME_SIZE`.
+    frame), has a side below :data:`MIN_FRAME_SIDE_PX` (the methods refuse such frames) or is
+    above :data:`MAX_FRAME_SIZE`.
 
     Raises:
         ValueError: naming ``--size`` and the size given.
     """
     max_w, max_h = MAX_FRAME_SIZE
+    low = MIN_FRAME_SIDE_PX
     if (
-        not (16 <= width <= max_w and 12 <= height <= max_h)
+        not (low <= width <= max_w and low <= height <= max_h)
         or abs(width / height - 4 / 3) > ASPECT_TOLERANCE
     ):
         raise ValueError(
-            f"--size: frames must be 4:3, at least 16x12 and at most {max_w}x{max_h} px (the "
-            f"rig camera's), got {width}x{height}"
+            f"--size: frames must be 4:3, at least {round(low * 4 / 3)}x{low} and at most "
+            f"{max_w}x{max_h} px (the rig camera's), got {width}x{height}"
         )
 
 

@@ -13,7 +13,7 @@ REAL_FIND_SPEC = importlib.util.find_spec
 
 CASES = {
     "synth": (
-        ["synth", "--fingers", "1", "--pressures", "0", "--size", "16x12", "--spp", "1"],
+        ["synth", "--fingers", "1", "--pressures", "0", "--size", "32x24", "--spp", "1"],
         "mitsuba",
         "synth",
     ),

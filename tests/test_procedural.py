@@ -150,6 +150,10 @@ def test_bad_arguments() -> None:
         with pytest.raises(ValueError, match=r"--size: .* at most 2592x1944 px .* got"):
             GeneratorConfig(fingers=1, pressures_kpa=(0.0,), seed=0, width=w, height=h)
     GeneratorConfig(fingers=1, pressures_kpa=(0.0,), seed=0, width=2592, height=1944)
+    # 16x12 frames were generated, then refused by every method ("not a rig frame")
+    with pytest.raises(ValueError, match=r"--size: .* at least 21x16 .* got 16x12"):
+        GeneratorConfig(fingers=1, pressures_kpa=(0.0,), seed=0, width=16, height=12)
+    GeneratorConfig(fingers=1, pressures_kpa=(0.0,), seed=0, width=21, height=16)
     with pytest.raises(ValueError, match="--seed must be >= 0"):
         GeneratorConfig(fingers=1, pressures_kpa=(0.0,), seed=-1)
 
