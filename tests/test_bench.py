@@ -492,6 +492,9 @@ def test_a_session_without_a_zero_pressure_frame_is_refused(
     (err,) = capsys.readouterr().err.strip().splitlines()
     assert f"{index}: session finger_0000 has no 0 kPa frame (its lowest pressure is 4 kPa)" in err
     assert "--no-reference" in err and not (tmp_path / "out").exists()
+    assert main([*argv, "--no-reference", "--robustness", "--robustness-frames", "2"]) == 2
+    (err,) = capsys.readouterr().err.strip().splitlines()  # advice that fits what was asked
+    assert "for the robustness suite: add one, or run without --robustness" in err
     with pytest.raises(ValueError, match="no 0 kPa frame"):  # a cross-check set too
         run_bench(write_dataset(tmp_path / "ok", fingers=1), tmp_path / "o", None, TINY, [data])
     res = run_bench(data, tmp_path / "out", config=dataclasses_replace(TINY, use_reference=False))

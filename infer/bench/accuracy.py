@@ -72,11 +72,15 @@ def score_session(
     return out + session_ruled([f for f in out if f.method == name])
 
 
-def check_references(sessions: Mapping[str, Sequence[IndexRow]]) -> None:
+def check_references(
+    sessions: Mapping[str, Sequence[IndexRow]], for_robustness: bool = False
+) -> None:
     """Refuse a session without a frame at rest (at most :data:`REST_KPA`) to be its reference.
 
     Args:
         sessions: rows per session, sorted by pressure (the first is the reference).
+        for_robustness: the references are for the robustness suite only (``--no-reference
+            --robustness``): the message's advice says so.
 
     Raises:
         ValueError: naming the ``index.csv``, the session and its lowest pressure.
@@ -87,8 +91,12 @@ def check_references(sessions: Mapping[str, Sequence[IndexRow]]) -> None:
             raise ValueError(
                 f"{ref.dataset / 'index.csv'}: session {ref.session} has no 0 kPa frame (its "
                 f"lowest pressure is {ref.pressure_kpa:g} kPa); bench needs each session's 0 kPa "
-                f"frame (at most {REST_KPA:g} kPa) as reference: add one, or run with "
-                "--no-reference (and without --robustness)"
+                f"frame (at most {REST_KPA:g} kPa) as reference"
+                + (
+                    " for the robustness suite: add one, or run without --robustness"
+                    if for_robustness
+                    else ": add one, or run with --no-reference (and without --robustness)"
+                )
             )
 
 

@@ -74,7 +74,7 @@ def run_bench(
     sessions = sessions_of(read_index(data))
     others = [read_sessions(c) for c in crosscheck]  # every folder checked before any work
     if config.use_reference or config.robustness_frames:  # robustness always uses references
-        check_references(sessions)
+        check_references(sessions, for_robustness=not config.use_reference)
     for other in others if config.use_reference else []:
         check_references(other)
     frames = evaluate(sessions, model, config.use_reference, config.variants)
