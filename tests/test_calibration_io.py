@@ -15,7 +15,7 @@ from test_outputs import copy_session
 
 from contactcal.infer.calibration import record as calibration_io
 from contactcal.infer.calibration.fit import CurveConfig
-from contactcal.infer.calibration.load import NoContactCurveError, load_curve
+from contactcal.infer.calibration.load import NoContactCurveError, NoSuchPhaseError, load_curve
 from contactcal.infer.calibration.points import CalibrationPoint
 from contactcal.infer.calibration.record import write_calibration
 from contactcal.infer.calibration.session import SessionFit, fit_session
@@ -166,14 +166,14 @@ def test_load_curve_reads_versions_1_and_2(tmp_path: Path) -> None:
     assert old.band is None and old.model is None
     with pytest.raises(ValueError, match="no uncertainty band"):
         old.pressure_interval_for_area(5.0)
-    with pytest.raises(ValueError, match="loading pass only"):
+    with pytest.raises(NoSuchPhaseError, match="loading pass only"):
         load_curve(tmp_path / "v2.json", phase="unloading")
     v1 = {k: v for k, v in v2.items() if k not in ("method_config", "device_id", "argv")}
     v1 = {**v1, "format_version": 1}
     del v1["inputs"]
     (tmp_path / "v1.json").write_text(json.dumps(v1), encoding="utf-8")
     np.testing.assert_allclose(load_curve(tmp_path / "v1.json").fit_area, fit.curve.fit_area)
-    with pytest.raises(ValueError, match="no unloading pass: the record has loading") as exc:
+    with pytest.raises(NoSuchPhaseError, match="no unloading pass: the record has loading") as exc:
         load_curve(paths["json"], phase="unloading")
     assert "not a readable" not in str(exc.value)  # it is readable; the pass is not in it
     assert load_curve(paths["json"], area_unit="mm²").area_unit == "mm²"

@@ -205,6 +205,12 @@ def test_inverse_round_trip_and_clamping() -> None:
         curve.pressure_for_area(-1.0)
     with pytest.raises(ValueError):
         curve.pressure_for_area(float("nan"))
+    assert curve.pressure_for_area(np.float32(100.0)) == curve.pressure_for_area(np.array(100))
+    for not_a_number in ("100", None, True, np.array([100.0])):  # float() read the first three
+        with pytest.raises(TypeError, match="pressure_for_area: expected an area in mm²"):
+            curve.pressure_for_area(not_a_number)  # type: ignore[arg-type]
+    with pytest.raises(TypeError, match="area_at: expected a pressure in kPa"):
+        curve.area_at("8")  # type: ignore[arg-type]
 
 
 def test_inverse_flat_segment_returns_lowest_pressure() -> None:

@@ -10,6 +10,7 @@ saturating one (``model``), :mod:`.bootstrap` the band.
 from __future__ import annotations
 
 import math
+import numbers
 from dataclasses import dataclass
 from typing import TYPE_CHECKING
 
@@ -113,7 +114,7 @@ class Curve:
     def area_at(self, p_kpa: float) -> float:
         """Fitted area (area_unit) at ``p_kpa``: 0 below the onset, linear between knots, held
         at the last fitted value above the calibrated maximum pressure."""
-        q = float(p_kpa)
+        q = real_number(p_kpa, "area_at", "a pressure in kPa")
         if not math.isfinite(q):
             raise ValueError(f"area_at: expected a finite pressure in kPa, got {p_kpa}")
         if self.onset_kpa is None:
@@ -139,9 +140,10 @@ class Curve:
         calibrated maximum 250 mm² at 20 kPa; clamped"``).
 
         Raises:
+            TypeError: ``area`` is not a real number (a string, None, a bool, an array).
             ValueError: non-finite or negative ``area``, or a curve without contact.
         """
-        a = float(area)
+        a = real_number(area, "pressure_for_area", f"an area in {self.area_unit}")
         if not math.isfinite(a) or a < 0:
             raise ValueError(f"pressure_for_area: expected a finite area >= 0, got {area}")
         if not self.has_contact:
@@ -261,6 +263,23 @@ def highest_at(x: np.ndarray, y: np.ndarray, a: float) -> float:
     """
     at = np.flatnonzero(y == a)
     return float(x[at[-1]]) if at.size else lowest_reaching(x, y, a)
+
+
+def real_number(value: object, where: str, what: str) -> float:
+    """``value`` as a float when it is a real number (a Python or numpy scalar, or a 0-d
+    array of one), else a TypeError saying what ``where`` expected: ``float("100")`` would
+    read a string from a controller's config as a number, and ``float(True)`` as 1.
+
+    Raises:
+        TypeError: a string, None, a bool, a complex number or an array with elements.
+    """
+    if isinstance(value, np.ndarray) and value.ndim == 0:
+        value = value[()]
+    if isinstance(value, numbers.Real) and not isinstance(value, (bool, np.bool_)):
+        return float(value)
+    raise TypeError(
+        f"{where}: expected {what} (a real number), got {type(value).__name__} {value!r}"
+    )
 
 
 def _apart(a: float, b: float) -> tuple[str, str]:

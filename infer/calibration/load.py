@@ -37,7 +37,7 @@ def _phase_curve(data: dict[str, Any], phase: str | None, allow_unresolved: bool
     """The curve of ``phase`` (None: the recorded inverse phase) from a version 3 record."""
     name = (phase or data["inverse_phase"]).lower()
     if name not in data["phases"]:
-        raise _NoSuchPhase(
+        raise NoSuchPhaseError(
             f"no {name} pass: the record has {', '.join(data['phases'])}; give phase= one of them"
         )
     ph = data["phases"][name]
@@ -94,8 +94,9 @@ class UnassessedCurveWarning(UserWarning):
     """The record could not assess whether the curve tells pressures apart (too few steps)."""
 
 
-class _NoSuchPhase(ValueError):
-    """A readable record without the pass asked for."""
+class NoSuchPhaseError(ValueError):
+    """A readable record without the pass asked for (``phase=``): the message names the passes
+    it holds."""
 
 
 def load_curve(
@@ -128,7 +129,8 @@ def load_curve(
         UnresolvedCurveError: the curve does not resolve pressures (and not allowed).
         NoContactCurveError: the curve has no contact in any step (it cannot be inverted;
             ``calibrate`` refuses to write such a record for the pass it inverts).
-        ValueError: unreadable file, not a contactcal calibration, no such phase, an unknown
+        NoSuchPhaseError: the record holds no ``phase`` pass (e.g. a loading-only session).
+        ValueError: unreadable file, not a contactcal calibration, an unknown
             ``area_unit``, or another unit than ``area_unit``.
     """
     unit = _check_unit(area_unit)
@@ -172,10 +174,12 @@ def _read_curve(path: str | os.PathLike[str], phase: str | None, allow_unresolve
         if version == 3:
             return _phase_curve(data, phase, allow_unresolved)
         if phase is not None and phase.lower() != LOADING:
-            raise _NoSuchPhase(f"format_version {version} holds the loading pass only, not {phase}")
+            raise NoSuchPhaseError(
+                f"format_version {version} holds the loading pass only, not {phase}"
+            )
         curve = _curve(data["fit"], data["onset_kpa"], data["area_unit"], data.get("inverse"))
         return _check_contact(curve, LOADING)
-    except (UnresolvedCurveError, NoContactCurveError, _NoSuchPhase) as exc:
+    except (UnresolvedCurveError, NoContactCurveError, NoSuchPhaseError) as exc:
         raise type(exc)(f"{path}: {exc}") from exc
     except (OSError, ValueError, KeyError, TypeError, AttributeError) as exc:
         raise ValueError(f"{path}: not a readable contactcal calibration ({exc})") from exc
