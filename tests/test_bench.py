@@ -348,11 +348,16 @@ def test_variant_is_scored_and_timed_beside_the_model(
     )
 
 
-def test_cli_rejects_a_bad_variant(tmp_path: Path) -> None:
+def test_cli_rejects_a_bad_variant(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
     data = write_dataset(tmp_path / "data")
     for bad in ("int8", "=x.onnx", f"int8={tmp_path / 'missing.onnx'}"):
         argv = ["bench", "--data", str(data), "--out", str(tmp_path / "o"), "--variant", bad]
         assert main(argv) == 2
+    for label in ("a|b", "int 8"):  # a | split the report's Markdown table rows
+        argv = ["bench", "--data", str(data), "--out", str(tmp_path / "o")]
+        assert main([*argv, "--variant", f"{label}=x.onnx"]) == 2
+        assert f"label {label!r} may hold letters" in capsys.readouterr().err
+    assert not (tmp_path / "o").exists()
 
 
 def _rewrite_index(index: Path, edit: Any) -> None:

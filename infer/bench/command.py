@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import argparse
+import re
 from pathlib import Path
 from typing import Any
 
@@ -30,7 +31,7 @@ def add_parsers(sub: argparse._SubParsersAction) -> None:
         default=[],
         metavar="LABEL=MODEL",
         help="a further U-Net model scored and timed beside --model as unet[LABEL] "
-        "(e.g. int8=models/contact_unet_int8.onnx); repeatable",
+        "(e.g. int8=models/contact_unet_int8.onnx; LABEL of letters, digits, . _ + -); repeatable",
     )
     b.add_argument(
         "--no-reference",
@@ -126,11 +127,20 @@ def _print_summary(res: dict[str, Any], out: Path) -> None:
     print(f"report: {out / 'report.md'}")
 
 
+#: A variant's label: it becomes ``unet[label]`` in Markdown tables, CSV cells and plot labels.
+_LABEL = re.compile(r"[A-Za-z0-9._+-]{1,40}")
+
+
 def _variant(text: str) -> tuple[str, str]:
     """``LABEL=MODEL`` → ``(label, path)``; the file must exist."""
     label, sep, path = text.partition("=")
     if not sep or not label or not path:
         raise ValueError(f"--variant {text!r}: expected LABEL=MODEL.onnx, e.g. int8=m_int8.onnx")
+    if not _LABEL.fullmatch(label):
+        raise ValueError(
+            f"--variant {text!r}: label {label!r} may hold letters, digits and . _ + - only (it "
+            "names the report's table rows and plot labels, where | or a space breaks them)"
+        )
     if not Path(path).is_file():
         raise ValueError(f"--variant {text!r}: {path}: no such model file")
     return label, path
