@@ -61,6 +61,11 @@ def test_outputs_written(bench: tuple[Path, Path, dict[str, Any]]) -> None:
     for heading in ("## Area error per pressure bin", "## Speed", "## Contact onset", "## Hard"):
         assert heading in report
     assert "](error_vs_pressure.png)" in report and "](pareto.png)" in report
+    assert "Bins are `[lo, hi)` kPa" in report
+    few = [b for b in results["bins"] if 0 < b["contact_frames"] < 5]  # the tiny set's bins
+    assert few, "expected bins of 1-4 contact frames in the tiny set"
+    for b in few:
+        assert f"{b['method']} {b['bin_kpa']} kPa ({b['contact_frames']})" in report
     assert json.loads((out / "results.json").read_text()) == json.loads(json.dumps(results))
 
 

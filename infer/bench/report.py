@@ -257,6 +257,26 @@ def _timed_frames(results: Mapping[str, Any]) -> str:
     return f"{got} (of {asked} asked: all the set has at {lo:g}-{hi:g} kPa, or at all pressures)"
 
 
+#: Fewer contact frames than this in a bin: its median is said to be indicative only.
+FEW_FRAMES = 5
+
+
+def _few_frames_note(bins: Sequence[Mapping[str, Any]]) -> str:
+    """A sentence naming the bins whose errors are medians of 1 to ``FEW_FRAMES - 1`` frames."""
+    few = [
+        f"{b['method']} {b['bin_kpa']} kPa ({b['contact_frames']})"
+        for b in bins
+        if 0 < b["contact_frames"] < FEW_FRAMES
+    ]
+    if not few:
+        return ""
+    return (
+        f" Errors over fewer than {FEW_FRAMES} contact frames are indicative only: "
+        + ", ".join(few)
+        + "."
+    )
+
+
 def report_text(results: Mapping[str, Any]) -> str:
     """``report.md`` from the results (with their ``bins``, ``hard`` and ``coverage`` tables)."""
     cfg = results["config"]
@@ -274,6 +294,9 @@ def report_text(results: Mapping[str, Any]) -> str:
         "that\nshrinks at the next pressure beyond both stated intervals, and a contact left "
         "below the\ncontact range, count as no contact), i.e. what a calibration reports.",
         "## Area error per pressure bin\n\n"
+        "Bins are `[lo, hi)` kPa (a frame at 3 kPa is in 3-5; the last bin holds 20 kPa)."
+        + _few_frames_note(results["bins"])
+        + "\n\n"
         + md_table(results["bins"], BIN_COLUMNS)
         + "\n\n![error vs pressure](error_vs_pressure.png)",
         "## Speed\n\n"
