@@ -302,3 +302,33 @@ def test_two_masks_of_one_frame_are_refused(
     assert _evaluate(tmp_path / "out", masks, "--method", "classical") == 2
     err = _one_line(capsys)
     assert "p10.0kpa" in err and "expected one mask per frame" in err
+
+
+def test_a_mask_saved_as_jpeg_is_refused_with_advice_that_fits_a_mask(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """A JPEG named .png was told "rename it to .jpg"; a .jpg mask was then skipped silently."""
+    ok, jpeg = cv2.imencode(".jpg", (_contact() * 255).astype(np.uint8))
+    assert ok
+    masks = _masks_with(tmp_path, "unused.png", np.zeros((300, 400), np.uint8))
+    (masks / "unused.png").unlink()
+    (masks / "p10.0kpa.png").write_bytes(jpeg.tobytes())
+    assert _evaluate(tmp_path / "out", masks, "--method", "classical") == 2
+    err = _one_line(capsys)
+    assert "p10.0kpa.png: not a PNG file (its content is a JPEG image); masks must be PNG" in err
+    (masks / "p10.0kpa.png").rename(masks / "p10.0kpa.jpg")
+    assert _evaluate(tmp_path / "out", masks, "--method", "classical") == 2
+    assert "p10.0kpa.jpg: a .jpg image in the mask folder; masks must be PNG" in _one_line(capsys)
+    assert not (tmp_path / "out").exists()
+
+
+def test_masks_beside_the_jpeg_frames_are_still_read(tmp_path: Path) -> None:
+    """The frames themselves are not taken for JPEG masks when the masks lie beside them."""
+    session = tmp_path / "session"
+    shutil.copytree(EXAMPLE_SESSION, session)
+    for mask in (session / "masks").iterdir():
+        mask.rename(session / mask.name)
+    argv = ["evaluate", str(session / "manifest.csv"), "--labels", str(session)]
+    assert main([*argv, "--out", str(tmp_path / "out"), "--method", "classical"]) == 0
+    labelled = len(list((EXAMPLE_SESSION / "masks").glob("*.png")))
+    assert len(_record(tmp_path / "out")["frames"]) == labelled

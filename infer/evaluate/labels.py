@@ -25,7 +25,8 @@ import numpy as np
 
 from contactcal.infer.evaluate.ellipse import ImageJEllipse, rasterise
 from contactcal.infer.evaluate.errors import LabelError
-from contactcal.infer.evaluate.mask_read import read_mask
+from contactcal.infer.evaluate.mask_read import MASK_FIX, read_mask
+from contactcal.infer.image.read import SUPPORTED_SUFFIXES
 from contactcal.infer.pipeline.manifest import Frame
 
 #: Required columns of an ellipse CSV (other columns, e.g. ImageJ's Area, are ignored).
@@ -80,6 +81,7 @@ def _mask_labels(folder: Path, frames: list[Frame]) -> list[Label]:
     for f in frames:
         by_stem.setdefault(f.file.stem, []).append(f.file)
     out: list[Label] = []
+    _refuse_other_images(folder, frames)
     for mask in sorted(p for p in folder.iterdir() if p.suffix.lower() == ".png"):
         match = by_stem.get(mask.stem, [])
         if not match:
@@ -101,6 +103,29 @@ def _mask_labels(folder: Path, frames: list[Frame]) -> list[Label]:
             )
         out.append(Label(match[0], mask, None, None))
     return out
+
+
+def _refuse_other_images(folder: Path, frames: list[Frame]) -> None:
+    """Refuse an image in the mask folder that is neither a PNG nor a frame of the manifest (a
+    mask saved as JPEG or TIFF would otherwise be skipped, leaving its frame unlabelled without
+    a word); other files, and the frames themselves, are left.
+
+    Raises:
+        LabelError: the first such image, named.
+    """
+    own = {f.file.resolve() for f in frames}
+    other = sorted(
+        p
+        for p in folder.iterdir()
+        if p.suffix.lower() in SUPPORTED_SUFFIXES
+        and p.suffix.lower() != ".png"
+        and p.resolve() not in own
+    )
+    if other:
+        raise LabelError(
+            f"{other[0]}: a {other[0].suffix} image in the mask folder; {MASK_FIX} "
+            f"({other[0].stem}.png)"
+        )
 
 
 def _read_rows(path: Path) -> tuple[dict[str, int], list[tuple[int, list[str]]]]:

@@ -13,6 +13,12 @@ from contactcal.infer.evaluate.errors import LabelError
 from contactcal.infer.image.decode import decode_strict
 from contactcal.infer.image.read import read_file_bytes
 
+#: The advice for a mask whose content is another format than PNG (a JPEG saved as .png).
+MASK_FIX = (
+    "masks must be PNG (lossless: a JPEG's compression moves the label's edge); save the mask "
+    "again as PNG, with 0 = background, > 0 = contact"
+)
+
 
 def read_mask(path: Path) -> tuple[np.ndarray, str | None]:
     """``(H, W)`` bool: any colour channel > 0 (alpha ignored, unless it alone holds a shape);
@@ -23,7 +29,7 @@ def read_mask(path: Path) -> tuple[np.ndarray, str | None]:
         LabelError: not a decodable image, or no pixel 0 (no background: an inverted mask, or a
             background of another value), which would make the whole frame contact.
     """
-    buf = np.frombuffer(read_file_bytes(path), np.uint8)
+    buf = np.frombuffer(read_file_bytes(path, MASK_FIX), np.uint8)
     img = decode_strict(buf, cv2.IMREAD_UNCHANGED, str(path))
     if img is None or img.ndim not in (2, 3):
         raise LabelError(

@@ -43,16 +43,18 @@ _SIGNATURES: tuple[tuple[str, tuple[bytes, ...], tuple[str, ...]], ...] = (
 _SIGNATURES_BY_NAME = {name: suffixes[0] for name, _, suffixes in _SIGNATURES}
 
 
-def _check_content(path: Path, data: bytes) -> None:
+def _check_content(path: Path, data: bytes, fix: str | None = None) -> None:
     """Reject a file whose content is not the format its suffix names (the suffix decides how it
-    is decoded and checked: a JPEG named .png would be called a truncated PNG)."""
+    is decoded and checked: a JPEG named .png would be called a truncated PNG); ``fix``: the
+    advice when it is another image format (default: rename it to that format's suffix)."""
     suffix = path.suffix.lower()
     found = next((name for name, sigs, _ in _SIGNATURES if data.startswith(sigs)), None)
     named = next(name for name, _, suffixes in _SIGNATURES if suffix in suffixes)
     if found == named:
         return
     what = f"a {found} image" if found else "not an image of a supported type"
-    fix = f"rename it to {_SIGNATURES_BY_NAME[found]}" if found else "export the frame again"
+    if fix is None or not found:
+        fix = f"rename it to {_SIGNATURES_BY_NAME[found]}" if found else "export the frame again"
     raise ImageError(f"{path}: not a {named} file (its content is {what}); {fix}")
 
 
@@ -72,11 +74,14 @@ def _check_complete(path: Path, data: bytes) -> None:
             raise ImageError(f"{path}: truncated JPEG (no end-of-image marker); re-export the file")
 
 
-def read_file_bytes(path: str | os.PathLike[str]) -> bytes:
+def read_file_bytes(path: str | os.PathLike[str], other_format_fix: str | None = None) -> bytes:
     """Read an image file's bytes with clear errors for missing, unreadable or empty files.
 
     Args:
         path: image file.
+        other_format_fix: the advice when its content is another image format than its suffix
+            names (None: rename it to that format's suffix, right for a frame; a mask must be
+            re-saved as PNG instead).
 
     Returns:
         The file content.
@@ -102,7 +107,7 @@ def read_file_bytes(path: str | os.PathLike[str]) -> bytes:
         raise ImageError(f"{p}: cannot read ({exc.strerror})") from exc
     if not data:
         raise ImageError(f"{p}: empty file (0 bytes)")
-    _check_content(p, data)
+    _check_content(p, data, other_format_fix)
     _check_complete(p, data)
     return data
 
