@@ -332,3 +332,26 @@ def test_masks_beside_the_jpeg_frames_are_still_read(tmp_path: Path) -> None:
     assert main([*argv, "--out", str(tmp_path / "out"), "--method", "classical"]) == 0
     labelled = len(list((EXAMPLE_SESSION / "masks").glob("*.png")))
     assert len(_record(tmp_path / "out")["frames"]) == labelled
+
+
+def test_an_evaluation_replaced_in_out_is_named(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """A second run into one --out replaced the first evaluation without a word."""
+    out = tmp_path / "out"
+    assert _evaluate(out, MASKS, "--method", "classical") == 0
+    assert "note: replaced" not in capsys.readouterr().out
+    assert _evaluate(out, MASKS, "--method", "classical") == 0
+    said = capsys.readouterr().out
+    assert f"note: replaced an earlier evaluation of this manifest that {out} held" in said
+    other = tmp_path / "session2"
+    shutil.copytree(EXAMPLE_SESSION, other)
+    argv = ["evaluate", str(other / "manifest.csv"), "--labels", str(other / "masks")]
+    assert main([*argv, "--out", str(out), "--method", "classical"]) == 0
+    assert (
+        f"note: replaced the evaluation of {MANIFEST.resolve()} that {out}"
+        in capsys.readouterr().out
+    )
+    (out / "evaluation.json").write_text("{", encoding="utf-8")
+    assert main([*argv, "--out", str(out), "--method", "classical"]) == 0
+    assert "not readable as an evaluation" in capsys.readouterr().out

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import argparse
+import json
 from pathlib import Path
 
 from contactcal.infer.methods.registry import METHODS
@@ -59,13 +60,41 @@ def _cmd_evaluate(args: argparse.Namespace) -> int:
     default_rig = beside_manifest(args.manifest)
     measure = measure_options(args, default_rig)
     rig = rig_file(args, default_rig)  # the file measure_options read, protected from --out
+    replaced = earlier_evaluation_note(args.out, args.manifest)
     rep = evaluate_session(
         args.manifest, args.labels, args.out, args.method, measure, also_read=[rig] if rig else []
     )
-    with printing_after([args.out]):
+    with printing_after([args.out], [replaced]):
         print(rep.table)
         print(f"evaluation: {rep.files['json']}, {rep.files['png']}")
+        if replaced is not None:
+            print(replaced)
     return 0
+
+
+def earlier_evaluation_note(out: Path, manifest: Path) -> str | None:
+    """A line naming the evaluation ``out`` holds before a run replaces it (None: none), so
+    that a typo in ``--out`` (one session's folder for another's) does not lose an evaluation
+    of the boundary-offset pool without a word.
+
+    Args:
+        out: the run's output folder, before the run.
+        manifest: the manifest this run evaluates.
+    """
+    held = [n for n in ("evaluation.json", "evaluation.png") if (out / n).is_file()]
+    if not held:
+        return None
+    try:
+        record = json.loads((out / "evaluation.json").read_text(encoding="utf-8"))
+        earlier = Path(record["manifest"])
+        what = (
+            "an earlier evaluation of this manifest"
+            if earlier == manifest.resolve()
+            else f"the evaluation of {earlier}"
+        )
+    except (OSError, ValueError, KeyError, TypeError):
+        what = f"{' and '.join(held)}, not readable as an evaluation"
+    return f"note: replaced {what} that {out} held; give each session its own --out to keep both"
 
 
 def _cmd_boundary_offset(args: argparse.Namespace) -> int:
