@@ -116,6 +116,7 @@ def _cmd_fidelity(args: argparse.Namespace) -> int:
     from contactcal.infer.files.atomic import run_outputs, write_json, write_text
     from contactcal.infer.image.write import write_image
     from contactcal.synth.fidelity_report import (
+        PAPER_BINS,
         FidelityConfig,
         run_fidelity,
         summarise,
@@ -130,9 +131,17 @@ def _cmd_fidelity(args: argparse.Namespace) -> int:
     check_out_folder(args.out, "fidelity", FIDELITY_FILES)  # before the renders, not after
     json_name, md_name, jpg_name = FIDELITY_FILES
     width, height = parse_size(args.size)
+    pressures = tuple(parse_pressures(args.pressures))
+    if max(pressures) > PAPER_BINS[-1][1]:
+        raise ValueError(
+            f"--pressures {args.pressures}: up to {max(pressures):g} kPa; fidelity compares with "
+            f"the rig paper's bins, which end at {PAPER_BINS[-1][1]:g} kPa (a frame above would "
+            "be in no bin): give pressures from 0 to 20 kPa"
+        )
+    replaced = [n for n in FIDELITY_FILES if (args.out / n).is_file()]
     config = FidelityConfig(
         sessions=args.sessions,
-        pressures_kpa=tuple(parse_pressures(args.pressures)),
+        pressures_kpa=pressures,
         seed=args.seed,
         render=RenderConfig(width=width, height=height, spp=args.spp),
         workers=args.workers,
@@ -150,4 +159,6 @@ def _cmd_fidelity(args: argparse.Namespace) -> int:
         write_image(out.stage(args.out / jpg_name), strip, jpeg)
     print(summary_markdown(summary), end="")
     print(f"fidelity: ROI found within tolerance in {summary['roi_ok']}/{args.sessions} sessions")
+    if replaced:
+        print(f"note: replaced the fidelity report that {args.out} held ({', '.join(replaced)})")
     return 0

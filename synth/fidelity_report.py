@@ -146,6 +146,11 @@ def summary_markdown(summary: dict[str, object]) -> str:
             f"| {iqr} | {b['over_30pct']} | {inside} | {encl} "
             f"| {b['routine_reports_contact']} of {b['frames_without_contact']} |"
         )
+    rows.append("")
+    rows.append(
+        "Bins are (lo, hi] kPa, the first [0, 1]: a frame at 5 kPa is in 3–5 (as the paper's "
+        "steps)."
+    )
     return "\n".join(rows) + "\n"
 
 

@@ -124,3 +124,20 @@ def test_cli_refuses_an_output_that_is_not_a_folder_before_rendering(
     assert main(["fidelity", "--sessions", "1", "--out", "-"]) == 2
     assert "writes a folder of files" in capsys.readouterr().err
     assert afile.read_text() == "kept"
+
+
+def test_cli_refuses_pressures_past_the_papers_bins_and_names_a_replaced_report(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """A 25 kPa frame fell in no bin without a word; a second run replaced the first silently."""
+    from contactcal.infer.cli import main
+
+    out = tmp_path / "fid"
+    argv = ["fidelity", "--sessions", "1", "--size", "64x48", "--spp", "1", "--out", str(out)]
+    assert main([*argv, "--pressures", "0:25:5"]) == 2
+    assert "bins, which end at 20 kPa" in capsys.readouterr().err and not out.exists()
+    assert main([*argv, "--pressures", "0,10"]) == 0
+    said = capsys.readouterr().out
+    assert "Bins are (lo, hi] kPa" in said and "note: replaced" not in said
+    assert main([*argv, "--pressures", "0,10"]) == 0
+    assert f"note: replaced the fidelity report that {out} held" in capsys.readouterr().out
