@@ -1,0 +1,121 @@
+"""The files of a ``contactcal synth`` dataset folder that a run reads back, each checked.
+
+A resumed run reads ``config.json`` (refused unless it is this config), the finished frames'
+truth JSON; a damaged or foreign file is refused in one line naming
+it and what was expected.
+"""
+
+from __future__ import annotations
+
+import json
+from dataclasses import asdict
+from pathlib import Path
+from typing import TYPE_CHECKING, Any
+
+from contactcal.infer.files.atomic import write_json
+from contactcal.infer.files.jsonable import jsonable
+from contactcal.synth.variant import VARIANTS
+
+if TYPE_CHECKING:
+    from contactcal.synth.dataset import DatasetConfig
+
+#: What changed the frames a given config renders (recorded in ``config.json``; a folder of an
+#: earlier revision is not resumed, since its frames and new ones would differ).
+REVISIONS = {
+    1: "v2 world",
+    2: "defocus, motion blur and axis offset scale with the frame width",
+}
+SYNTH_REVISION = max(REVISIONS)
+
+#: Keys of a frame's truth JSON that a run reads back (the rest are ``index.csv`` columns).
+FRAME_KEYS = ("finger", "pressure_kpa", "contact", "mm_per_px")
+
+
+def read_json(path: Path, expected: str) -> Any:
+    """The JSON in ``path``; ValueError naming it and ``expected`` if it is not valid JSON."""
+    try:
+        return json.loads(path.read_text(encoding="utf-8"))
+    except UnicodeDecodeError:
+        why = "not UTF-8 text"
+    except json.JSONDecodeError as exc:
+        why = f"{exc.msg} at line {exc.lineno} column {exc.colno}"
+    raise ValueError(f"{path}: not valid JSON ({why}); expected {expected}")
+
+
+def read_frame_record(path: Path) -> dict[str, Any]:
+    """A finished frame's truth JSON (its ``index.csv`` row), checked.
+
+    Raises:
+        ValueError: naming the file as a damaged frame record (removed, it is rendered again
+            by a resume).
+    """
+    remedy = (
+        "a frame record a `contactcal synth` run wrote (this one is damaged): remove it and run "
+        "the same synth command, which renders that frame again"
+    )
+    record = read_json(path, remedy)
+    if not isinstance(record, dict):
+        raise ValueError(f"{path}: holds no JSON object; expected {remedy}")
+    missing = [k for k in FRAME_KEYS if k not in record]
+    if missing:
+        raise ValueError(f"{path}: has no {', '.join(missing)}; expected {remedy}")
+    for key in ("pressure_kpa", "mm_per_px"):
+        if isinstance(record[key], bool) or not isinstance(record[key], int | float):
+            raise ValueError(f"{path}: {key} is {record[key]!r}, not a number; expected {remedy}")
+    return record
+
+
+def config_record(config: DatasetConfig) -> dict[str, Any]:
+    """What ``config.json`` holds for ``config`` (as read back from JSON)."""
+    return json.loads(json.dumps({**jsonable(asdict(config)), "synth_revision": SYNTH_REVISION}))
+
+
+def check_config_matches(root: Path, config: DatasetConfig) -> None:
+    """Write ``config.json``, or refuse to mix a different config into an existing folder.
+
+    Raises:
+        ValueError: ``config.json`` is damaged, another tool's, of another Mitsuba variant or
+            synth revision, or of other arguments.
+    """
+    path = root / "config.json"
+    new = config_record(config)
+    if not path.is_file():
+        write_json(path, new)
+        return
+    expected = (
+        "the config a `contactcal synth` run wrote; render into a new --out (or remove this "
+        "folder to render it again)"
+    )
+    old = read_json(path, expected)
+    if not isinstance(old, dict) or not isinstance(old.get("render"), dict):
+        raise ValueError(
+            f"{path}: is not the config of a `contactcal synth` dataset (a training run's or "
+            "another tool's?); render into a new --out"
+        )
+    was, now = old["render"].get("variant"), config.render.variant
+    if was in VARIANTS and was != now:
+        raise ValueError(
+            f"{path}: rendered with the Mitsuba variant {was}, and this machine renders with "
+            f"{now} (other bytes); resume where {was} works (CONTACTCAL_MI_VARIANT={was}) "
+            "or render into a new --out"
+        )
+    if was == "auto":
+        raise ValueError(
+            f"{path}: rendered before the Mitsuba variant was recorded ('auto'), so a resume "
+            f"could mix frames of another variant (this machine's: {now}); render into a new --out"
+        )
+    old.setdefault("smooth_fraction", 0.0)  # folders rendered before the options existed
+    old.setdefault("speck_fraction", 0.0)
+    old.setdefault("departure_fraction", 0.0)
+    old.setdefault("synth_revision", 1)
+    if old["synth_revision"] != SYNTH_REVISION:
+        raise ValueError(
+            f"{path}: this folder was rendered by synth revision {old['synth_revision']} "
+            f"(now {SYNTH_REVISION}: {REVISIONS[SYNTH_REVISION]}), so new frames would not "
+            "match its frames; render into a new --out"
+        )
+    if old != new:
+        raise ValueError(
+            f"{path}: this folder was rendered with a different config; use a new --out "
+            "or the same arguments to resume"
+        )

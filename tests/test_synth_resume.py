@@ -1,0 +1,94 @@
+"""``contactcal synth`` into an existing folder: damaged files.
+
+The folders are written by hand: nothing is rendered."""
+
+from __future__ import annotations
+
+import dataclasses
+import json
+import re
+from pathlib import Path
+
+import pytest
+
+pytest.importorskip("mitsuba")
+
+from contactcal.infer.cli import main
+from contactcal.synth.dataset import DatasetConfig, build_dataset, render_finger
+from contactcal.synth.dataset_folder import (
+    check_config_matches,
+)
+from contactcal.synth.layout import frame_name
+from contactcal.synth.session import RenderConfig
+from contactcal.synth.variant import choose_variant
+
+CONFIG = DatasetConfig(
+    fingers=1, pressures_kpa=(0.0, 6.0), seed=5, render=RenderConfig(width=48, height=36, spp=1)
+)
+#: The command line of CONFIG (add --out).
+ARGV = ["synth", "--fingers", "1", "--pressures", "0,6", "--size", "48x36", "--spp", "1"]
+ARGV += ["--seed", "5", "--quiet"]
+
+
+def _finished(root: Path, config: DatasetConfig = CONFIG) -> Path:
+    """``root`` as a finished run of ``config`` leaves it: config.json and every frame record."""
+    variant = choose_variant(config.render.variant)
+    root.mkdir()
+    render = dataclasses.replace(config.render, variant=variant)
+    check_config_matches(root, dataclasses.replace(config, render=render))
+    for f in range(config.fingers):
+        frames = root / f"finger_{f:04d}" / "frames"
+        frames.mkdir(parents=True)
+        for p in config.pressures_kpa:
+            truth = {"finger": f, "pressure_kpa": p, "contact": int(p > 0), "mm_per_px": 0.1}
+            (frames / f"{frame_name(p)}.json").write_text(json.dumps(truth))
+    return root
+
+
+def _one_line(capsys: pytest.CaptureFixture[str]) -> str:
+    err = capsys.readouterr().err
+    assert len(err.strip().splitlines()) == 1, err
+    return err
+
+
+def test_a_damaged_config_json_is_named(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    root = _finished(tmp_path / "ds")
+    (root / "config.json").write_text("{\n")
+    assert main([*ARGV, "--out", str(root)]) == 2
+    err = _one_line(capsys)
+    assert f"{root / 'config.json'}: not valid JSON (Expecting property name" in err
+    assert "expected the config a `contactcal synth` run wrote; render into a new --out" in err
+
+
+@pytest.mark.parametrize(
+    ("text", "said"),
+    [
+        ("{\n", "not valid JSON (Expecting property name"),
+        ("[]", "holds no JSON object"),
+        ('{"finger": 1}', "has no pressure_kpa, contact, mm_per_px"),
+        (
+            '{"finger": 1, "pressure_kpa": "6", "contact": 1, "mm_per_px": 0.1}',
+            "pressure_kpa is '6', not a number",
+        ),
+    ],
+)
+def test_a_damaged_frame_record_is_named_before_any_render(
+    tmp_path: Path, text: str, said: str
+) -> None:
+    """Any shard's frame (index.csv reads them all), before the run renders anything."""
+    config = dataclasses.replace(CONFIG, fingers=2)
+    root = _finished(tmp_path / "ds", config)
+    damaged = root / "finger_0001" / "frames" / "p06.0kpa.json"
+    damaged.write_text(text)
+    (root / "finger_0000" / "frames" / "p06.0kpa.json").unlink()  # shard 0's frame to render
+    with pytest.raises(ValueError) as exc:
+        build_dataset(root, config, shard=(0, 2), progress=False)
+    msg = str(exc.value)
+    assert msg.startswith(f"{damaged}: {said}") and "expected a frame record a `contactcal" in msg
+    assert msg.endswith(
+        "(this one is damaged): remove it and run the same synth command, "
+        "which renders that frame again"
+    )
+    assert not (root / "finger_0000" / "manifest.csv").exists(), "nothing rendered or written"
+    with pytest.raises(ValueError, match=re.escape(str(damaged))):
+        render_finger(str(root), config, 1)  # the resume of one finger reads it too
