@@ -29,6 +29,7 @@ SYNTH_REVISION = max(REVISIONS)
 
 #: Keys of a frame's truth JSON that a run reads back (the rest are ``index.csv`` columns).
 FRAME_KEYS = ("finger", "pressure_kpa", "contact", "mm_per_px")
+MAX_CHANGES = 4  # config keys named when a resume is refused for a changed config
 
 
 def read_json(path: Path, expected: str) -> Any:
@@ -70,12 +71,41 @@ def config_record(config: DatasetConfig) -> dict[str, Any]:
     return json.loads(json.dumps({**jsonable(asdict(config)), "synth_revision": SYNTH_REVISION}))
 
 
+def _flat(record: dict[str, Any], prefix: str = "") -> dict[str, Any]:
+    """``{"render": {"spp": 1}}`` → ``{"render.spp": 1}``."""
+    out: dict[str, Any] = {}
+    for key, value in record.items():
+        if isinstance(value, dict):
+            out.update(_flat(value, f"{prefix}{key}."))
+        else:
+            out[f"{prefix}{key}"] = value
+    return out
+
+
+_NONE = object()  # a key one of two configs lacks
+
+
+def _shown(value: Any) -> str:
+    """A config value in a message: JSON, at most 40 characters."""
+    text = "(none)" if value is _NONE else json.dumps(value)
+    return text if len(text) <= 40 else text[:39] + "…"
+
+
+def config_changes(old: dict[str, Any], new: dict[str, Any]) -> str:
+    """The keys that differ, e.g. ``render.spp: 1 → 4; seed: 0 → 9`` (a few, then a count)."""
+    was, now = _flat(old), _flat(new)
+    keys = sorted(k for k in was.keys() | now.keys() if was.get(k, _NONE) != now.get(k, _NONE))
+    shown = [f"{k}: {_shown(was.get(k, _NONE))} → {_shown(now.get(k, _NONE))}" for k in keys]
+    more = len(shown) - MAX_CHANGES
+    return "; ".join(shown[:MAX_CHANGES]) + (f"; and {more} more" if more > 0 else "")
+
+
 def check_config_matches(root: Path, config: DatasetConfig) -> None:
     """Write ``config.json``, or refuse to mix a different config into an existing folder.
 
     Raises:
         ValueError: ``config.json`` is damaged, another tool's, of another Mitsuba variant or
-            synth revision, or of other arguments.
+            synth revision, or of other arguments (the differing keys are named, old → new).
     """
     path = root / "config.json"
     new = config_record(config)
@@ -116,6 +146,6 @@ def check_config_matches(root: Path, config: DatasetConfig) -> None:
         )
     if old != new:
         raise ValueError(
-            f"{path}: this folder was rendered with a different config; use a new --out "
-            "or the same arguments to resume"
+            f"{path}: this folder was rendered with a different config ({config_changes(old, new)}"
+            "); use a new --out or the same arguments to resume"
         )

@@ -127,7 +127,7 @@ def test_bad_arguments(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> No
     assert main(["synth", "--fingers", "1", "--seed", "-1", "--out", str(out)]) == 2
     assert "--seed must be >= 0, got -1" in capsys.readouterr().err and not out.exists()
     build_dataset(tmp_path / "a", dataclasses.replace(CONFIG, fingers=1), progress=False)
-    with pytest.raises(ValueError, match="different config"):
+    with pytest.raises(ValueError, match=r"different config \(seed: 5 → 9\); use a new"):
         build_dataset(
             tmp_path / "a", dataclasses.replace(CONFIG, fingers=1, seed=9), progress=False
         )
@@ -138,7 +138,7 @@ def test_bad_arguments(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> No
     with pytest.raises(ValueError, match="departure-fraction"):
         dataclasses.replace(CONFIG, departure_fraction=1.1)
     specky = dataclasses.replace(CONFIG, fingers=1, speck_fraction=1.0)
-    with pytest.raises(ValueError, match="different config"):
+    with pytest.raises(ValueError, match=r"different config \(speck_fraction: 0.0 → 1.0\)"):
         build_dataset(tmp_path / "a", specky, progress=False)
     speck_arg = ["synth", "--fingers", "1", "--speck-fraction", "2", "--out", str(tmp_path / "b")]
     assert main(speck_arg) == 2  # the flag reaches DatasetConfig's check; nothing rendered

@@ -1,4 +1,4 @@
-"""``contactcal synth`` into an existing folder: damaged files.
+"""``contactcal synth`` into an existing folder: damaged files, a changed config.
 
 The folders are written by hand: nothing is rendered."""
 
@@ -17,6 +17,7 @@ from contactcal.infer.cli import main
 from contactcal.synth.dataset import DatasetConfig, build_dataset, render_finger
 from contactcal.synth.dataset_folder import (
     check_config_matches,
+    config_changes,
 )
 from contactcal.synth.layout import frame_name
 from contactcal.synth.session import RenderConfig
@@ -92,3 +93,19 @@ def test_a_damaged_frame_record_is_named_before_any_render(
     assert not (root / "finger_0000" / "manifest.csv").exists(), "nothing rendered or written"
     with pytest.raises(ValueError, match=re.escape(str(damaged))):
         render_finger(str(root), config, 1)  # the resume of one finger reads it too
+
+
+def test_a_changed_config_names_what_changed(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    root = _finished(tmp_path / "ds")
+    assert main([*ARGV, "--spp", "4", "--hard-fraction", "0.5", "--out", str(root)]) == 2
+    err = _one_line(capsys)
+    assert "different config (hard_fraction: 0.25 → 0.5; render.spp: 1 → 4); use a new" in err
+    old = {"a": 1, "b": 2, "c": 3, "d": 4, "e": 5, "render": {"f": [0.0, 1.0]}}
+    new = {"a": 0, "b": 0, "c": 0, "d": 0, "render": {"f": [0.0] * 20}}
+    changes = config_changes(old, new)
+    assert changes.startswith("a: 1 → 0; b: 2 → 0; c: 3 → 0; d: 4 → 0; and 2 more")
+    assert config_changes({"e": 5}, {"render": {"f": [0.0] * 20}}) == (
+        "e: 5 → (none); render.f: (none) → [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0…"
+    )
