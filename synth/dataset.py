@@ -26,6 +26,7 @@ from contactcal.infer.image.write import write_image
 from contactcal.synth.dataset_folder import SYNTH_REVISION as SYNTH_REVISION  # re-exported
 from contactcal.synth.dataset_folder import (
     check_config_matches,
+    check_out_folder,
     read_frame_record,
 )
 from contactcal.synth.layout import (
@@ -198,11 +199,11 @@ def build_dataset(
     The Mitsuba variant is resolved here (``auto`` → the one this machine renders with) and
     recorded in ``config.json``, so a resume or a shard that would render with another variant
     (whose frames differ in their bytes) is refused instead of mixed in. Everything is checked
-    before the first render: ``config.json`` and
+    before the first render: the folder (:func:`check_out_folder`), ``config.json`` and
     the finished frames' records.
 
     Args:
-        out_dir: the dataset folder (new, or a synth dataset to resume).
+        out_dir: the dataset folder (new, empty, or a synth dataset to resume).
         config: what to render.
         workers: worker processes.
         shard: ``(i, n)``: render the fingers ``f % n == i``.
@@ -228,6 +229,7 @@ def _open_folder(
     if root.exists() and not root.is_dir():
         raise ValueError(f"{root}: is a file; expected a dataset folder for --out (new or resumed)")
     fingers = shard_fingers(config.fingers, shard)
+    check_out_folder(root)
     variant = choose_variant(config.render.variant)
     config = replace(config, render=replace(config.render, variant=variant))
     root.mkdir(parents=True, exist_ok=True)

@@ -2,17 +2,19 @@
 
 A resumed run reads ``config.json`` (refused unless it is this config), the finished frames'
 truth JSON; a damaged or foreign file is refused in one line naming
-it and what was expected.
+it and what was expected. :func:`check_out_folder` refuses an ``--out`` that would mix the
+dataset with other files.
 """
 
 from __future__ import annotations
 
 import json
+import os
 from dataclasses import asdict
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
-from contactcal.infer.files.atomic import write_json
+from contactcal.infer.files.atomic import TEMP_NAME, write_json
 from contactcal.infer.files.jsonable import jsonable
 from contactcal.synth.variant import VARIANTS
 
@@ -148,4 +150,42 @@ def check_config_matches(root: Path, config: DatasetConfig) -> None:
         raise ValueError(
             f"{path}: this folder was rendered with a different config ({config_changes(old, new)}"
             "); use a new --out or the same arguments to resume"
+        )
+
+
+def is_dataset(folder: Path) -> bool:
+    """Whether ``folder`` holds a synth dataset: a ``config.json`` and ``finger_*`` folders."""
+    if not (folder / "config.json").is_file():
+        return False
+    return any(p.is_dir() for p in folder.glob("finger_[0-9]*"))
+
+
+def check_out_folder(root: Path) -> None:
+    """Refuse an ``--out`` inside a synth dataset, or an existing folder of other files.
+
+    An existing folder without ``config.json`` is taken only when empty or holding nothing but
+    the staged ``config.json`` of a synth run (killed, or another shard writing it now): every
+    other synth file is written after ``config.json``.
+
+    Raises:
+        ValueError: naming the folder and what was expected.
+    """
+    for parent in root.resolve().parents:
+        if is_dataset(parent):
+            raise ValueError(
+                f"--out {root}: inside the synth dataset {parent} (its config.json and finger_* "
+                "folders); give the new dataset a folder of its own, outside that one"
+            )
+    if not root.is_dir() or (root / "config.json").exists():
+        return
+    other = sorted(
+        e.name
+        for e in os.scandir(root)
+        if not (TEMP_NAME.match(e.name) and e.name.startswith(".config.json."))
+    )
+    if other:
+        more = f" and {len(other) - 3} more" if len(other) > 3 else ""
+        raise ValueError(
+            f"--out {root}: holds other files ({', '.join(other[:3])}{more}) and no config.json; "
+            "expected a new or empty folder, or a synth dataset to resume; render into a new --out"
         )

@@ -24,9 +24,10 @@ from contactcal.synth.dataset import (
     shard_fingers,
     stop_if_orphaned,
 )
+from contactcal.synth.dataset_folder import check_config_matches
 from contactcal.synth.layout import parse_pressures, parse_size
 from contactcal.synth.session import RenderConfig
-from contactcal.synth.variant import VARIANTS
+from contactcal.synth.variant import VARIANTS, choose_variant
 
 pytestmark = pytest.mark.slow
 
@@ -229,6 +230,11 @@ def test_resume_removes_stale_temporaries(tmp_path: Path) -> None:
     config = dataclasses.replace(CONFIG, fingers=1, pressures_kpa=(0.0, 6.0))
     frames = tmp_path / "finger_0000" / "frames"
     frames.mkdir(parents=True)
+    variant = choose_variant(config.render.variant)  # config.json as the killed run wrote it
+    check_config_matches(
+        tmp_path,
+        dataclasses.replace(config, render=dataclasses.replace(config.render, variant=variant)),
+    )
     for p in config.pressures_kpa:  # every frame done: the resumed run renders nothing
         truth = {"finger": 0, "pressure_kpa": p, "contact": int(p > 0), "mm_per_px": 0.1}
         (frames / f"p{p:04.1f}kpa.json").write_text(json.dumps(truth))

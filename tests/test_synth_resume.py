@@ -1,12 +1,13 @@
-"""``contactcal synth`` into an existing folder: damaged files, a changed config.
-
-The folders are written by hand: nothing is rendered."""
+"""``contactcal synth`` into an existing folder: damaged files, a changed config, a folder of
+other files. The folders are written by hand: nothing is rendered."""
 
 from __future__ import annotations
 
 import dataclasses
 import json
+import os
 import re
+import subprocess
 from pathlib import Path
 
 import pytest
@@ -17,6 +18,7 @@ from contactcal.infer.cli import main
 from contactcal.synth.dataset import DatasetConfig, build_dataset, render_finger
 from contactcal.synth.dataset_folder import (
     check_config_matches,
+    check_out_folder,
     config_changes,
 )
 from contactcal.synth.layout import frame_name
@@ -109,3 +111,29 @@ def test_a_changed_config_names_what_changed(
     assert config_changes({"e": 5}, {"render": {"f": [0.0] * 20}}) == (
         "e: 5 → (none); render.f: (none) → [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0…"
     )
+
+
+def _dead_pid() -> int:
+    proc = subprocess.Popen(["true"])
+    proc.wait()
+    return proc.pid
+
+
+def test_an_out_of_other_files_or_inside_a_dataset_is_refused(tmp_path: Path) -> None:
+    junk = tmp_path / "junk"
+    junk.mkdir()
+    (junk / "a.txt").write_text("x")
+    with pytest.raises(ValueError, match=r"junk: holds other files \(a.txt\) and no config.json"):
+        build_dataset(junk, CONFIG, progress=False)
+    assert [p.name for p in junk.iterdir()] == ["a.txt"], "nothing written into it"
+    killed = tmp_path / "killed"  # killed while staging config.json: taken, as an empty folder
+    (killed / f".config.json.{_dead_pid()}.abc123.tmp").mkdir(parents=True)
+    (killed / f".config.json.{os.getpid()}.def456.tmp").mkdir()  # another shard writing it
+    check_out_folder(killed)
+    root = _finished(tmp_path / "ds")
+    check_out_folder(root)  # a dataset: resumed
+    for inside in (root / "finger_0000", root / "new", root / "finger_0000" / "new"):
+        where = re.escape(f"inside the synth dataset {root.resolve()} (its config.json")
+        with pytest.raises(ValueError, match=where):
+            build_dataset(inside, CONFIG, progress=False)
+        assert inside.name == "finger_0000" or not inside.exists()
