@@ -27,7 +27,10 @@ from contactcal.synth.dataset_folder import SYNTH_REVISION as SYNTH_REVISION  # 
 from contactcal.synth.dataset_folder import (
     check_config_matches,
     check_out_folder,
+    earlier_runs,
     read_frame_record,
+    run_record_path,
+    write_run_record,
 )
 from contactcal.synth.layout import (
     INDEX_COLUMNS,
@@ -193,14 +196,15 @@ def build_dataset(
     workers: int = 1,
     shard: tuple[int, int] = (0, 1),
     progress: bool = True,
-) -> dict[str, int]:
+    run_args: dict[str, Any] | None = None,
+) -> dict[str, Any]:
     """Render this shard's fingers into ``out_dir`` (resuming), then rebuild ``index.csv``.
 
     The Mitsuba variant is resolved here (``auto`` → the one this machine renders with) and
     recorded in ``config.json``, so a resume or a shard that would render with another variant
     (whose frames differ in their bytes) is refused instead of mixed in. Everything is checked
-    before the first render: the folder (:func:`check_out_folder`), ``config.json`` and
-    the finished frames' records.
+    before the first render: the folder (:func:`check_out_folder`), ``config.json``,
+    the finished frames' records and the shard's run record.
 
     Args:
         out_dir: the dataset folder (new, empty, or a synth dataset to resume).
@@ -208,14 +212,24 @@ def build_dataset(
         workers: worker processes.
         shard: ``(i, n)``: render the fingers ``f % n == i``.
         progress: show a progress bar.
+        run_args: the command line, to keep the shard's run record ``run_shard{i}of{n}.json``
+            (:func:`~contactcal.synth.dataset_folder.write_run_record`); None writes none.
+
     Returns:
-        ``fingers`` (this shard's) and ``frames_rendered`` (by this run).
+        ``fingers`` (this shard's), ``frames_rendered`` (by this run) and, with ``run_args``,
+        ``run_record_written`` (False: the record of the run that rendered the frames is kept).
     """
     root = Path(out_dir)
     config, fingers = _open_folder(root, config, shard)
+    record_path = run_record_path(root, shard)
+    earlier = earlier_runs(record_path) if run_args is not None else []
     made = _render_fingers(root, config, fingers, workers, shard if progress else None)
     write_index(root)
-    return {"fingers": len(fingers), "frames_rendered": made}
+    stats: dict[str, Any] = {"fingers": len(fingers), "frames_rendered": made}
+    if run_args is not None:
+        written = write_run_record(record_path, {"args": run_args, **stats}, earlier)
+        stats["run_record_written"] = written
+    return stats
 
 
 def _open_folder(

@@ -1,5 +1,5 @@
 """``contactcal synth`` into an existing folder: damaged files, a changed config, a folder of
-other files. The folders are written by hand: nothing is rendered."""
+other files, the run record. The folders are written by hand: nothing is rendered."""
 
 from __future__ import annotations
 
@@ -20,6 +20,8 @@ from contactcal.synth.dataset_folder import (
     check_config_matches,
     check_out_folder,
     config_changes,
+    earlier_runs,
+    write_run_record,
 )
 from contactcal.synth.layout import frame_name
 from contactcal.synth.session import RenderConfig
@@ -137,3 +139,31 @@ def test_an_out_of_other_files_or_inside_a_dataset_is_refused(tmp_path: Path) ->
         with pytest.raises(ValueError, match=where):
             build_dataset(inside, CONFIG, progress=False)
         assert inside.name == "finger_0000" or not inside.exists()
+
+
+def test_a_rerun_of_a_finished_shard_keeps_its_run_record(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    root = _finished(tmp_path / "ds")
+    record = root / "run_shard0of1.json"
+    record.write_text(json.dumps({"args": {"workers": 2}, "fingers": 1, "frames_rendered": 2}))
+    before = record.read_bytes()
+    assert main([*ARGV, "--out", str(root)]) == 0
+    assert record.read_bytes() == before, "the record of the run that rendered the frames"
+    assert "every frame was there; run_shard0of1.json kept" in capsys.readouterr().out
+    record.unlink()  # none yet: this run's is written
+    assert main([*ARGV, "--out", str(root)]) == 0
+    assert json.loads(record.read_text())["frames_rendered"] == 0
+
+
+def test_run_records_add_up(tmp_path: Path) -> None:
+    path = tmp_path / "run_shard0of1.json"
+    first = {"args": {"run": 1}, "fingers": 1, "frames_rendered": 2}
+    assert write_run_record(path, first, earlier_runs(path))
+    assert not write_run_record(path, {**first, "frames_rendered": 0}, earlier_runs(path))
+    second = {"args": {"run": 2}, "fingers": 1, "frames_rendered": 3}  # a resume of a damaged one
+    assert write_run_record(path, second, earlier_runs(path))
+    assert json.loads(path.read_text()) == {**second, "earlier_runs": [first]}
+    path.write_text("{")
+    with pytest.raises(ValueError, match=r"run_shard0of1.json: not valid JSON .*run record"):
+        earlier_runs(path)
