@@ -203,7 +203,7 @@ def build_dataset(
     The Mitsuba variant is resolved here (``auto`` → the one this machine renders with) and
     recorded in ``config.json``, so a resume or a shard that would render with another variant
     (whose frames differ in their bytes) is refused instead of mixed in. Everything is checked
-    before the first render: the folder (:func:`check_out_folder`), ``config.json``,
+    before the first render: the folder (:func:`check_out_folder`), the shard, ``config.json``,
     the finished frames' records and the shard's run record.
 
     Args:
@@ -243,6 +243,11 @@ def _open_folder(
     if root.exists() and not root.is_dir():
         raise ValueError(f"{root}: is a file; expected a dataset folder for --out (new or resumed)")
     fingers = shard_fingers(config.fingers, shard)
+    if not fingers:
+        raise ValueError(
+            f"--shard {shard[0]}/{shard[1]}: of {config.fingers} finger(s) this shard holds none "
+            f"(shard i renders the fingers f % n == i); use fewer shards (at most {config.fingers})"
+        )
     check_out_folder(root)
     variant = choose_variant(config.render.variant)
     config = replace(config, render=replace(config.render, variant=variant))

@@ -124,6 +124,11 @@ def test_bad_arguments(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> No
         DatasetConfig(fingers=0, pressures_kpa=(0.0,), seed=0)
     assert main(["synth", "--fingers", "1", "--out", str(tmp_path), "--shard", "2/2"]) == 2
     assert "--shard" in capsys.readouterr().err
+    empty = tmp_path / "empty"  # a shard without a finger: refused, not an empty dataset
+    assert main(["synth", "--fingers", "1", "--out", str(empty), "--shard", "1/2"]) == 2
+    err = capsys.readouterr().err
+    assert "--shard 1/2: of 1 finger(s) this shard holds none" in err and "fewer shards" in err
+    assert len(err.strip().splitlines()) == 1 and not empty.exists()
     out = tmp_path / "neg"  # refused before config.json is written: the folder stays usable
     assert main(["synth", "--fingers", "1", "--seed", "-1", "--out", str(out)]) == 2
     assert "--seed must be >= 0, got -1" in capsys.readouterr().err and not out.exists()
