@@ -16,6 +16,7 @@ from typing import TYPE_CHECKING, Any
 
 from contactcal.infer.files.atomic import TEMP_NAME, write_json
 from contactcal.infer.files.jsonable import jsonable
+from contactcal.synth.layout import INDEX_COLUMNS
 from contactcal.synth.variant import VARIANTS
 
 if TYPE_CHECKING:
@@ -62,6 +63,10 @@ def read_frame_record(path: Path) -> dict[str, Any]:
     missing = [k for k in FRAME_KEYS if k not in record]
     if missing:
         raise ValueError(f"{path}: has no {', '.join(missing)}; expected {remedy}")
+    unknown = [k for k in record if k not in INDEX_COLUMNS]  # index.csv has no column for them
+    if unknown:
+        extra = ", ".join(unknown)
+        raise ValueError(f"{path}: has keys no frame record has ({extra}); expected {remedy}")
     for key in ("pressure_kpa", "mm_per_px"):
         if isinstance(record[key], bool) or not isinstance(record[key], int | float):
             raise ValueError(f"{path}: {key} is {record[key]!r}, not a number; expected {remedy}")

@@ -72,6 +72,10 @@ def test_a_damaged_config_json_is_named(tmp_path: Path, capsys: pytest.CaptureFi
         ("[]", "holds no JSON object"),
         ('{"finger": 1}', "has no pressure_kpa, contact, mm_per_px"),
         (
+            '{"finger": 1, "pressure_kpa": 6, "contact": 1, "mm_per_px": 0.1, "colour": 1}',
+            "has keys no frame record has (colour)",
+        ),
+        (
             '{"finger": 1, "pressure_kpa": "6", "contact": 1, "mm_per_px": 0.1}',
             "pressure_kpa is '6', not a number",
         ),
