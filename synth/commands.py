@@ -60,7 +60,6 @@ SYNTH_MODULES = ("mitsuba", "drjit")
 
 def _cmd_synth(args: argparse.Namespace) -> int:
     require_extra("synth", "synth", SYNTH_MODULES)
-    from contactcal.infer.files.atomic import write_json
     from contactcal.synth.dataset import DatasetConfig, build_dataset, parse_shard
     from contactcal.synth.layout import parse_pressures, parse_size
     from contactcal.synth.session import RenderConfig
@@ -78,10 +77,14 @@ def _cmd_synth(args: argparse.Namespace) -> int:
         render=RenderConfig(width=width, height=height, spp=args.spp, variant=args.variant),
     )
     shard = parse_shard(args.shard)
-    stats = build_dataset(args.out, config, args.workers, shard, progress=not args.quiet)
-    write_json(args.out / f"run_shard{shard[0]}of{shard[1]}.json", {"args": _args(args), **stats})
+    stats = build_dataset(
+        args.out, config, args.workers, shard, progress=not args.quiet, run_args=_args(args)
+    )
     made, fingers = stats["frames_rendered"], stats["fingers"]
     print(f"synth: {made} frames rendered, {fingers} fingers → {args.out}")
+    if not stats["run_record_written"]:
+        record = f"run_shard{shard[0]}of{shard[1]}.json"
+        print(f"synth: every frame was there; {record} kept (the record of the run that rendered)")
     return 0
 
 

@@ -12,7 +12,6 @@ from __future__ import annotations
 
 import csv
 import io
-import json
 import multiprocessing as mp
 import os
 from dataclasses import asdict, dataclass, field, replace
@@ -24,6 +23,15 @@ import numpy as np
 from contactcal.infer.files.atomic import remove_stale_temporaries, write_json, write_text
 from contactcal.infer.files.jsonable import jsonable
 from contactcal.infer.image.write import write_image
+from contactcal.synth.dataset_folder import SYNTH_REVISION as SYNTH_REVISION  # re-exported
+from contactcal.synth.dataset_folder import (
+    check_config_matches,
+    check_out_folder,
+    earlier_runs,
+    read_frame_record,
+    run_record_path,
+    write_run_record,
+)
 from contactcal.synth.layout import (
     INDEX_COLUMNS,
     check_sweep,
@@ -32,15 +40,7 @@ from contactcal.synth.layout import (
 )
 from contactcal.synth.randomize import SessionParams, sample_session
 from contactcal.synth.session import FrameOutput, RenderConfig, render_session
-from contactcal.synth.variant import VARIANTS, choose_variant
-
-#: What changed the frames a given config renders (recorded in ``config.json``; a folder of an
-#: earlier revision is not resumed, since its frames and new ones would differ).
-REVISIONS = {
-    1: "v2 world",
-    2: "defocus, motion blur and axis offset scale with the frame width",
-}
-SYNTH_REVISION = max(REVISIONS)
+from contactcal.synth.variant import choose_variant
 
 
 @dataclass(frozen=True)
@@ -134,6 +134,8 @@ def render_finger(
     pressures = sorted(config.pressures_kpa)
     truth_paths = [folder / "frames" / f"{frame_name(p)}.json" for p in pressures]
     skip = [t.is_file() for t in truth_paths]
+    for t in (t for t, done in zip(truth_paths, skip, strict=True) if done):
+        read_frame_record(t)  # a damaged one is refused before any render
     made = 0
     if not all(skip):
         frames = render_session(params, pressures, config.render, (config.seed, finger), None, skip)
@@ -149,7 +151,7 @@ def render_finger(
             write_json(tpath, _truth(out, finger, params.hard))
             made += 1
             stop_if_orphaned(parent_pid)  # before the next render
-    rows = [json.loads(t.read_text()) for t in truth_paths]
+    rows = [read_frame_record(t) for t in truth_paths]
     manifest = "file,pressure_kpa\n" + "".join(
         f"frames/{frame_name(r['pressure_kpa'])}.png,{r['pressure_kpa']}\n" for r in rows
     )
@@ -170,7 +172,7 @@ def _run_finger(task: tuple[str, DatasetConfig, int, int]) -> tuple[int, int]:
 def write_index(out_dir: str | os.PathLike[str]) -> Path:
     """Rebuild ``index.csv`` from every finished frame under ``out_dir`` (sorted, atomic)."""
     root = Path(out_dir)
-    rows = [json.loads(p.read_text()) for p in sorted(root.glob("finger_*/frames/*.json"))]
+    rows = [read_frame_record(p) for p in sorted(root.glob("finger_*/frames/*.json"))]
     rows.sort(key=lambda r: (r["finger"], r["pressure_kpa"]))
     buf = io.StringIO()
     writer = csv.DictWriter(buf, fieldnames=INDEX_COLUMNS, lineterminator="\n")
@@ -194,84 +196,98 @@ def build_dataset(
     workers: int = 1,
     shard: tuple[int, int] = (0, 1),
     progress: bool = True,
-) -> dict[str, int]:
+    run_args: dict[str, Any] | None = None,
+) -> dict[str, Any]:
     """Render this shard's fingers into ``out_dir`` (resuming), then rebuild ``index.csv``.
 
     The Mitsuba variant is resolved here (``auto`` → the one this machine renders with) and
     recorded in ``config.json``, so a resume or a shard that would render with another variant
-    (whose frames differ in their bytes) is refused instead of mixed in.
+    (whose frames differ in their bytes) is refused instead of mixed in. Everything is checked
+    before the first render: the folder (:func:`check_out_folder`), the shard, ``config.json``,
+    the finished frames' records and the shard's run record.
+
+    Args:
+        out_dir: the dataset folder (new, empty, or a synth dataset to resume).
+        config: what to render.
+        workers: worker processes.
+        shard: ``(i, n)``: render the fingers ``f % n == i``.
+        progress: show a progress bar.
+        run_args: the command line, to keep the shard's run record ``run_shard{i}of{n}.json``
+            (:func:`~contactcal.synth.dataset_folder.write_run_record`); None writes none.
+
+    Returns:
+        ``fingers`` (this shard's), ``frames_rendered`` (by this run) and, with ``run_args``,
+        ``run_record_written`` (False: the record of the run that rendered the frames is kept).
     """
     root = Path(out_dir)
+    config, fingers = _open_folder(root, config, shard)
+    record_path = run_record_path(root, shard)
+    earlier = earlier_runs(record_path) if run_args is not None else []
+    made = _render_fingers(root, config, fingers, workers, shard if progress else None)
+    write_index(root)
+    stats: dict[str, Any] = {"fingers": len(fingers), "frames_rendered": made}
+    if run_args is not None:
+        written = write_run_record(record_path, {"args": run_args, **stats}, earlier)
+        stats["run_record_written"] = written
+    return stats
+
+
+def _open_folder(
+    root: Path, config: DatasetConfig, shard: tuple[int, int]
+) -> tuple[DatasetConfig, list[int]]:
+    """Check ``root`` and the shard, write or check ``config.json`` and every frame record.
+
+    Returns:
+        The config with its Mitsuba variant resolved, and the shard's fingers.
+    """
     if root.exists() and not root.is_dir():
         raise ValueError(f"{root}: is a file; expected a dataset folder for --out (new or resumed)")
+    fingers = shard_fingers(config.fingers, shard)
+    if not fingers:
+        raise ValueError(
+            f"--shard {shard[0]}/{shard[1]}: of {config.fingers} finger(s) this shard holds none "
+            f"(shard i renders the fingers f % n == i); use fewer shards (at most {config.fingers})"
+        )
+    check_out_folder(root)
     variant = choose_variant(config.render.variant)
     config = replace(config, render=replace(config.render, variant=variant))
     root.mkdir(parents=True, exist_ok=True)
     remove_stale_temporaries(root)  # left by a killed run
-    _check_config_matches(root, config)
-    fingers = shard_fingers(config.fingers, shard)
+    check_config_matches(root, config)
+    for path in root.glob("finger_*/frames/*.json"):
+        read_frame_record(path)  # a damaged one (any shard's: index.csv reads all) is refused now
+    return config, fingers
+
+
+def _render_fingers(
+    root: Path,
+    config: DatasetConfig,
+    fingers: list[int],
+    workers: int,
+    bar_shard: tuple[int, int] | None,
+) -> int:
+    """Render ``fingers`` in ``workers`` processes; returns the frames rendered now.
+
+    ``bar_shard``: the shard named by the progress bar; None shows no bar.
+    """
     tasks = [(str(root), config, f, os.getpid()) for f in fingers]
     made = 0
     bar = None
-    if progress:
+    if bar_shard is not None:
         from tqdm import tqdm
 
         total = len(fingers) * len(config.pressures_kpa)
-        bar = tqdm(total=total, desc=f"synth shard {shard[0]}/{shard[1]}", unit="frame")
+        i, n = bar_shard
+        bar = tqdm(total=total, desc=f"synth shard {i}/{n}", unit="frame")
     ctx = mp.get_context("spawn")
     with ctx.Pool(max(1, workers), maxtasksperchild=1) as pool:
-        for _, n in pool.imap_unordered(_run_finger, tasks):
-            made += n
+        for _, count in pool.imap_unordered(_run_finger, tasks):
+            made += count
             if bar is not None:
                 bar.update(len(config.pressures_kpa))
     if bar is not None:
         bar.close()
-    write_index(root)
-    return {"fingers": len(fingers), "frames_rendered": made}
-
-
-def _check_config_matches(root: Path, config: DatasetConfig) -> None:
-    """Write ``config.json``, or refuse to mix a different config into an existing folder."""
-    path = root / "config.json"
-    data = {**jsonable(asdict(config)), "synth_revision": SYNTH_REVISION}
-    if path.is_file():
-        old = json.loads(path.read_text())
-        new = json.loads(json.dumps(data))
-        if not isinstance(old, dict) or not isinstance(old.get("render"), dict):
-            raise ValueError(
-                f"{path}: is not the config of a `contactcal synth` dataset (a training run's or "
-                "another tool's?); render into a new --out"
-            )
-        was, now = old["render"].get("variant"), config.render.variant
-        if was in VARIANTS and was != now:
-            raise ValueError(
-                f"{path}: rendered with the Mitsuba variant {was}, and this machine renders with "
-                f"{now} (other bytes); resume where {was} works (CONTACTCAL_MI_VARIANT={was}) "
-                "or render into a new --out"
-            )
-        if was == "auto":
-            raise ValueError(
-                f"{path}: rendered before the Mitsuba variant was recorded ('auto'), so a resume "
-                f"could mix frames of another variant (this machine's: {config.render.variant}); "
-                "render into a new --out"
-            )
-        old.setdefault("smooth_fraction", 0.0)  # folders rendered before the options existed
-        old.setdefault("speck_fraction", 0.0)
-        old.setdefault("departure_fraction", 0.0)
-        old.setdefault("synth_revision", 1)
-        if old["synth_revision"] != SYNTH_REVISION:
-            raise ValueError(
-                f"{path}: this folder was rendered by synth revision {old['synth_revision']} "
-                f"(now {SYNTH_REVISION}: {REVISIONS[SYNTH_REVISION]}), so new frames would not "
-                "match its frames; render into a new --out"
-            )
-        if old != new:
-            raise ValueError(
-                f"{path}: this folder was rendered with a different config; use a new --out "
-                "or the same arguments to resume"
-            )
-        return
-    write_json(path, data)
+    return made
 
 
 def parse_shard(text: str) -> tuple[int, int]:

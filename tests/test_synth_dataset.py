@@ -24,9 +24,10 @@ from contactcal.synth.dataset import (
     shard_fingers,
     stop_if_orphaned,
 )
+from contactcal.synth.dataset_folder import check_config_matches
 from contactcal.synth.layout import parse_pressures, parse_size
 from contactcal.synth.session import RenderConfig
-from contactcal.synth.variant import VARIANTS
+from contactcal.synth.variant import VARIANTS, choose_variant
 
 pytestmark = pytest.mark.slow
 
@@ -123,11 +124,16 @@ def test_bad_arguments(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> No
         DatasetConfig(fingers=0, pressures_kpa=(0.0,), seed=0)
     assert main(["synth", "--fingers", "1", "--out", str(tmp_path), "--shard", "2/2"]) == 2
     assert "--shard" in capsys.readouterr().err
+    empty = tmp_path / "empty"  # a shard without a finger: refused, not an empty dataset
+    assert main(["synth", "--fingers", "1", "--out", str(empty), "--shard", "1/2"]) == 2
+    err = capsys.readouterr().err
+    assert "--shard 1/2: of 1 finger(s) this shard holds none" in err and "fewer shards" in err
+    assert len(err.strip().splitlines()) == 1 and not empty.exists()
     out = tmp_path / "neg"  # refused before config.json is written: the folder stays usable
     assert main(["synth", "--fingers", "1", "--seed", "-1", "--out", str(out)]) == 2
     assert "--seed must be >= 0, got -1" in capsys.readouterr().err and not out.exists()
     build_dataset(tmp_path / "a", dataclasses.replace(CONFIG, fingers=1), progress=False)
-    with pytest.raises(ValueError, match="different config"):
+    with pytest.raises(ValueError, match=r"different config \(seed: 5 → 9\); use a new"):
         build_dataset(
             tmp_path / "a", dataclasses.replace(CONFIG, fingers=1, seed=9), progress=False
         )
@@ -138,7 +144,7 @@ def test_bad_arguments(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> No
     with pytest.raises(ValueError, match="departure-fraction"):
         dataclasses.replace(CONFIG, departure_fraction=1.1)
     specky = dataclasses.replace(CONFIG, fingers=1, speck_fraction=1.0)
-    with pytest.raises(ValueError, match="different config"):
+    with pytest.raises(ValueError, match=r"different config \(speck_fraction: 0.0 → 1.0\)"):
         build_dataset(tmp_path / "a", specky, progress=False)
     speck_arg = ["synth", "--fingers", "1", "--speck-fraction", "2", "--out", str(tmp_path / "b")]
     assert main(speck_arg) == 2  # the flag reaches DatasetConfig's check; nothing rendered
@@ -229,6 +235,11 @@ def test_resume_removes_stale_temporaries(tmp_path: Path) -> None:
     config = dataclasses.replace(CONFIG, fingers=1, pressures_kpa=(0.0, 6.0))
     frames = tmp_path / "finger_0000" / "frames"
     frames.mkdir(parents=True)
+    variant = choose_variant(config.render.variant)  # config.json as the killed run wrote it
+    check_config_matches(
+        tmp_path,
+        dataclasses.replace(config, render=dataclasses.replace(config.render, variant=variant)),
+    )
     for p in config.pressures_kpa:  # every frame done: the resumed run renders nothing
         truth = {"finger": 0, "pressure_kpa": p, "contact": int(p > 0), "mm_per_px": 0.1}
         (frames / f"p{p:04.1f}kpa.json").write_text(json.dumps(truth))

@@ -1,0 +1,235 @@
+"""The files of a ``contactcal synth`` dataset folder that a run reads back, each checked.
+
+A resumed run reads ``config.json`` (refused unless it is this config), the finished frames'
+truth JSON and its shard's run record; a damaged or foreign file is refused in one line naming
+it and what was expected. :func:`check_out_folder` refuses an ``--out`` that would mix the
+dataset with other files.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+from dataclasses import asdict
+from pathlib import Path
+from typing import TYPE_CHECKING, Any
+
+from contactcal.infer.files.atomic import TEMP_NAME, write_json
+from contactcal.infer.files.jsonable import jsonable
+from contactcal.synth.layout import INDEX_COLUMNS
+from contactcal.synth.variant import VARIANTS
+
+if TYPE_CHECKING:
+    from contactcal.synth.dataset import DatasetConfig
+
+#: What changed the frames a given config renders (recorded in ``config.json``; a folder of an
+#: earlier revision is not resumed, since its frames and new ones would differ).
+REVISIONS = {
+    1: "v2 world",
+    2: "defocus, motion blur and axis offset scale with the frame width",
+}
+SYNTH_REVISION = max(REVISIONS)
+
+#: Keys of a frame's truth JSON that a run reads back (the rest are ``index.csv`` columns).
+FRAME_KEYS = ("finger", "pressure_kpa", "contact", "mm_per_px")
+MAX_CHANGES = 4  # config keys named when a resume is refused for a changed config
+
+
+def read_json(path: Path, expected: str) -> Any:
+    """The JSON in ``path``; ValueError naming it and ``expected`` if it is not valid JSON."""
+    try:
+        return json.loads(path.read_text(encoding="utf-8"))
+    except UnicodeDecodeError:
+        why = "not UTF-8 text"
+    except json.JSONDecodeError as exc:
+        why = f"{exc.msg} at line {exc.lineno} column {exc.colno}"
+    raise ValueError(f"{path}: not valid JSON ({why}); expected {expected}")
+
+
+def read_frame_record(path: Path) -> dict[str, Any]:
+    """A finished frame's truth JSON (its ``index.csv`` row), checked.
+
+    Raises:
+        ValueError: naming the file as a damaged frame record (removed, it is rendered again
+            by a resume).
+    """
+    remedy = (
+        "a frame record a `contactcal synth` run wrote (this one is damaged): remove it and run "
+        "the same synth command, which renders that frame again"
+    )
+    record = read_json(path, remedy)
+    if not isinstance(record, dict):
+        raise ValueError(f"{path}: holds no JSON object; expected {remedy}")
+    missing = [k for k in FRAME_KEYS if k not in record]
+    if missing:
+        raise ValueError(f"{path}: has no {', '.join(missing)}; expected {remedy}")
+    unknown = [k for k in record if k not in INDEX_COLUMNS]  # index.csv has no column for them
+    if unknown:
+        extra = ", ".join(unknown)
+        raise ValueError(f"{path}: has keys no frame record has ({extra}); expected {remedy}")
+    for key in ("pressure_kpa", "mm_per_px"):
+        if isinstance(record[key], bool) or not isinstance(record[key], int | float):
+            raise ValueError(f"{path}: {key} is {record[key]!r}, not a number; expected {remedy}")
+    return record
+
+
+def config_record(config: DatasetConfig) -> dict[str, Any]:
+    """What ``config.json`` holds for ``config`` (as read back from JSON)."""
+    return json.loads(json.dumps({**jsonable(asdict(config)), "synth_revision": SYNTH_REVISION}))
+
+
+def _flat(record: dict[str, Any], prefix: str = "") -> dict[str, Any]:
+    """``{"render": {"spp": 1}}`` → ``{"render.spp": 1}``."""
+    out: dict[str, Any] = {}
+    for key, value in record.items():
+        if isinstance(value, dict):
+            out.update(_flat(value, f"{prefix}{key}."))
+        else:
+            out[f"{prefix}{key}"] = value
+    return out
+
+
+_NONE = object()  # a key one of two configs lacks
+
+
+def _shown(value: Any) -> str:
+    """A config value in a message: JSON, at most 40 characters."""
+    text = "(none)" if value is _NONE else json.dumps(value)
+    return text if len(text) <= 40 else text[:39] + "…"
+
+
+def config_changes(old: dict[str, Any], new: dict[str, Any]) -> str:
+    """The keys that differ, e.g. ``render.spp: 1 → 4; seed: 0 → 9`` (a few, then a count)."""
+    was, now = _flat(old), _flat(new)
+    keys = sorted(k for k in was.keys() | now.keys() if was.get(k, _NONE) != now.get(k, _NONE))
+    shown = [f"{k}: {_shown(was.get(k, _NONE))} → {_shown(now.get(k, _NONE))}" for k in keys]
+    more = len(shown) - MAX_CHANGES
+    return "; ".join(shown[:MAX_CHANGES]) + (f"; and {more} more" if more > 0 else "")
+
+
+def check_config_matches(root: Path, config: DatasetConfig) -> None:
+    """Write ``config.json``, or refuse to mix a different config into an existing folder.
+
+    Raises:
+        ValueError: ``config.json`` is damaged, another tool's, of another Mitsuba variant or
+            synth revision, or of other arguments (the differing keys are named, old → new).
+    """
+    path = root / "config.json"
+    new = config_record(config)
+    if not path.is_file():
+        write_json(path, new)
+        return
+    expected = (
+        "the config a `contactcal synth` run wrote; render into a new --out (or remove this "
+        "folder to render it again)"
+    )
+    old = read_json(path, expected)
+    if not isinstance(old, dict) or not isinstance(old.get("render"), dict):
+        raise ValueError(
+            f"{path}: is not the config of a `contactcal synth` dataset (a training run's or "
+            "another tool's?); render into a new --out"
+        )
+    was, now = old["render"].get("variant"), config.render.variant
+    if was in VARIANTS and was != now:
+        raise ValueError(
+            f"{path}: rendered with the Mitsuba variant {was}, and this machine renders with "
+            f"{now} (other bytes); resume where {was} works (CONTACTCAL_MI_VARIANT={was}) "
+            "or render into a new --out"
+        )
+    if was == "auto":
+        raise ValueError(
+            f"{path}: rendered before the Mitsuba variant was recorded ('auto'), so a resume "
+            f"could mix frames of another variant (this machine's: {now}); render into a new --out"
+        )
+    old.setdefault("smooth_fraction", 0.0)  # folders rendered before the options existed
+    old.setdefault("speck_fraction", 0.0)
+    old.setdefault("departure_fraction", 0.0)
+    old.setdefault("synth_revision", 1)
+    if old["synth_revision"] != SYNTH_REVISION:
+        raise ValueError(
+            f"{path}: this folder was rendered by synth revision {old['synth_revision']} "
+            f"(now {SYNTH_REVISION}: {REVISIONS[SYNTH_REVISION]}), so new frames would not "
+            "match its frames; render into a new --out"
+        )
+    if old != new:
+        raise ValueError(
+            f"{path}: this folder was rendered with a different config ({config_changes(old, new)}"
+            "); use a new --out or the same arguments to resume"
+        )
+
+
+def is_dataset(folder: Path) -> bool:
+    """Whether ``folder`` holds a synth dataset: a ``config.json`` and ``finger_*`` folders."""
+    if not (folder / "config.json").is_file():
+        return False
+    return any(p.is_dir() for p in folder.glob("finger_[0-9]*"))
+
+
+def check_out_folder(root: Path) -> None:
+    """Refuse an ``--out`` inside a synth dataset, or an existing folder of other files.
+
+    An existing folder without ``config.json`` is taken only when empty or holding nothing but
+    the staged ``config.json`` of a synth run (killed, or another shard writing it now): every
+    other synth file is written after ``config.json``.
+
+    Raises:
+        ValueError: naming the folder and what was expected.
+    """
+    for parent in root.resolve().parents:
+        if is_dataset(parent):
+            raise ValueError(
+                f"--out {root}: inside the synth dataset {parent} (its config.json and finger_* "
+                "folders); give the new dataset a folder of its own, outside that one"
+            )
+    if not root.is_dir() or (root / "config.json").exists():
+        return
+    other = sorted(
+        e.name
+        for e in os.scandir(root)
+        if not (TEMP_NAME.match(e.name) and e.name.startswith(".config.json."))
+    )
+    if other:
+        more = f" and {len(other) - 3} more" if len(other) > 3 else ""
+        raise ValueError(
+            f"--out {root}: holds other files ({', '.join(other[:3])}{more}) and no config.json; "
+            "expected a new or empty folder, or a synth dataset to resume; render into a new --out"
+        )
+
+
+def run_record_path(root: Path, shard: tuple[int, int]) -> Path:
+    """The record of the runs of shard ``(i, n)``: ``run_shard{i}of{n}.json``."""
+    return root / f"run_shard{shard[0]}of{shard[1]}.json"
+
+
+def earlier_runs(path: Path) -> list[dict[str, Any]]:
+    """The records in ``path`` of the earlier runs that rendered frames, oldest first.
+
+    Raises:
+        ValueError: ``path`` is damaged (read before the renders, so nothing is rendered).
+    """
+    if not path.is_file():
+        return []
+    expected = (
+        "the run record a `contactcal synth` run wrote; remove it (it records only the earlier "
+        "runs' arguments and frame counts) and run again"
+    )
+    record = read_json(path, expected)
+    earlier = record.pop("earlier_runs", []) if isinstance(record, dict) else None
+    if not isinstance(earlier, list) or not all(isinstance(r, dict) for r in earlier):
+        raise ValueError(f"{path}: not a run record (a JSON object); expected {expected}")
+    return [r for r in (*earlier, record) if r.get("frames_rendered")]
+
+
+def write_run_record(path: Path, record: dict[str, Any], earlier: list[dict[str, Any]]) -> bool:
+    """Keep the record of the runs that rendered the shard's frames; returns whether it wrote.
+
+    The file holds the latest run that rendered frames (its ``args``, ``fingers`` and
+    ``frames_rendered``) with the earlier ones that did under ``earlier_runs``, oldest first, so
+    a resumed shard's counts add up. A run that renders nothing (every frame present) leaves
+    the file as it is: a re-run of a finished shard does not replace the record of the run that
+    rendered it. Where there is no record yet, it writes its own.
+    """
+    if not record["frames_rendered"] and path.is_file():
+        return False
+    write_json(path, {**record, "earlier_runs": earlier} if earlier else record)
+    return True

@@ -1,0 +1,173 @@
+"""``contactcal synth`` into an existing folder: damaged files, a changed config, a folder of
+other files, the run record. The folders are written by hand: nothing is rendered."""
+
+from __future__ import annotations
+
+import dataclasses
+import json
+import os
+import re
+import subprocess
+from pathlib import Path
+
+import pytest
+
+pytest.importorskip("mitsuba")
+
+from contactcal.infer.cli import main
+from contactcal.synth.dataset import DatasetConfig, build_dataset, render_finger
+from contactcal.synth.dataset_folder import (
+    check_config_matches,
+    check_out_folder,
+    config_changes,
+    earlier_runs,
+    write_run_record,
+)
+from contactcal.synth.layout import frame_name
+from contactcal.synth.session import RenderConfig
+from contactcal.synth.variant import choose_variant
+
+CONFIG = DatasetConfig(
+    fingers=1, pressures_kpa=(0.0, 6.0), seed=5, render=RenderConfig(width=48, height=36, spp=1)
+)
+#: The command line of CONFIG (add --out).
+ARGV = ["synth", "--fingers", "1", "--pressures", "0,6", "--size", "48x36", "--spp", "1"]
+ARGV += ["--seed", "5", "--quiet"]
+
+
+def _finished(root: Path, config: DatasetConfig = CONFIG) -> Path:
+    """``root`` as a finished run of ``config`` leaves it: config.json and every frame record."""
+    variant = choose_variant(config.render.variant)
+    root.mkdir()
+    render = dataclasses.replace(config.render, variant=variant)
+    check_config_matches(root, dataclasses.replace(config, render=render))
+    for f in range(config.fingers):
+        frames = root / f"finger_{f:04d}" / "frames"
+        frames.mkdir(parents=True)
+        for p in config.pressures_kpa:
+            truth = {"finger": f, "pressure_kpa": p, "contact": int(p > 0), "mm_per_px": 0.1}
+            (frames / f"{frame_name(p)}.json").write_text(json.dumps(truth))
+    return root
+
+
+def _one_line(capsys: pytest.CaptureFixture[str]) -> str:
+    err = capsys.readouterr().err
+    assert len(err.strip().splitlines()) == 1, err
+    return err
+
+
+def test_a_damaged_config_json_is_named(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    root = _finished(tmp_path / "ds")
+    (root / "config.json").write_text("{\n")
+    assert main([*ARGV, "--out", str(root)]) == 2
+    err = _one_line(capsys)
+    assert f"{root / 'config.json'}: not valid JSON (Expecting property name" in err
+    assert "expected the config a `contactcal synth` run wrote; render into a new --out" in err
+
+
+@pytest.mark.parametrize(
+    ("text", "said"),
+    [
+        ("{\n", "not valid JSON (Expecting property name"),
+        ("[]", "holds no JSON object"),
+        ('{"finger": 1}', "has no pressure_kpa, contact, mm_per_px"),
+        (
+            '{"finger": 1, "pressure_kpa": 6, "contact": 1, "mm_per_px": 0.1, "colour": 1}',
+            "has keys no frame record has (colour)",
+        ),
+        (
+            '{"finger": 1, "pressure_kpa": "6", "contact": 1, "mm_per_px": 0.1}',
+            "pressure_kpa is '6', not a number",
+        ),
+    ],
+)
+def test_a_damaged_frame_record_is_named_before_any_render(
+    tmp_path: Path, text: str, said: str
+) -> None:
+    """Any shard's frame (index.csv reads them all), before the run renders anything."""
+    config = dataclasses.replace(CONFIG, fingers=2)
+    root = _finished(tmp_path / "ds", config)
+    damaged = root / "finger_0001" / "frames" / "p06.0kpa.json"
+    damaged.write_text(text)
+    (root / "finger_0000" / "frames" / "p06.0kpa.json").unlink()  # shard 0's frame to render
+    with pytest.raises(ValueError) as exc:
+        build_dataset(root, config, shard=(0, 2), progress=False)
+    msg = str(exc.value)
+    assert msg.startswith(f"{damaged}: {said}") and "expected a frame record a `contactcal" in msg
+    assert msg.endswith(
+        "(this one is damaged): remove it and run the same synth command, "
+        "which renders that frame again"
+    )
+    assert not (root / "finger_0000" / "manifest.csv").exists(), "nothing rendered or written"
+    with pytest.raises(ValueError, match=re.escape(str(damaged))):
+        render_finger(str(root), config, 1)  # the resume of one finger reads it too
+
+
+def test_a_changed_config_names_what_changed(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    root = _finished(tmp_path / "ds")
+    assert main([*ARGV, "--spp", "4", "--hard-fraction", "0.5", "--out", str(root)]) == 2
+    err = _one_line(capsys)
+    assert "different config (hard_fraction: 0.25 → 0.5; render.spp: 1 → 4); use a new" in err
+    old = {"a": 1, "b": 2, "c": 3, "d": 4, "e": 5, "render": {"f": [0.0, 1.0]}}
+    new = {"a": 0, "b": 0, "c": 0, "d": 0, "render": {"f": [0.0] * 20}}
+    changes = config_changes(old, new)
+    assert changes.startswith("a: 1 → 0; b: 2 → 0; c: 3 → 0; d: 4 → 0; and 2 more")
+    assert config_changes({"e": 5}, {"render": {"f": [0.0] * 20}}) == (
+        "e: 5 → (none); render.f: (none) → [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0…"
+    )
+
+
+def _dead_pid() -> int:
+    proc = subprocess.Popen(["true"])
+    proc.wait()
+    return proc.pid
+
+
+def test_an_out_of_other_files_or_inside_a_dataset_is_refused(tmp_path: Path) -> None:
+    junk = tmp_path / "junk"
+    junk.mkdir()
+    (junk / "a.txt").write_text("x")
+    with pytest.raises(ValueError, match=r"junk: holds other files \(a.txt\) and no config.json"):
+        build_dataset(junk, CONFIG, progress=False)
+    assert [p.name for p in junk.iterdir()] == ["a.txt"], "nothing written into it"
+    killed = tmp_path / "killed"  # killed while staging config.json: taken, as an empty folder
+    (killed / f".config.json.{_dead_pid()}.abc123.tmp").mkdir(parents=True)
+    (killed / f".config.json.{os.getpid()}.def456.tmp").mkdir()  # another shard writing it
+    check_out_folder(killed)
+    root = _finished(tmp_path / "ds")
+    check_out_folder(root)  # a dataset: resumed
+    for inside in (root / "finger_0000", root / "new", root / "finger_0000" / "new"):
+        where = re.escape(f"inside the synth dataset {root.resolve()} (its config.json")
+        with pytest.raises(ValueError, match=where):
+            build_dataset(inside, CONFIG, progress=False)
+        assert inside.name == "finger_0000" or not inside.exists()
+
+
+def test_a_rerun_of_a_finished_shard_keeps_its_run_record(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    root = _finished(tmp_path / "ds")
+    record = root / "run_shard0of1.json"
+    record.write_text(json.dumps({"args": {"workers": 2}, "fingers": 1, "frames_rendered": 2}))
+    before = record.read_bytes()
+    assert main([*ARGV, "--out", str(root)]) == 0
+    assert record.read_bytes() == before, "the record of the run that rendered the frames"
+    assert "every frame was there; run_shard0of1.json kept" in capsys.readouterr().out
+    record.unlink()  # none yet: this run's is written
+    assert main([*ARGV, "--out", str(root)]) == 0
+    assert json.loads(record.read_text())["frames_rendered"] == 0
+
+
+def test_run_records_add_up(tmp_path: Path) -> None:
+    path = tmp_path / "run_shard0of1.json"
+    first = {"args": {"run": 1}, "fingers": 1, "frames_rendered": 2}
+    assert write_run_record(path, first, earlier_runs(path))
+    assert not write_run_record(path, {**first, "frames_rendered": 0}, earlier_runs(path))
+    second = {"args": {"run": 2}, "fingers": 1, "frames_rendered": 3}  # a resume of a damaged one
+    assert write_run_record(path, second, earlier_runs(path))
+    assert json.loads(path.read_text()) == {**second, "earlier_runs": [first]}
+    path.write_text("{")
+    with pytest.raises(ValueError, match=r"run_shard0of1.json: not valid JSON .*run record"):
+        earlier_runs(path)
