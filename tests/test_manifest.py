@@ -7,7 +7,12 @@ from pathlib import Path
 
 import pytest
 
-from contactcal.infer.calibration.phases import FROM_COLUMN, FROM_ORDER, SINGLE_PASS
+from contactcal.infer.calibration.phases import (
+    FROM_COLUMN,
+    FROM_ORDER,
+    SINGLE_PASS,
+    misplaced_rows,
+)
 from contactcal.infer.pipeline.manifest import Frame, ManifestError, read_manifest, read_session
 
 
@@ -244,3 +249,40 @@ def test_a_windows_path_gets_a_hint(tmp_path: Path) -> None:
     manifest.write_text("file,pressure_kpa\nframes\\p00.png,0\nframes\\p05.png,5\n")
     with pytest.raises(ManifestError, match=r"not found: .*written with '\\' as on Windows"):
         read_manifest(manifest)
+
+
+def _rows(tmp_path: Path, pressures: list[float]) -> Path:
+    names = tuple(f"f{i:02d}.png" for i in range(len(pressures)))
+    body = "".join(f"{n},{p:g}\n" for n, p in zip(names, pressures, strict=True))
+    return _session(tmp_path, "file,pressure_kpa\n" + body, names)
+
+
+def test_a_row_breaking_an_otherwise_rising_order_is_named(tmp_path: Path) -> None:
+    """A mistyped pressure (16 for 6 kPa) was read silently as one pass in pressure order."""
+    typo = [0, 1, 2, 3, 4, 5, 16, 7, 8, 9, 10]
+    session = read_session(_rows(tmp_path, typo))
+    assert session.phase_source == SINGLE_PASS
+    assert session.out_of_order == ("row 7 (f06.png, 16 kPa)",)
+    loop = [0, 5, 10, 15, 20, 15, 12, 10, 17, 5, 0]  # a typo in the unloading pass
+    assert read_session(_rows(tmp_path, loop)).out_of_order == ("row 9 (f08.png, 17 kPa)",)
+    for fine in (
+        [0, 2, 4, 6, 8, 10],  # rising
+        [0, 4, 8, 4, 0],  # rising, then falling (two passes)
+        [10, 8, 6, 4, 2, 0],  # falling: one pass
+        [6, 0, 10, 2, 8, 4],  # no particular order: one pass, nothing to name
+    ):
+        assert read_session(_rows(tmp_path, fine)).out_of_order == (), fine
+
+
+@pytest.mark.parametrize(
+    ("levels", "misplaced"),
+    [
+        ([0, 1, 2, 3, 4, 5, 16, 7, 8, 9], [6]),
+        ([0, 0, 5, 5, 3, 10], [4]),  # ties: the longer rise (a loading session's typo)
+        ([0, 5, 10, 20, 10, 5, 0], []),
+        ([5, 3, 8, 1, 9, 2], [0, 3]),
+        ([], []),
+    ],
+)
+def test_misplaced_rows_reference_values(levels: list[float], misplaced: list[int]) -> None:
+    assert misplaced_rows(levels) == misplaced

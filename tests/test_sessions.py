@@ -192,3 +192,24 @@ def test_hysteresis_onset_shift_range_from_the_brackets() -> None:
     h = hysteresis(([], up), ([], lowest))
     assert h["onset_shift_range_kpa"] is None and "range unknown" in _onset_shift(h)[0]
     assert _onset_shift(hysteresis(([], up), ([], Curve([1.0], [0.0], None, PX)))) == []
+
+
+def test_calibrate_warns_of_a_row_out_of_order(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """One mistyped pressure (16 for 6 kPa) among rising rows: said and recorded, not silent."""
+    from test_outputs import copy_session
+
+    names = tuple(f"p{p:04.1f}kpa.jpg" for p in (0, 2, 4, 6, 8, 10, 12))
+    s = copy_session(tmp_path, names)
+    text = (s / "manifest.csv").read_text().replace("p06.0kpa.jpg,6.0", "p06.0kpa.jpg,16.0")
+    (s / "manifest.csv").write_text(text)
+    out = tmp_path / "cal"
+    assert (
+        main(["calibrate", str(s / "manifest.csv"), "--method", "classical", "--out", str(out)])
+        == 0
+    )
+    said = capsys.readouterr().out
+    assert "warning: row 4 (p06.0kpa.jpg, 16 kPa) breaks the rows' order" in said
+    record = json.loads((out / "calibration.json").read_text())
+    assert record["extra"]["rows_out_of_order"] == ["row 4 (p06.0kpa.jpg, 16 kPa)"]

@@ -71,6 +71,13 @@ AT_REST_NOTE = (
     "the gauge's offset at rest) are given as 0 kPa, each keeping its reading as "
     "pressure_kpa_read"
 )
+#: The table's line when one or two rows broke an otherwise rising (then falling) row order
+#: (``{rows}``: the rows, named; the session was read as one loading pass in pressure order).
+OUT_OF_ORDER_WARNING = (
+    "warning: {rows} {verb} the rows' order, rising then falling elsewhere, so the session was "
+    "read as one loading pass in pressure order (a mistyped pressure, or a frame listed in the "
+    "wrong place?); correct the manifest, or state the passes in a 'phase' column"
+)
 
 
 @dataclass(frozen=True)
@@ -164,6 +171,7 @@ def calibrate_session(
         "step_tolerance_kpa": options.step_tolerance_kpa,
         "readings_pooled": None if session.pooled is None else asdict(session.pooled),
         "readings_at_rest": None if session.at_rest is None else asdict(session.at_rest),
+        "rows_out_of_order": list(session.out_of_order),
     }
     extra |= checks | {"identical_frames": same}
     model = None if measure.model is None else str(measure.model)
@@ -182,8 +190,8 @@ def _notes(
     options: SessionOptions,
 ) -> list[str]:
     """The warning and note lines printed under the table, in a fixed order: the reference
-    (gated above 0 kPa, or not at rest), identical frames, pooled readings, readings below
-    0 kPa, a sweep top far above the display's range."""
+    (gated above 0 kPa, or not at rest), identical frames, rows out of order, pooled readings,
+    readings below 0 kPa, a sweep top far above the display's range."""
     lines = []
     if checks["reference_gated_above_zero"]:
         lines.append("warning: " + REFERENCE_NOTE.format(p=results[0].pressure_kpa))
@@ -199,6 +207,12 @@ def _notes(
         lines.append(LOST_ABOVE_CONTACT_WARNING.format(n=len(lost), shown=shown + more))
     if same:
         lines.append(identical_frames_warning(same))
+    if session.out_of_order:
+        rows, verb = (
+            " and ".join(session.out_of_order),
+            "breaks" if len(session.out_of_order) == 1 else "break",
+        )
+        lines.append(OUT_OF_ORDER_WARNING.format(rows=rows, verb=verb))
     if session.pooled is not None:
         lines.append(POOLED_NOTE.format(p=session.pooled, t=options.step_tolerance_kpa))
     if session.at_rest is not None:

@@ -7,6 +7,7 @@ it, read from the row order (:func:`phases_from_order`).
 
 from __future__ import annotations
 
+import bisect
 import itertools
 import statistics
 from collections.abc import Sequence
@@ -73,3 +74,45 @@ def order_slack(levels_kpa: Sequence[float]) -> float:
         return 0.0
     gaps = [b - a for a, b in itertools.pairwise(distinct)]
     return 0.5 * statistics.median(gaps)
+
+
+def misplaced_rows(levels_kpa: Sequence[float]) -> list[int]:
+    """The fewest rows (indices) without which the rows rise, then fall (either part may be
+    empty): in a manifest read as one pass because its order is neither, these are the rows
+    that broke it, e.g. a typo (16 for 6 kPa among 5 and 7).
+
+    Args:
+        levels_kpa: ``(N,)`` each row's step pressure in row order, kPa (the steps' pooled
+            readings, so that one step's jitter is no reversal).
+
+    Returns:
+        Sorted row indices, empty when the rows already rise then fall.
+    """
+    p = list(levels_kpa)
+    best: list[int] = []
+    for k in range(len(p), -1, -1):  # rows before k rise, rows from k fall; ties: longer rise
+        kept = _longest_rising(p[:k]) + [k + i for i in _longest_rising([-v for v in p[k:]])]
+        if len(kept) > len(best):
+            best = kept
+    kept_set = set(best)
+    return [i for i in range(len(p)) if i not in kept_set]
+
+
+def _longest_rising(values: Sequence[float]) -> list[int]:
+    """Indices of a longest non-decreasing subsequence of ``values`` (patience sorting)."""
+    tails: list[float] = []  # the smallest tail value of a rising run of each length
+    tail_at: list[int] = []  # its index
+    before = [-1] * len(values)
+    for i, v in enumerate(values):
+        j = bisect.bisect_right(tails, v)
+        before[i] = tail_at[j - 1] if j > 0 else -1
+        if j == len(tails):
+            tails.append(v)
+            tail_at.append(i)
+        else:
+            tails[j], tail_at[j] = v, i
+    out, i = [], tail_at[-1] if tail_at else -1
+    while i >= 0:
+        out.append(i)
+        i = before[i]
+    return out[::-1]

@@ -35,6 +35,8 @@ from contactcal.infer.calibration.phases import (
     FROM_COLUMN,
     LOADING,
     PHASES,
+    SINGLE_PASS,
+    misplaced_rows,
     order_slack,
     parse_phase,
     phases_from_order,
@@ -99,6 +101,9 @@ class Session:
     phase_source: str  # phases.FROM_COLUMN, FROM_ORDER or SINGLE_PASS
     pooled: Pooled | None = None  # steps pooled from differing readings (readings.py); None: none
     at_rest: AtRest | None = None  # steps read below 0 kPa, given as 0; None: none
+    #: rows that broke an otherwise rising (then falling) order, read as one pass (a typo?):
+    #: "row 7 (p06.0kpa.jpg, 16 kPa)"; empty: none, or rows in no particular order
+    out_of_order: tuple[str, ...] = ()
 
 
 def check_sweep_unit(where: str | os.PathLike[str], frames: Sequence[Frame]) -> None:
@@ -167,7 +172,7 @@ def read_session(
         parse_row(where, mpath, names, row_no, line_no, cells)
         for row_no, (line_no, cells) in enumerate(data, start=1)
     ]
-    source = FROM_COLUMN
+    source, out_of_order = FROM_COLUMN, ()
     if PHASE_COLUMN not in names:  # the passes from the steps' order (readings jitter)
         _check_phase_elsewhere(where, names, frames)
         labels = frame_step_labels(frames, step_tolerance_kpa)
@@ -175,13 +180,32 @@ def read_session(
         # 0 and 0.5 kPa steps is no reversal of the passes.
         levels = [max(v, 0.0) for v in pooled_pressures([f.pressure_kpa for f in frames], labels)]
         phases, source = phases_from_order(levels, order_slack(levels))
+        out_of_order = _out_of_order(frames, levels) if source == SINGLE_PASS else ()
         frames = [with_changes(f, phase=ph) for f, ph in zip(frames, phases, strict=True)]
     frames, pooled, at_rest = pool_readings(where, names, frames, step_tolerance_kpa)
     merged = f"readings less than {step_tolerance_kpa:g} kPa apart are one step"
     hint = "" if pooled is None else f" ({merged}: --step-tolerance-kpa)"
     frames = _number_steps(where, frames, hint)
     _check_files(where, frames, mpath.resolve().parent)
-    return Session(frames, source, pooled, at_rest)
+    return Session(frames, source, pooled, at_rest, out_of_order)
+
+
+#: At most this share of the rows may break the order for them to be named as misplaced (more:
+#: rows in no particular order, a legitimate single pass).
+MISPLACED_MAX_SHARE = 0.2
+
+
+def _out_of_order(frames: list[Frame], levels: list[float]) -> tuple[str, ...]:
+    """The rows (``"row 7 (p06.0kpa.jpg, 16 kPa)"``) without which a manifest read as one pass
+    would rise, then fall, when they are few (one or two, and at most
+    :data:`MISPLACED_MAX_SHARE` of the rows): a mistyped pressure, or a frame listed in the
+    wrong place. Empty otherwise."""
+    rows = misplaced_rows(levels)
+    if not rows or len(rows) > 2 or len(rows) > MISPLACED_MAX_SHARE * len(levels):
+        return ()
+    return tuple(
+        f"row {i + 1} ({frames[i].file.name}, {frames[i].pressure_kpa:g} kPa)" for i in rows
+    )
 
 
 def _check_phase_elsewhere(where: str, names: list[str], frames: list[Frame]) -> None:
