@@ -573,11 +573,17 @@ def test_video_step_options_are_refused_for_a_manifest(
     tmp_path: Path, capsys: pytest.CaptureFixture[str]
 ) -> None:
     manifest = str(EXAMPLE / "manifest.csv")
-    for option in ("--tolerance-kpa", "--settle-s"):
-        assert main(["calibrate", manifest, option, "0", "--out", str(tmp_path / "c")]) == 2
+    for option in ("--tolerance-kpa", "--settle-s", "--preview", "--duration-s"):
+        value = [] if option == "--preview" else ["1"]
+        assert main(["calibrate", manifest, option, *value, "--out", str(tmp_path / "c")]) == 2
         err = capsys.readouterr().err
-        assert f"got {option} without them" in err and err.count("\n") == 1
+        # it said "expected MANIFEST.csv, or --video ..." as if no manifest had been given
+        assert f"{option} is for --video/--camera, not for MANIFEST.csv" in err
+        assert err.count("\n") == 1 and "expected MANIFEST" not in err
         assert ("pooled with --step-tolerance-kpa" in err) is (option == "--tolerance-kpa")
+    for option, value in (("--preview", []), ("--settle-s", ["1"])):  # and no input at all
+        assert main(["calibrate", option, *value, "--out", str(tmp_path / "c")]) == 2
+        assert "expected MANIFEST.csv, or --video" in capsys.readouterr().err
     assert not (tmp_path / "c").exists()
 
 

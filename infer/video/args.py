@@ -64,6 +64,16 @@ def is_video_run(args: argparse.Namespace) -> bool:
             "--tolerance-kpa": args.tolerance_kpa,
         }
         extra = [o for o, v in given.items() if v is not None and v is not False]  # 0.0 given
+        if args.manifest is not None and extra:
+            hint = (
+                "; a manifest's readings are pooled with --step-tolerance-kpa"
+                if extra[0] == "--tolerance-kpa"
+                else ""
+            )
+            raise ValueError(
+                f"calibrate: {extra[0]} is for --video/--camera, not for MANIFEST.csv "
+                f"({args.manifest}); drop it{hint}"
+            )
         if args.manifest is None or extra:
             hint = " (a manifest's readings are pooled with --step-tolerance-kpa)"
             raise ValueError(
