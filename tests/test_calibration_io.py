@@ -173,6 +173,9 @@ def test_load_curve_reads_versions_1_and_2(tmp_path: Path) -> None:
     del v1["inputs"]
     (tmp_path / "v1.json").write_text(json.dumps(v1), encoding="utf-8")
     np.testing.assert_allclose(load_curve(tmp_path / "v1.json").fit_area, fit.curve.fit_area)
+    for caught in (FileNotFoundError, ValueError):  # a controller may catch either
+        with pytest.raises(caught, match="missing.json: no such file; expected the calibration"):
+            load_curve(tmp_path / "missing.json")
     with pytest.raises(NoSuchPhaseError, match="no unloading pass: the record has loading") as exc:
         load_curve(paths["json"], phase="unloading")
     assert "not a readable" not in str(exc.value)  # it is readable; the pass is not in it

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import errno
 import json
 import os
 import warnings
@@ -94,6 +95,14 @@ class UnassessedCurveWarning(UserWarning):
     """The record could not assess whether the curve tells pressures apart (too few steps)."""
 
 
+class CalibrationNotFoundError(FileNotFoundError, ValueError):
+    """No file at the path given: a :class:`FileNotFoundError` for a controller that catches
+    that, and a :class:`ValueError` as every other unreadable record."""
+
+    def __str__(self) -> str:
+        return str(self.strerror)
+
+
 class NoSuchPhaseError(ValueError):
     """A readable record without the pass asked for (``phase=``): the message names the passes
     it holds."""
@@ -130,6 +139,7 @@ def load_curve(
         NoContactCurveError: the curve has no contact in any step (it cannot be inverted;
             ``calibrate`` refuses to write such a record for the pass it inverts).
         NoSuchPhaseError: the record holds no ``phase`` pass (e.g. a loading-only session).
+        CalibrationNotFoundError: no file at ``path`` (a FileNotFoundError and a ValueError).
         ValueError: unreadable file, not a contactcal calibration, an unknown
             ``area_unit``, or another unit than ``area_unit``.
     """
@@ -179,6 +189,12 @@ def _read_curve(path: str | os.PathLike[str], phase: str | None, allow_unresolve
             )
         curve = _curve(data["fit"], data["onset_kpa"], data["area_unit"], data.get("inverse"))
         return _check_contact(curve, LOADING)
+    except FileNotFoundError:
+        raise CalibrationNotFoundError(
+            errno.ENOENT,
+            f"{path}: no such file; expected the calibration.json that `contactcal calibrate` "
+            "wrote",
+        ) from None
     except (UnresolvedCurveError, NoContactCurveError, NoSuchPhaseError) as exc:
         raise type(exc)(f"{path}: {exc}") from exc
     except (OSError, ValueError, KeyError, TypeError, AttributeError) as exc:
