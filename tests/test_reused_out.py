@@ -1,6 +1,7 @@
-"""What ``calibrate`` does with an ``--out`` that already holds a run's files: another
-display's calibration and an earlier recording's frames are refused before any work; a
-re-calibration of the same display replaces its record, with a note."""
+"""What ``calibrate`` and ``measure`` do with an ``--out`` that already holds a run's files:
+another display's calibration and an earlier recording's frames are refused before any work; a
+re-calibration of the same display replaces its record, and ``measure`` its results file, with
+a note."""
 
 from __future__ import annotations
 
@@ -9,7 +10,7 @@ import shutil
 from pathlib import Path
 
 import pytest
-from test_outputs import copy_session, one_line_naming
+from test_outputs import EXAMPLE, copy_session, one_line_naming
 
 from contactcal.infer.cli import main
 
@@ -97,3 +98,22 @@ def test_a_recording_calibrated_again_in_its_own_folder_is_not_refused(
     (out / "preview.mp4").write_bytes(b"x")
     assert main(_calibrate(out / "frames" / "manifest.csv", out)) == 0, capsys.readouterr().err
     assert (out / "calibration.json").is_file() and (out / "preview.mp4").is_file()
+
+
+def test_measure_says_which_results_file_it_replaced(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """An existing results file was overwritten without a word (calibrate, evaluate say so)."""
+    frame = str(EXAMPLE / "p12.0kpa.jpg")
+    out = tmp_path / "results.json"
+    argv = ["measure", "--method", "classical", frame]
+    assert main([*argv, "--out", str(out)]) == 0
+    assert "replaced" not in capsys.readouterr().out
+    assert main([*argv, frame, "--out", str(out)]) == 0
+    printed = capsys.readouterr()
+    note = f"note: replaced {out} (1 result(s)); give each run its own --out to keep both"
+    assert printed.out.splitlines()[-1] == note and "replaced" not in printed.err
+    assert len(json.loads(out.read_text())) == 2
+    assert main([*argv, "--out", "-"]) == 0  # standard output replaces no file
+    printed = capsys.readouterr()
+    assert "replaced" not in printed.out + printed.err
