@@ -309,11 +309,11 @@ def test_a_second_run_into_one_out_says_which_calibration_it_replaced(
     assert main([*argv, "--device-id", "display-07"]) == 0
     first = json.loads((out / "calibration.json").read_text())
     assert "replaced" not in capsys.readouterr().out
-    assert main(argv) == 0
+    assert main([*argv, "--device-id", "display-07"]) == 0
     printed = capsys.readouterr().out
     held = f"note: replaced the calibration that {out} held (created {first['created']}, device id "
     assert held + "'display-07'); give each run its own --out to keep both" in printed
-    assert json.loads((out / "calibration.json").read_text())["device_id"] is None
+    assert json.loads((out / "calibration.json").read_text())["device_id"] == "display-07"
 
 
 def test_a_sweep_far_above_20_kpa_is_read_with_a_warning(

@@ -92,8 +92,8 @@ def session_options(args: argparse.Namespace) -> SessionOptions:
 
 def _cmd_calibrate(args: argparse.Namespace) -> int:
     from contactcal.infer.calibration.calibrate import calibrate_session
+    from contactcal.infer.calibration.out_folder import check_reused_out
     from contactcal.infer.calibration.provenance import Provenance
-    from contactcal.infer.calibration.record import earlier_record_note
     from contactcal.infer.files.atomic import run_outputs
     from contactcal.infer.files.stdout import printing_after
     from contactcal.infer.pipeline.manifest import beside_manifest
@@ -104,8 +104,10 @@ def _cmd_calibrate(args: argparse.Namespace) -> int:
     provenance = Provenance(argv=args.argv, device_id=args.device_id)  # refuses a bad id
     check_change_gate(args)
     check_out_folder(args.out, "calibrate")
-    replaced = earlier_record_note(args.out)
-    if is_video_run(args):  # --video / --camera: contactcal.infer.video.command
+    video = is_video_run(args)  # checks the options' combination
+    # another display's record, or an earlier recording's frames: refused before any work
+    replaced = check_reused_out(args.out, args.device_id, None if video else args.manifest)
+    if video:  # --video / --camera: contactcal.infer.video.command
         return calibrate_video(args, measure_options(args), provenance, replaced)
     measure = measure_options(args, beside_manifest(args.manifest))
     written: list[Path] = []

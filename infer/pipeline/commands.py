@@ -67,6 +67,7 @@ def _cmd_measure(args: argparse.Namespace) -> int:
                 else " (measure writes JSON; a name like a manifest's would replace that file)"
             )
         )
+    replaced = None if to_stdout else earlier_results_note(args.out)
     with run_outputs([*args.images, *run_inputs(args)]) as outs:
         json_path = None if to_stdout else outs.stage(args.out)  # refused here, before work
         options = measure_options(args)
@@ -83,7 +84,7 @@ def _cmd_measure(args: argparse.Namespace) -> int:
             runs = overlay_runs(args, options, measured, args.images, args.reference)
             written = write_overlays(runs, args.overlay, outputs=outs, bit_depth=args.bit_depth)
     overlays = [] if args.overlay is None else [args.overlay]
-    with printing_after([*([] if to_stdout else [args.out]), *overlays]):
+    with printing_after([*([] if to_stdout else [args.out]), *overlays], [replaced]):
         if to_stdout:
             sys.stdout.write(text)
         for m in measured:
@@ -93,10 +94,32 @@ def _cmd_measure(args: argparse.Namespace) -> int:
             print(line, file=sys.stderr if to_stdout else sys.stdout)
         for line in warnings:
             print(line, file=sys.stderr)
-        note = earlier_overlays_note(written)
-        if note is not None:
-            print(note, file=sys.stderr if to_stdout else sys.stdout)
+        for note in (earlier_overlays_note(written), replaced):
+            if note is not None:
+                print(note, file=sys.stderr if to_stdout else sys.stdout)
     return 0
+
+
+def earlier_results_note(out: Path) -> str | None:
+    """A line naming the file ``measure --out`` replaces (None: there is none yet).
+
+    Args:
+        out: the run's results file, before the run.
+
+    Returns:
+        ``None`` when ``out`` is not a file, else a one-line note naming it and how many results
+        it held ("not a results list" when it is not one).
+    """
+    import json
+
+    if not out.is_file():
+        return None
+    try:
+        old = json.loads(out.read_text(encoding="utf-8"))
+        held = f"{len(old)} result(s)" if isinstance(old, list) else "not a results list"
+    except (OSError, ValueError):
+        held = "unreadable as results"
+    return f"note: replaced {out} ({held}); give each run its own --out to keep both"
 
 
 def _cmd_demo(args: argparse.Namespace) -> int:

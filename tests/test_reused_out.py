@@ -1,0 +1,119 @@
+"""What ``calibrate`` and ``measure`` do with an ``--out`` that already holds a run's files:
+another display's calibration and an earlier recording's frames are refused before any work; a
+re-calibration of the same display replaces its record, and ``measure`` its results file, with
+a note."""
+
+from __future__ import annotations
+
+import json
+import shutil
+from pathlib import Path
+
+import pytest
+from test_outputs import EXAMPLE, copy_session, one_line_naming
+
+from contactcal.infer.cli import main
+
+
+def _calibrate(manifest: Path, out: Path, *more: str) -> list[str]:
+    return ["calibrate", str(manifest), "--method", "classical", "--out", str(out), *more]
+
+
+def _snapshot(folder: Path) -> dict[str, bytes]:
+    return {str(p.relative_to(folder)): p.read_bytes() for p in folder.rglob("*") if p.is_file()}
+
+
+@pytest.mark.parametrize("device", [["--device-id", "display-08"], []])
+def test_another_displays_calibration_is_refused_not_replaced(
+    device: list[str], tmp_path: Path, capsys: pytest.CaptureFixture[str], monkeypatch
+) -> None:
+    """A typo in --out replaced display-07's calibration, said only afterwards in a note."""
+    from contactcal.infer.calibration import calibrate
+
+    s = copy_session(tmp_path)
+    out = tmp_path / "cal" / "display-07-stills"
+    assert main(_calibrate(s / "manifest.csv", out, "--device-id", "display-07")) == 0
+    capsys.readouterr()
+    before = _snapshot(out)
+
+    def measured(*args: object, **kwargs: object) -> None:
+        raise AssertionError("measured before the --out was checked")
+
+    monkeypatch.setattr(calibrate, "calibrate_session", measured)
+    assert main(_calibrate(s / "manifest.csv", out, *device)) == 2
+    printed = capsys.readouterr()
+    one_line_naming(printed.err, out / "calibration.json")
+    assert "device id 'display-07'" in printed.err and "another --out" in printed.err
+    assert "remove it first" in printed.err and printed.out == ""
+    assert _snapshot(out) == before
+
+
+def test_the_same_display_or_none_is_replaced_with_a_note(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    s = copy_session(tmp_path)
+    for device in (["--device-id", "display-07"], []):
+        out = tmp_path / f"c{len(device)}"
+        assert main(_calibrate(s / "manifest.csv", out, *device)) == 0
+        first = json.loads((out / "calibration.json").read_text())
+        capsys.readouterr()
+        assert main(_calibrate(s / "manifest.csv", out, *device)) == 0
+        assert f"note: replaced the calibration that {out} held" in capsys.readouterr().out
+        assert json.loads((out / "calibration.json").read_text())["created"] >= first["created"]
+    # a record without a device id is replaced by an identified run, with the note
+    assert main(_calibrate(s / "manifest.csv", tmp_path / "c0", "--device-id", "display-07")) == 0
+    assert "no device id" in capsys.readouterr().out
+
+
+HELD = [("frames/p.jpg",), ("preview.mp4",), ("frames/p.jpg", "preview.avi")]
+
+
+@pytest.mark.parametrize("held", HELD)
+def test_a_manifest_run_into_a_recordings_folder_is_refused(
+    held: tuple[str, ...], tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """Its frames/ and preview stayed beside a calibration of other frames."""
+    s = copy_session(tmp_path)
+    out = tmp_path / "cal" / "display-07"
+    for name in held:
+        (out / name).parent.mkdir(parents=True, exist_ok=True)
+        (out / name).write_bytes(b"x")
+    before = _snapshot(out)
+    assert main(_calibrate(s / "manifest.csv", out)) == 2
+    err = capsys.readouterr().err
+    one_line_naming(err, out)
+    assert "earlier calibrate --video/--camera run" in err and "another --out" in err
+    assert ("frames/" in err) is held[0].startswith("frames/")
+    assert ("preview." in err) is (held != ("frames/p.jpg",))
+    assert _snapshot(out) == before and not (out / "calibration.json").exists()
+
+
+def test_a_recording_calibrated_again_in_its_own_folder_is_not_refused(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """Its frames/manifest.csv again (as the docs suggest): the calibration is of those frames."""
+    s = copy_session(tmp_path)
+    out = tmp_path / "cal"
+    shutil.copytree(s, out / "frames")
+    (out / "preview.mp4").write_bytes(b"x")
+    assert main(_calibrate(out / "frames" / "manifest.csv", out)) == 0, capsys.readouterr().err
+    assert (out / "calibration.json").is_file() and (out / "preview.mp4").is_file()
+
+
+def test_measure_says_which_results_file_it_replaced(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """An existing results file was overwritten without a word (calibrate, evaluate say so)."""
+    frame = str(EXAMPLE / "p12.0kpa.jpg")
+    out = tmp_path / "results.json"
+    argv = ["measure", "--method", "classical", frame]
+    assert main([*argv, "--out", str(out)]) == 0
+    assert "replaced" not in capsys.readouterr().out
+    assert main([*argv, frame, "--out", str(out)]) == 0
+    printed = capsys.readouterr()
+    note = f"note: replaced {out} (1 result(s)); give each run its own --out to keep both"
+    assert printed.out.splitlines()[-1] == note and "replaced" not in printed.err
+    assert len(json.loads(out.read_text())) == 2
+    assert main([*argv, "--out", "-"]) == 0  # standard output replaces no file
+    printed = capsys.readouterr()
+    assert "replaced" not in printed.out + printed.err
