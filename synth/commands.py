@@ -81,7 +81,7 @@ def _cmd_synth(args: argparse.Namespace) -> int:
         args.out, config, args.workers, shard, progress=not args.quiet, run_args=_args(args)
     )
     made, fingers = stats["frames_rendered"], stats["fingers"]
-    print(f"synth: {made} frames rendered, {fingers} fingers → {args.out}")
+    print(f"synth: {made} frame(s) rendered, {fingers} finger(s) → {args.out}")
     if not stats["run_record_written"]:
         record = f"run_shard{shard[0]}of{shard[1]}.json"
         print(f"synth: every frame was there; {record} kept (the record of the run that rendered)")

@@ -330,6 +330,11 @@ def test_a_sweep_far_above_20_kpa_is_read_with_a_warning(
         printed = capsys.readouterr().out
         assert ("warning: the highest pressure is 95 kPa, far above" in printed) is warned
         assert ("in mbar" in printed) is warned
+        assert ("convert them to kPa and run calibrate again" in printed) is warned
+    # evaluate's run of the same warning names evaluate, not calibrate
+    from contactcal.infer.pipeline.manifest_rows import sweep_top_warning
+
+    assert str(sweep_top_warning(95.0, "evaluate")).endswith("run evaluate again")
 
 
 @pytest.mark.parametrize("bad", ["", "x" * 101, "line\nbreak"])

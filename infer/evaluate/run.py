@@ -217,7 +217,7 @@ def evaluate_session(
     names = list(METHODS) if method == "both" else [method]
     frames = read_manifest(manifest, 0.0)  # each frame scored at its own pressure
     check_sweep_unit(manifest, frames)  # bar or MPa read as kPa, as calibrate refuses them
-    high = sweep_top_warning(max(f.pressure_kpa for f in frames))
+    high = sweep_top_warning(max(f.pressure_kpa for f in frames), "evaluate")
     base = manifest.resolve().parent
     labs = read_labels(labels, frames, manifest)
     labelled, labs, unlabelled = _labelled(frames, labs, labels, base)

@@ -236,12 +236,12 @@ def check_sweep_top(where: str | os.PathLike[str], top: float) -> None:
 HIGH_SWEEP_TOP_KPA = 30.0
 
 
-def sweep_top_warning(top: float) -> str | None:
+def sweep_top_warning(top: float, command: str = "calibrate") -> str | None:
     """The warning line of a sweep whose highest pressure ``top`` (kPa as read) is above
-    :data:`HIGH_SWEEP_TOP_KPA`; None below it."""
+    :data:`HIGH_SWEEP_TOP_KPA`, advising to run ``command`` again in kPa; None below it."""
     if top <= HIGH_SWEEP_TOP_KPA:
         return None
     return (
         f"warning: the highest pressure is {top:g} kPa, far above the display's 0-20 kPa: if the "
-        "pressures are in mbar (or another unit), convert them to kPa and calibrate again"
+        f"pressures are in mbar (or another unit), convert them to kPa and run {command} again"
     )
