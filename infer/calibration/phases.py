@@ -89,20 +89,26 @@ def misplaced_rows(levels_kpa: Sequence[float]) -> list[int]:
         Sorted row indices, empty when the rows already rise then fall.
     """
     p = list(levels_kpa)
-    best: list[int] = []
-    for k in range(len(p), -1, -1):  # rows before k rise, rows from k fall; ties: longer rise
-        kept = _longest_rising(p[:k]) + [k + i for i in _longest_rising([-v for v in p[k:]])]
-        if len(kept) > len(best):
-            best = kept
-    kept_set = set(best)
-    return [i for i in range(len(p)) if i not in kept_set]
+    n = len(p)
+    rise = _longest_rising(p)[1]  # rise[k]: longest rise within rows < k
+    fall = _longest_rising(p[::-1])[1][::-1]  # fall[k]: longest fall within rows >= k
+    # the split into a rise and a fall keeping most rows; ties: the longer rise
+    k = max(range(n, -1, -1), key=lambda j: rise[j] + fall[j])
+    kept = set(_longest_rising(p[:k])[0]) | {k + i for i in _longest_rising([-v for v in p[k:]])[0]}
+    return [i for i in range(n) if i not in kept]
 
 
-def _longest_rising(values: Sequence[float]) -> list[int]:
-    """Indices of a longest non-decreasing subsequence of ``values`` (patience sorting)."""
+def _longest_rising(values: Sequence[float]) -> tuple[list[int], list[int]]:
+    """A longest non-decreasing subsequence of ``values`` (patience sorting, O(N log N)).
+
+    Returns:
+        Its indices (ascending), and ``(N + 1,)`` lengths: ``[k]`` that of such a
+        subsequence among the first ``k`` values.
+    """
     tails: list[float] = []  # the smallest tail value of a rising run of each length
     tail_at: list[int] = []  # its index
     before = [-1] * len(values)
+    lengths = [0]
     for i, v in enumerate(values):
         j = bisect.bisect_right(tails, v)
         before[i] = tail_at[j - 1] if j > 0 else -1
@@ -111,8 +117,9 @@ def _longest_rising(values: Sequence[float]) -> list[int]:
             tail_at.append(i)
         else:
             tails[j], tail_at[j] = v, i
+        lengths.append(len(tails))
     out, i = [], tail_at[-1] if tail_at else -1
     while i >= 0:
         out.append(i)
         i = before[i]
-    return out[::-1]
+    return out[::-1], lengths
