@@ -117,6 +117,7 @@ def _cmd_fidelity(args: argparse.Namespace) -> int:
     import numpy as np
 
     from contactcal.infer.files.atomic import run_outputs, write_json, write_text
+    from contactcal.infer.files.replaced import replaced_note
     from contactcal.infer.image.write import write_image
     from contactcal.synth.fidelity_report import (
         PAPER_BINS,
@@ -141,7 +142,7 @@ def _cmd_fidelity(args: argparse.Namespace) -> int:
             f"the rig paper's bins, which end at {PAPER_BINS[-1][1]:g} kPa (a frame above would "
             "be in no bin): give pressures from 0 to 20 kPa"
         )
-    replaced = [n for n in FIDELITY_FILES if (args.out / n).is_file()]
+    replaced = replaced_note(args.out, FIDELITY_FILES, "fidelity report")
     config = FidelityConfig(
         sessions=args.sessions,
         pressures_kpa=pressures,
@@ -162,6 +163,6 @@ def _cmd_fidelity(args: argparse.Namespace) -> int:
         write_image(out.stage(args.out / jpg_name), strip, jpeg)
     print(summary_markdown(summary), end="")
     print(f"fidelity: ROI found within tolerance in {summary['roi_ok']}/{args.sessions} sessions")
-    if replaced:
-        print(f"note: replaced the fidelity report that {args.out} held ({', '.join(replaced)})")
+    if replaced is not None:
+        print(replaced)
     return 0

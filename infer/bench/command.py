@@ -59,6 +59,7 @@ def _cmd_bench(args: argparse.Namespace) -> int:
     from contactcal.infer.bench.config import BenchConfig
     from contactcal.infer.bench.report import REPORT_FILES, ROBUSTNESS_FILES
     from contactcal.infer.bench.run import run_bench
+    from contactcal.infer.files.replaced import replaced_note
     from contactcal.infer.files.stdout import printing_after
     from contactcal.infer.pipeline.args import check_out_folder
 
@@ -80,11 +81,8 @@ def _cmd_bench(args: argparse.Namespace) -> int:
     )
     model = None if args.model is None else str(args.model)
     writes = [n for n in REPORT_FILES if args.robustness or n not in ROBUSTNESS_FILES]
-    earlier = [n for n in writes if (args.out / n).is_file()]
+    replaced = replaced_note(args.out, writes, "report")
     res = run_bench(args.data, args.out, model, cfg, args.crosscheck)
-    replaced = None
-    if earlier:
-        replaced = f"note: replaced the report that {args.out} held ({', '.join(earlier)})"
     with printing_after([args.out], [replaced]):
         _print_summary(res, args.out)
         if replaced is not None:
