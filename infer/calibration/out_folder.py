@@ -14,10 +14,7 @@ from pathlib import Path
 
 from contactcal.infer.calibration.record import earlier_record_note
 from contactcal.infer.files.atomic import TEMP_NAME
-
-#: What a ``calibrate --video`` / ``--camera`` run writes beside its calibration (the preview in
-#: the first format OpenCV can write: :data:`contactcal.infer.video.live.PREVIEW_FORMATS`).
-RECORDING_FILES = ("preview.mp4", "preview.avi")
+from contactcal.infer.video.preview_files import PREVIEW_FILES
 
 
 def check_reused_out(out: Path, device_id: str | None, manifest: Path | None) -> str | None:
@@ -92,7 +89,7 @@ def check_no_recording(out: Path, manifest: Path) -> None:
     frames = out / "frames"
     if manifest.resolve() == (frames / "manifest.csv").resolve():
         return
-    held = [f"{n} (a recording's preview)" for n in RECORDING_FILES if (out / n).is_file()]
+    held = [f"{n} (a recording's preview)" for n in PREVIEW_FILES if (out / n).is_file()]
     if frames.is_dir() and any(TEMP_NAME.match(n) is None for n in os.listdir(frames)):
         held.insert(0, "frames/ (a recording's frames)")
     if held:

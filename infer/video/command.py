@@ -44,6 +44,7 @@ def _preview(
     fps: float,
 ) -> Preview | None:
     from contactcal.infer.video.live import Preview, preview_format
+    from contactcal.infer.video.preview_files import PREVIEW_STEM
 
     if not (args.show or args.preview or args.camera is not None):
         return None
@@ -51,7 +52,7 @@ def _preview(
     if args.show:
         return Preview(method, extractor, None, "", fps)
     suffix, fourcc = preview_format()
-    return Preview(method, extractor, outs.stage(args.out / f"preview{suffix}"), fourcc, fps)
+    return Preview(method, extractor, outs.stage(args.out / f"{PREVIEW_STEM}{suffix}"), fourcc, fps)
 
 
 def _source(

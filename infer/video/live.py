@@ -27,11 +27,8 @@ from contactcal.infer.methods.base import Method
 from contactcal.infer.pipeline.overlay import draw_overlay
 from contactcal.infer.video.extract import Decision, Extractor
 from contactcal.infer.video.log import PressureLog, parse_log, read_log_text
+from contactcal.infer.video.preview_files import PREVIEW_FORMATS
 from contactcal.infer.video.steps import reference_step
-
-#: Preview codecs tried in order (suffix, fourcc): MPEG-4 part 2 in .mp4 plays everywhere; builds
-#: without an MPEG-4 encoder still have Motion-JPEG (in .avi).
-PREVIEW_FORMATS = ((".mp4", "mp4v"), (".avi", "MJPG"))
 
 
 def open_camera(index: int) -> cv2.VideoCapture:
