@@ -208,11 +208,10 @@ def _notes(
     if same:
         lines.append(identical_frames_warning(same))
     if session.out_of_order:
-        rows, verb = (
-            " and ".join(session.out_of_order),
-            "breaks" if len(session.out_of_order) == 1 else "break",
+        verb = "breaks" if len(session.out_of_order) == 1 else "break"
+        lines.append(
+            OUT_OF_ORDER_WARNING.format(rows=" and ".join(session.out_of_order), verb=verb)
         )
-        lines.append(OUT_OF_ORDER_WARNING.format(rows=rows, verb=verb))
     if session.pooled is not None:
         lines.append(POOLED_NOTE.format(p=session.pooled, t=options.step_tolerance_kpa))
     if session.at_rest is not None:

@@ -190,18 +190,19 @@ def read_session(
     return Session(frames, source, pooled, at_rest, out_of_order)
 
 
-#: At most this share of the rows may break the order for them to be named as misplaced (more:
-#: rows in no particular order, a legitimate single pass).
+#: At most this many rows, and this share of the rows, may break the order for them to be named
+#: as misplaced (more: rows in no particular order, a legitimate single pass).
+MISPLACED_MAX_ROWS = 2
 MISPLACED_MAX_SHARE = 0.2
 
 
 def _out_of_order(frames: list[Frame], levels: list[float]) -> tuple[str, ...]:
     """The rows (``"row 7 (p06.0kpa.jpg, 16 kPa)"``) without which a manifest read as one pass
-    would rise, then fall, when they are few (one or two, and at most
+    would rise, then fall, when they are few (at most :data:`MISPLACED_MAX_ROWS`, and
     :data:`MISPLACED_MAX_SHARE` of the rows): a mistyped pressure, or a frame listed in the
     wrong place. Empty otherwise."""
     rows = misplaced_rows(levels)
-    if not rows or len(rows) > 2 or len(rows) > MISPLACED_MAX_SHARE * len(levels):
+    if not rows or len(rows) > min(MISPLACED_MAX_ROWS, MISPLACED_MAX_SHARE * len(levels)):
         return ()
     return tuple(
         f"row {i + 1} ({frames[i].file.name}, {frames[i].pressure_kpa:g} kPa)" for i in rows
