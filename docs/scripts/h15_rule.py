@@ -15,6 +15,7 @@ would only dilute the pool (amended before H15 was trained; the count with them 
 
 Another draw of the recipe names its run and validation sets (``--candidate h16 --val val_v7``:
 ``runs/h16/v25.onnx`` as ``unet[h16]``, the sets ``val_v7``, ``val_v7_depart``, ``val_v7_onset``).
+``--rule h17`` applies H17's rule: H15's, with (b) allowing 0.5 points (``EXCESS``).
 """
 
 from __future__ import annotations
@@ -33,8 +34,12 @@ from rule_scores import datasets, scores
 from contactcal.infer.files.digest import sha256_file
 
 BASE = "unet"
-#: The candidate's allowed excess over v2.4 in points, per condition (a)-(c).
-EXCESS = {"a": 0.5, "b": 0.0, "c": 0.2}
+#: The candidate's allowed excess over v2.4 in points, per condition (a)-(c), per rule: H17's
+#: (b) allows the seed spread measured on ``val_depart`` (docs/training.md, "H17").
+EXCESS = {
+    "h15": {"a": 0.5, "b": 0.0, "c": 0.2},
+    "h17": {"a": 0.5, "b": 0.5, "c": 0.2},
+}
 #: Its allowed loss in points of (e).
 NO_CONTACT_LOSS = 1.0
 #: (d): the largest error ratio at a randomised, non-baseline level.
@@ -51,6 +56,7 @@ class Draw:
 
     name: str = "h15"
     val: str = "val_v6"
+    rule: str = "h15"
 
     @property
     def method(self) -> str:
@@ -69,14 +75,15 @@ class Draw:
 
     def error_conditions(self) -> tuple[tuple[str, tuple[str, ...], float], ...]:
         """(label, sets pooled, allowed excess in points) of (a)-(c)."""
+        excess = EXCESS[self.rule]
         return (
             (
                 "(a) procedural 7800+7900, median err >= 5 kPa",
                 ("cc7800_hr", "cc7900_hr"),
-                EXCESS["a"],
+                excess["a"],
             ),
-            ("(b) val_depart, median err >= 5 kPa", ("val_depart",), EXCESS["b"]),
-            (f"(c) {self.val}, median err >= 5 kPa", ("main",), EXCESS["c"]),
+            ("(b) val_depart, median err >= 5 kPa", ("val_depart",), excess["b"]),
+            (f"(c) {self.val}, median err >= 5 kPa", ("main",), excess["c"]),
         )
 
     def no_contact_sets(self) -> tuple[str, ...]:
@@ -233,8 +240,11 @@ def main(argv: list[str] | None = None) -> int:
     )
     p.add_argument("--candidate", default="h15", help="the draw's run name (default h15)")
     p.add_argument("--val", default="val_v6", help="the draw's validation set (default val_v6)")
+    p.add_argument(
+        "--rule", choices=sorted(EXCESS), default="h15", help="the rule's margins (default h15)"
+    )
     args = p.parse_args(argv)
-    draw = Draw(args.candidate, args.val)
+    draw = Draw(args.candidate, args.val, args.rule)
     try:
         loaded = [
             json.loads(f.read_text(encoding="utf-8"))
