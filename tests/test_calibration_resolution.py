@@ -38,7 +38,7 @@ FAST = CurveConfig(n_bootstrap=50)
 
 def _phase(pressures: list[float], areas: list[float], contacts: list[int]) -> PhaseFit:
     steps = [
-        Step("loading", i, float(p), np.array([float(a)]), np.array([bool(c)]), (None,))
+        Step("loading", i, float(p), np.array([float(a)]), np.array([bool(c)]), (None,), ("f",))
         for i, (p, a, c) in enumerate(zip(pressures, areas, contacts, strict=True))
     ]
     return fit_phase(steps, FAST, "mm²")

@@ -132,7 +132,7 @@ def test_curve_resolution(
     from contactcal.infer.calibration.steps import Step
 
     steps = [
-        Step("loading", i, float(p), np.array([float(a)]), np.array([bool(c)]), (None,))
+        Step("loading", i, float(p), np.array([float(a)]), np.array([bool(c)]), (None,), ("f",))
         for i, (p, a, c) in enumerate(zip(pressures, areas, contacts, strict=True))
     ]
     res = fit_phase(steps, CurveConfig(), "px").resolution()

@@ -157,7 +157,7 @@ def test_hysteresis_matches_steps_of_a_noisy_log() -> None:
 
     def steps(phase: str, pressures: list[float], areas: list[float]) -> list[Step]:
         return [
-            Step(phase, k, p, np.array([a]), np.array([a > 0]), (None,))
+            Step(phase, k, p, np.array([a]), np.array([a > 0]), (None,), ("f",))
             for k, (p, a) in enumerate(zip(pressures, areas, strict=True))
         ]
 

@@ -27,6 +27,7 @@ from contactcal.infer.calibration.provenance import (
 from contactcal.infer.calibration.record import write_calibration
 from contactcal.infer.calibration.session import SessionFit, fit_session
 from contactcal.infer.calibration.session_checks import check_inverse_contact, session_points
+from contactcal.infer.calibration.steps import OffStep, frames_off_their_step, off_step_warning
 from contactcal.infer.calibration.table import format_table
 from contactcal.infer.files.atomic import OutputSet, run_outputs
 from contactcal.infer.pipeline.manifest import (
@@ -54,8 +55,9 @@ class CalibrationReport:
     fit: SessionFit  # every phase's steps, curve and band; hysteresis
 
 
-#: Frames named in the warning of frames without contact above a contact (the record lists all).
-LISTED_LOST = 5
+#: Frames a warning listing frames names (without contact above a contact, off their step's
+#: median); the record lists all.
+LISTED_FRAMES = 5
 #: The table's line when readings were pooled into steps (``{p}``: the session's
 #: :class:`~contactcal.infer.pipeline.manifest.Pooled`, ``{t}``: the tolerance, kPa).
 POOLED_NOTE = (
@@ -157,6 +159,7 @@ def calibrate_session(
     unit = PX if measure.scale is None else MM2
     fit = fit_session(results, unit, options.curve, options.inverse_phase, session.phase_source)
     check_inverse_contact(where, fit)
+    off = frames_off_their_step([s for ph in fit.phases.values() for s in ph.steps], unit)
     recorded = Path(manifest_as if manifest_as is not None else manifest).resolve()
     provenance = replace(
         provenance if provenance is not None else Provenance(),
@@ -172,13 +175,15 @@ def calibrate_session(
         "readings_pooled": None if session.pooled is None else asdict(session.pooled),
         "readings_at_rest": None if session.at_rest is None else asdict(session.at_rest),
         "rows_out_of_order": list(session.out_of_order),
+        "frames_off_their_step": [asdict(o) for o in off],
     }
     extra |= checks | {"identical_frames": same}
     model = None if measure.model is None else str(measure.model)
     with run_outputs([manifest, model, *files], join=outputs) as outs:
         paths = write_calibration(out_dir, results, fit, method.name, extra, provenance, outs)
     table = format_table(results, fit, provenance.device_id)
-    table += "".join("\n" + line for line in _notes(session, results, checks, same, options))
+    notes = _notes(session, results, checks, same, options, off, unit)
+    table += "".join("\n" + line for line in notes)
     return CalibrationReport(table, frames, measured, fit.curve, paths, fit)
 
 
@@ -188,10 +193,13 @@ def _notes(
     checks: dict[str, object],
     same: list[dict[str, Any]],
     options: SessionOptions,
+    off: list[OffStep],
+    unit: str,
 ) -> list[str]:
     """The warning and note lines printed under the table, in a fixed order: the reference
-    (gated above 0 kPa, or not at rest), identical frames, rows out of order, pooled readings,
-    readings below 0 kPa, a sweep top far above the display's range."""
+    (gated above 0 kPa, or not at rest), identical frames, rows out of order, frames off their
+    step (``off``, areas in ``unit``), pooled readings, readings below 0 kPa, a sweep
+    top far above the display's range."""
     lines = []
     if checks["reference_gated_above_zero"]:
         lines.append("warning: " + REFERENCE_NOTE.format(p=results[0].pressure_kpa))
@@ -202,8 +210,8 @@ def _notes(
         )
     lost = checks["no_contact_above_contact"]
     if lost:
-        shown = ", ".join(os.path.basename(f) for f in lost[:LISTED_LOST])
-        more = ", …" if len(lost) > LISTED_LOST else ""
+        shown = ", ".join(os.path.basename(f) for f in lost[:LISTED_FRAMES])
+        more = ", …" if len(lost) > LISTED_FRAMES else ""
         lines.append(LOST_ABOVE_CONTACT_WARNING.format(n=len(lost), shown=shown + more))
     if same:
         lines.append(identical_frames_warning(same))
@@ -212,6 +220,8 @@ def _notes(
         lines.append(
             OUT_OF_ORDER_WARNING.format(rows=" and ".join(session.out_of_order), verb=verb)
         )
+    if off:
+        lines.append(off_step_warning(off, unit, LISTED_FRAMES))
     if session.pooled is not None:
         lines.append(POOLED_NOTE.format(p=session.pooled, t=options.step_tolerance_kpa))
     if session.at_rest is not None:
