@@ -105,7 +105,8 @@ def _cmd_calibrate(args: argparse.Namespace) -> int:
     check_change_gate(args)
     check_out_folder(args.out, "calibrate")
     video = is_video_run(args)  # checks the options' combination
-    # another display's record, or an earlier recording's frames: refused before any work
+    # another display's record, or an earlier recording's frames or preview: refused before
+    # any work (a video run's own: check_fresh_recording)
     replaced = check_reused_out(args.out, args.device_id, None if video else args.manifest)
     if video:  # --video / --camera: contactcal.infer.video.command
         return calibrate_video(args, measure_options(args), provenance, replaced)
