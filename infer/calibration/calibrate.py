@@ -172,6 +172,7 @@ def calibrate_session(
         "readings_pooled": None if session.pooled is None else asdict(session.pooled),
         "readings_at_rest": None if session.at_rest is None else asdict(session.at_rest),
         "rows_out_of_order": list(session.out_of_order),
+        "rig_note": provenance.rig_note,
     }
     extra |= checks | {"identical_frames": same}
     model = None if measure.model is None else str(measure.model)
