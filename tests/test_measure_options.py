@@ -72,7 +72,7 @@ def _rig_json(path: Path, mm_per_px: float, width: int, **offset: object) -> Pat
 def test_an_option_setting_aside_the_rig_json_beside_the_manifest_is_said(tmp_path: Path) -> None:
     """``--rig`` leaves the ``rig.json`` beside the manifest unread, ``--mm-per-px`` replaces its
     scale: one note names both sources and values, none where they state the same."""
-    from contactcal.infer.pipeline.args import rig_note
+    from contactcal.infer.pipeline.rig_note import rig_note
 
     beside = _rig_json(tmp_path / "s" / "rig.json", 0.05, 400)
     manifest = str(tmp_path / "s" / "manifest.csv")

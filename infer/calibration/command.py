@@ -16,7 +16,6 @@ from contactcal.infer.pipeline.args import (
     measure_options,
     method_args,
     overlay_runs,
-    rig_note,
     run_inputs,
     scale_args,
 )
@@ -100,6 +99,7 @@ def _cmd_calibrate(args: argparse.Namespace) -> int:
     from contactcal.infer.files.stdout import printing_after
     from contactcal.infer.pipeline.manifest import beside_manifest, reference_width
     from contactcal.infer.pipeline.overlay import earlier_overlays_note, write_overlays
+    from contactcal.infer.pipeline.rig_note import rig_note
     from contactcal.infer.video.args import is_video_run
     from contactcal.infer.video.command import calibrate_video
 

@@ -13,7 +13,6 @@ from contactcal.infer.pipeline.args import (
     check_out_folder,
     measure_options,
     rig_file,
-    rig_note,
     scale_args,
 )
 
@@ -55,6 +54,7 @@ def _cmd_evaluate(args: argparse.Namespace) -> int:
     from contactcal.infer.evaluate.run import evaluate_session
     from contactcal.infer.files.stdout import printing_after
     from contactcal.infer.pipeline.manifest import beside_manifest, reference_width
+    from contactcal.infer.pipeline.rig_note import rig_note
 
     check_change_gate(args)
     check_out_folder(args.out, "evaluate")
