@@ -63,6 +63,88 @@ def test_the_rig_json_beside_the_manifest_gives_scale_and_offset(tmp_path: Path)
     assert (got.threads, got.outline) == (1, False)  # evaluate has neither option
 
 
+def _rig_json(path: Path, mm_per_px: float, width: int, **offset: object) -> Path:
+    path.parent.mkdir(parents=True, exist_ok=True)
+    path.write_text(json.dumps({"mm_per_px": mm_per_px, "image_width_px": width, **offset}))
+    return path
+
+
+def test_an_option_setting_aside_the_rig_json_beside_the_manifest_is_said(tmp_path: Path) -> None:
+    """``--rig`` leaves the ``rig.json`` beside the manifest unread, ``--mm-per-px`` replaces its
+    scale: one note names both sources and values, none where they state the same."""
+    from contactcal.infer.pipeline.rig_note import rig_note
+
+    beside = _rig_json(tmp_path / "s" / "rig.json", 0.05, 400)
+    manifest = str(tmp_path / "s" / "manifest.csv")
+
+    def note(*option: str, width: int | None = None) -> str | None:
+        args = _args("calibrate", manifest, "--out", "x", *option)
+
+        def width_px() -> int:
+            assert width is not None, "the frames' width is read only for --mm-per-px"
+            return width
+
+        return rig_note(args, measure_options(args, beside), beside, width_px)
+
+    other = _rig_json(tmp_path / "other.json", 0.06, 400)
+    assert note("--rig", str(other)) == (
+        f"note: --rig {other} used (0.06 mm/px at 400 px wide); {beside} beside the manifest "
+        "(0.05 mm/px at 400 px wide) was not read"
+    )
+    same = _rig_json(tmp_path / "same.json", 0.1, 200)  # the same scale at every width
+    assert note("--rig", str(same)) is None
+    assert note("--rig", str(tmp_path / "s" / ".." / "s" / "rig.json")) is None  # that file
+    assert note() is None
+    offset = _rig_json(tmp_path / "offset.json", 0.1, 200, boundary_offset_mm=0.1, **_digest())
+    assert f"(0.1 mm/px at 200 px wide, boundary offset +0.100 mm); {beside}" in str(
+        note("--rig", str(offset))
+    )
+    assert "(0.05 mm/px at 400 px wide, boundary offset none) was not read" in str(
+        note("--rig", str(offset))
+    )
+    beside.write_text("[1, 2]")  # not read, so not refused: said
+    assert f"{beside} beside the manifest (not a valid rig config) was not read" in str(
+        note("--rig", str(other))
+    )
+    _rig_json(beside, 0.05, 400)
+    assert note("--mm-per-px", "0.07", width=400) == (
+        f"note: --mm-per-px 0.07 used in place of the scale of {beside} (0.05 mm/px at 400 px wide)"
+    )
+    assert note("--mm-per-px", "0.1", width=200) is None  # the rig's scale at the frames' width
+    assert note("--mm-per-px", "0.05", width=200) is not None  # its number, at another width
+    _rig_json(beside, 0.05, 400, boundary_offset_mm=0.1, **_digest())
+    assert str(note("--mm-per-px", "0.07", width=400)).endswith(
+        "(0.05 mm/px at 400 px wide); its boundary offset still applies"
+    )
+    beside.write_text(json.dumps({"boundary_offset_mm": 0.1, **_digest()}))
+    assert note("--mm-per-px", "0.07") is None  # no scale replaced: only its offset, applied
+    beside.unlink()
+    assert note("--rig", str(other)) is None and note("--mm-per-px", "0.07") is None
+
+
+def test_calibrate_says_and_records_the_rig_json_its_rig_option_left_unread(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    from contactcal.infer.cli import main
+
+    session = tmp_path / "s"
+    frames = sorted(EXAMPLE.glob("p*.jpg"))[::4]
+    session.mkdir()
+    rows = "".join(f"{f},{float(f.stem[1:5]):g}\n" for f in frames)
+    (session / "manifest.csv").write_text("file,pressure_kpa\n" + rows)
+    beside = _rig_json(session / "rig.json", 0.05, 400)
+    other = _rig_json(tmp_path / "other.json", 0.06, 400)
+    argv = ["calibrate", str(session / "manifest.csv"), "--rig", str(other), "--method"]
+    assert main([*argv, "classical", "--out", str(tmp_path / "c")]) == 0
+    expected = (
+        f"note: --rig {other} used (0.06 mm/px at 400 px wide); {beside} beside the manifest "
+        "(0.05 mm/px at 400 px wide) was not read"
+    )
+    assert capsys.readouterr().out.splitlines().count(expected) == 1
+    record = json.loads((tmp_path / "c" / "calibration.json").read_text())
+    assert record["extra"]["rig_note"] == expected and record["extra"]["mm_per_px"] == 0.06
+
+
 def test_threads_reach_onnxruntime() -> None:
     """``calibrate --threads`` sets onnxruntime's threads too (it was 1 whatever was asked)."""
     method = MeasureOptions(threads=2).method("unet")

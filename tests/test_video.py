@@ -394,6 +394,36 @@ def test_staging_left_by_a_killed_run_is_no_earlier_recording(tmp_path: Path) ->
         check_fresh_frames(frames)
 
 
+def test_a_preview_of_an_earlier_recording_is_refused(
+    tmp_path: Path,
+    rng: np.random.Generator,
+    capsys: pytest.CaptureFixture[str],
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    """An --out whose frames/ the user removed but which still holds an earlier recording's
+    preview is refused before any work: a run without --preview would leave that preview beside
+    its calibration. The line names the file and what to do; nothing is written."""
+    out = tmp_path / "out"
+    out.mkdir()
+    (out / "preview.mp4").write_bytes(b"earlier")
+    make_log(tmp_path / "log.csv", [0, 6, 12, 0], rng, hold_s=0.8)
+    argv = ["calibrate", "--video", str(tmp_path / "v.avi"), "--pressure-log"]
+    argv += [str(tmp_path / "log.csv"), "--out", str(out)]
+    with monkeypatch.context() as m:  # refused before the video is opened
+        m.setattr(cv2, "VideoCapture", _unreachable)
+        code, err = _run(argv, capsys)
+    expected = f"{out / 'preview.mp4'}: the preview of an earlier recording; expected a new "
+    expected += "--out folder for each recording (or remove that file first)"
+    assert code == 2 and expected in err and err.count("\n") == 1, err
+    assert [p.name for p in out.iterdir()] == ["preview.mp4"]
+    assert (out / "preview.mp4").read_bytes() == b"earlier"
+    from contactcal.infer.video.command import check_fresh_recording
+
+    (out / "preview.avi").write_bytes(b"earlier")  # both formats: both named
+    with pytest.raises(ValueError, match=r"preview\.mp4 and .*preview\.avi: .*those files first"):
+        check_fresh_recording(out)
+
+
 def test_a_vent_to_zero_is_left_out_and_a_rerun_is_refused(
     tmp_path: Path, rng: np.random.Generator, capsys: pytest.CaptureFixture[str]
 ) -> None:

@@ -176,6 +176,7 @@ def calibrate_session(
         "readings_at_rest": None if session.at_rest is None else asdict(session.at_rest),
         "rows_out_of_order": list(session.out_of_order),
         "frames_off_their_step": [asdict(o) for o in off],
+        "rig_note": provenance.rig_note,
     }
     extra |= checks | {"identical_frames": same}
     model = None if measure.model is None else str(measure.model)

@@ -4,6 +4,7 @@ through :mod:`contactcal.infer.video.command`)."""
 from __future__ import annotations
 
 import argparse
+from dataclasses import replace
 from pathlib import Path
 from typing import TYPE_CHECKING
 
@@ -96,8 +97,9 @@ def _cmd_calibrate(args: argparse.Namespace) -> int:
     from contactcal.infer.calibration.provenance import Provenance
     from contactcal.infer.files.atomic import run_outputs
     from contactcal.infer.files.stdout import printing_after
-    from contactcal.infer.pipeline.manifest import beside_manifest
+    from contactcal.infer.pipeline.manifest import beside_manifest, reference_width
     from contactcal.infer.pipeline.overlay import earlier_overlays_note, write_overlays
+    from contactcal.infer.pipeline.rig_note import rig_note
     from contactcal.infer.video.args import is_video_run
     from contactcal.infer.video.command import calibrate_video
 
@@ -105,11 +107,18 @@ def _cmd_calibrate(args: argparse.Namespace) -> int:
     check_change_gate(args)
     check_out_folder(args.out, "calibrate")
     video = is_video_run(args)  # checks the options' combination
-    # another display's record, or an earlier recording's frames: refused before any work
+    # another display's record, or an earlier recording's frames or preview: refused before
+    # any work (a video run's own: check_fresh_recording)
     replaced = check_reused_out(args.out, args.device_id, None if video else args.manifest)
     if video:  # --video / --camera: contactcal.infer.video.command
         return calibrate_video(args, measure_options(args), provenance, replaced)
-    measure = measure_options(args, beside_manifest(args.manifest))
+    beside = beside_manifest(args.manifest)
+    measure = measure_options(args, beside)
+    tolerance = step_tolerance(args)  # the manifest read as the run reads it
+    set_aside = rig_note(
+        args, measure, beside, lambda: reference_width(args.manifest, tolerance, args.bit_depth)
+    )
+    provenance = replace(provenance, rig_note=set_aside)  # recorded: extra.rig_note
     written: list[Path] = []
     with run_outputs(run_inputs(args)) as outs:
         rep = calibrate_session(
@@ -129,11 +138,11 @@ def _cmd_calibrate(args: argparse.Namespace) -> int:
                 runs, args.overlay, titles, outputs=outs, bit_depth=args.bit_depth
             )
     overlays = [] if args.overlay is None else [args.overlay]
-    with printing_after([args.out, *overlays], [replaced]):
+    with printing_after([args.out, *overlays], [set_aside, replaced]):
         print(rep.table)
         if measure.scale is None:
             print(NO_SCALE_NOTE.format(looked=MANIFEST_SCALE))
-        for note in (replaced, earlier_overlays_note(written)):
+        for note in (set_aside, replaced, earlier_overlays_note(written)):
             if note is not None:
                 print(note)
     return 0

@@ -23,8 +23,9 @@ def check_reused_out(out: Path, device_id: str | None, manifest: Path | None) ->
     Args:
         out: the run's output folder, before the run.
         device_id: this run's ``--device-id`` (None: not given).
-        manifest: the still frames' manifest (None: a video or camera run, whose own
-            ``frames/`` check refuses an earlier recording).
+        manifest: the still frames' manifest (None: a video or camera run, whose own check
+            refuses an earlier recording's frames or preview:
+            :func:`~contactcal.infer.video.command.check_fresh_recording`).
 
     Returns:
         The note :func:`~contactcal.infer.calibration.record.earlier_record_note` gives (None:

@@ -90,6 +90,9 @@ class Provenance:
     inputs: dict[str, Any] | None = None  # input_digests() (None: not recorded)
     argv: list[str] | None = None  # the command line's arguments (None: not run from the CLI)
     device_id: str | None = None  # the calibrated display's identifier (1-100 printable chars)
+    #: the note on a rig.json beside the manifest that --rig or --mm-per-px set aside
+    #: (:func:`~contactcal.infer.pipeline.rig_note.rig_note`); None: none
+    rig_note: str | None = None
 
     def __post_init__(self) -> None:
         check_device_id(self.device_id)

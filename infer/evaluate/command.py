@@ -53,22 +53,27 @@ def add_parsers(sub: argparse._SubParsersAction) -> None:
 def _cmd_evaluate(args: argparse.Namespace) -> int:
     from contactcal.infer.evaluate.run import evaluate_session
     from contactcal.infer.files.stdout import printing_after
-    from contactcal.infer.pipeline.manifest import beside_manifest
+    from contactcal.infer.pipeline.manifest import beside_manifest, reference_width
+    from contactcal.infer.pipeline.rig_note import rig_note
 
     check_change_gate(args)
     check_out_folder(args.out, "evaluate")
     default_rig = beside_manifest(args.manifest)
     measure = measure_options(args, default_rig)
     rig = rig_file(args, default_rig)  # the file measure_options read, protected from --out
+    set_aside = rig_note(  # each frame scored at its own pressure: steps not pooled
+        args, measure, default_rig, lambda: reference_width(args.manifest, 0.0, args.bit_depth)
+    )
     replaced = earlier_evaluation_note(args.out, args.manifest)
     rep = evaluate_session(
         args.manifest, args.labels, args.out, args.method, measure, also_read=[rig] if rig else []
     )
-    with printing_after([args.out], [replaced]):
+    with printing_after([args.out], [set_aside, replaced]):
         print(rep.table)
         print(f"evaluation: {rep.files['json']}, {rep.files['png']}")
-        if replaced is not None:
-            print(replaced)
+        for note in (set_aside, replaced):
+            if note is not None:
+                print(note)
     return 0
 
 

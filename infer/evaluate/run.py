@@ -29,9 +29,7 @@ from contactcal.infer.evaluate.score import frame_records, onset_summary, score_
 from contactcal.infer.evaluate.window import check_label_area, find_window
 from contactcal.infer.files.atomic import OutputSet, run_outputs, write_synced
 from contactcal.infer.files.jsonable import json_text
-from contactcal.infer.image.gray import ImageError
-from contactcal.infer.image.jpeg import jpeg_size
-from contactcal.infer.image.read import load_image
+from contactcal.infer.image.read import frame_size
 from contactcal.infer.methods.registry import METHODS
 from contactcal.infer.pipeline.manifest import (
     Frame,
@@ -89,19 +87,6 @@ def _measure(
     return out, described, stale
 
 
-def _frame_size(path: Path, bit_depth: int | None) -> tuple[int, int]:
-    """``(width, height)`` of a frame file as ``measure`` reads it: a JPEG's from its header (no
-    pixel decoded), another format's (or a file named .jpg that is not one) decoded."""
-    if path.suffix.lower() in (".jpg", ".jpeg"):
-        try:
-            h, w = jpeg_size(path)
-            return w, h
-        except ImageError:
-            pass  # OpenCV decodes by content, as measure does below
-    h, w = load_image(path, bit_depth=bit_depth).shape
-    return w, h
-
-
 def _label_masks(labs: list[Label], reference: Path, bit_depth: int | None) -> list[LabelMask]:
     """The labels rasterised at their frames' sizes (read before any frame is measured, so a
     mask of another size is refused up front), each checked to fit the window ring of
@@ -109,7 +94,7 @@ def _label_masks(labs: list[Label], reference: Path, bit_depth: int | None) -> l
     window = find_window(reference, bit_depth)
     masks = []
     for lab in labs:
-        size = _frame_size(lab.frame, bit_depth)
+        size = frame_size(lab.frame, bit_depth)
         mask = label_mask(lab, size)
         check_label_area(lab, mask, size, window)
         masks.append(mask)

@@ -24,6 +24,7 @@ from contactcal.infer.image.complete import jpeg_end, png_end
 from contactcal.infer.image.decode import decode_strict
 from contactcal.infer.image.frame import LOW_BITS_MAX, check_frame_shape
 from contactcal.infer.image.gray import ImageError, reduce_area, to_gray_u8
+from contactcal.infer.image.jpeg import jpeg_size
 from contactcal.infer.image.png import png_significant_bits
 
 #: File suffixes accepted by :func:`load_image` (lower case).
@@ -211,3 +212,21 @@ def load_image(
     img = _scale_depth(p, img, *_stated_depth(p, data, bit_depth))
     gray = to_gray_u8(img, name=str(p), bgr=True)
     return gray if jpeg else reduce_area(gray, reduce)
+
+
+def frame_size(path: str | os.PathLike[str], bit_depth: int | None = None) -> tuple[int, int]:
+    """``(width, height)`` of a frame file as :func:`load_image` reads it: a JPEG's from its
+    header (no pixel decoded), another format's (or a file named .jpg that is not one) decoded.
+
+    Raises:
+        ImageError: as :func:`load_image`.
+    """
+    p = Path(path)
+    if p.suffix.lower() in (".jpg", ".jpeg"):
+        try:
+            h, w = jpeg_size(p)
+            return w, h
+        except ImageError:
+            pass  # OpenCV decodes by content, as load_image does below
+    h, w = load_image(p, bit_depth=bit_depth).shape
+    return w, h

@@ -87,6 +87,7 @@ __all__ = [
     "check_sweep_unit",
     "read_manifest",
     "read_session",
+    "reference_width",
     "sweep_top_warning",
 ]
 
@@ -121,6 +122,20 @@ def beside_manifest(path: str | os.PathLike[str], name: str = "rig.json") -> Pat
     manifest file's own folder, a link's target's (so a linked manifest finds the ``rig.json``
     of its frames, not of the link's folder)."""
     return Path(path).resolve().parent / name
+
+
+def reference_width(
+    path: str | os.PathLike[str], step_tolerance_kpa: float, bit_depth: int | None
+) -> int:
+    """Width (px) of the manifest's reference frame, which its frames share (a run refuses
+    others), as :func:`~contactcal.infer.image.read.frame_size` reads it (a JPEG's header).
+
+    Raises:
+        ManifestError / ImageError: as a run reading that manifest and frame would.
+    """
+    from contactcal.infer.image.read import frame_size
+
+    return frame_size(read_manifest(path, step_tolerance_kpa)[0].file, bit_depth)[0]
 
 
 def read_manifest(

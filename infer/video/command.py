@@ -4,7 +4,9 @@ The frames taken in steady pressure steps are written to ``DIR/frames/`` with a 
 (:mod:`.extract`), then the session is calibrated exactly as ``contactcal calibrate MANIFEST``
 (:func:`~contactcal.infer.calibration.calibrate.calibrate_session`). Frames, manifest,
 calibration and preview are one run's outputs: all written, or none; the video and the log are
-inputs, never replaced.
+inputs, never replaced. An ``--out`` holding an earlier recording's outputs (frames, or a preview
+that a run without ``--preview`` would leave beside its calibration) is refused before any work
+(:func:`check_fresh_recording`).
 """
 
 from __future__ import annotations
@@ -98,9 +100,29 @@ def _source(
     return live.capture_frames(cap), feed, stop, fps
 
 
+def check_fresh_recording(out: Path) -> None:
+    """Refuse an ``--out`` holding an earlier recording's outputs, before any work: frames in
+    ``frames/`` (:func:`check_fresh_frames`), or a preview (``preview.mp4`` or ``.avi``), which
+    a run without ``--preview`` (or writing the other format) would leave beside its calibration.
+
+    Raises:
+        ValueError: naming the folder or file and what to do.
+    """
+    from contactcal.infer.video.preview_files import PREVIEW_FILES
+
+    check_fresh_frames(out / "frames")
+    stale = [str(out / name) for name in PREVIEW_FILES if (out / name).is_file()]
+    if stale:
+        raise ValueError(
+            f"{' and '.join(stale)}: the preview of an earlier recording; expected a new --out "
+            "folder for each recording (or remove "
+            f"{'that file' if len(stale) == 1 else 'those files'} first)"
+        )
+
+
 def check_fresh_frames(frames_dir: Path) -> None:
     """Refuse a ``frames/`` folder that already holds files: an earlier recording's frames would
-    stay beside this one's, outside its manifest (and its ``preview`` beside this calibration).
+    stay beside this one's, outside its manifest.
 
     The staging entries of a killed run (:data:`~contactcal.infer.files.atomic.TEMP_NAME`,
     their process gone) are no frames: they are removed first, as the next write into the
@@ -163,7 +185,7 @@ def calibrate_video(
         default.tolerance_kpa if args.tolerance_kpa is None else args.tolerance_kpa,
         default.settle_s if args.settle_s is None else args.settle_s,
     )
-    check_fresh_frames(args.out / "frames")
+    check_fresh_recording(args.out)
     protect = [args.video, args.pressure_log, args.model, args.rig]
     with run_outputs(protect) as outs:
         ex = extract.Extractor(cfg, args.out / "frames", outs.stage)
