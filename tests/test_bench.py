@@ -16,8 +16,9 @@ from procedural import write_dataset
 
 from contactcal.infer.bench import config as bench_config
 from contactcal.infer.bench import run as bench_run
-from contactcal.infer.bench.accuracy import from_record, onset_errors, to_record
+from contactcal.infer.bench.accuracy import from_record, to_record
 from contactcal.infer.bench.config import BenchConfig
+from contactcal.infer.bench.onset import onset_errors, onset_table
 from contactcal.infer.bench.plots import pareto_points
 from contactcal.infer.bench.report import (
     _timed_frames,
@@ -25,7 +26,7 @@ from contactcal.infer.bench.report import (
     coverage_table,
     hard_table,
     md_table,
-    onset_table,
+    report_text,
 )
 from contactcal.infer.bench.run import run_bench
 from contactcal.infer.bench.scoring import (
@@ -209,8 +210,8 @@ def test_tables_by_hand() -> None:
     assert rows["10-20"]["median_abs_rel_error"] == pytest.approx(0.01)
 
     onset = [
-        {"method": "m", "session": "s0", "onset_kpa": 5.0, "error_kpa": 2.0},
-        {"method": "m", "session": "s1", "onset_kpa": None, "error_kpa": None},
+        {"method": "m", "session": "s0", "onset_kpa": 5.0, "error_kpa": 2.0, "outcome": "found"},
+        {"method": "m", "session": "s1", "onset_kpa": None, "error_kpa": None, "outcome": "missed"},
     ]
     hard = {h["sessions"]: h for h in hard_table(frames, onset)}
     assert hard["normal"]["n"] == 1 and hard["hard"]["n"] == 1
@@ -220,7 +221,8 @@ def test_tables_by_hand() -> None:
     assert hard["normal"]["median_abs_onset_error_kpa"] == pytest.approx(2.0)
     assert hard["hard"]["median_abs_rel_error_ge5"] == pytest.approx(0.01)
     assert hard["hard"]["onset_missing"] == 1
-    assert onset_table(onset) == [{"method": "m", "median_abs": 2.0, "max_abs": 2.0}]
+    (row,) = onset_table(onset)
+    assert row["median_abs_error_kpa_found"] == row["max_abs_error_kpa_found"] == 2.0
     table = md_table([five], [("bin_kpa", "kPa", False), ("median_abs_rel_error", "err", True)])
     assert table.splitlines() == ["| kPa | err |", "|---|---|", "| 5-10 | 25.0 % |"]
 
@@ -244,6 +246,53 @@ def test_onset_errors_by_hand() -> None:
     assert row["onset_kpa"] == pytest.approx(3.0)
     assert row["truth_masks_onset_kpa"] == pytest.approx(3.0)
     assert row["mechanics_onset_kpa"] == 3.0 and row["error_kpa"] == pytest.approx(0.0)
+
+
+def test_the_onset_table_counts_every_session() -> None:
+    """A missed onset (true contact, none found) once dropped its session from the onset table's
+    median and max, and a correct "no contact" counted as "no onset found"."""
+    onset_at = {4.0: 40.0, 8.0: 80.0}  # true contact from 4 kPa on (onset 3 kPa)
+    frames = []
+    for session, contact, seen in (
+        ("found", True, True),
+        ("missed", True, False),
+        ("false", False, True),
+        ("none", False, False),
+    ):
+        for p in (0.0, 2.0, 4.0, 8.0):
+            true = onset_at.get(p, 0.0) if contact else 0.0
+            area = (onset_at.get(p, 0.0) or (30.0 if not contact and p else 0.0)) if seen else 0.0
+            frames.append(_frame(p, true, area, session=session))
+    onset = onset_errors(frames)
+    assert [o["outcome"] for o in onset] == ["false onset", "found", "missed", "no contact"]
+    (row,) = onset_table(onset)
+    assert {k: row[k] for k in ("sessions", "contact_sessions", "found", "missed")} == {
+        "sessions": 4,
+        "contact_sessions": 2,
+        "found": 1,
+        "missed": 1,
+    }
+    assert row["false_onsets"] == 1
+    found = next(o for o in onset if o["outcome"] == "found")
+    assert row["max_abs_error_kpa_found"] == pytest.approx(abs(found["error_kpa"]))
+    hard = hard_table(frames, onset)
+    assert [(h["onset_missing"], h["false_onsets"]) for h in hard] == [(1, 1)]
+    text = report_text(
+        {
+            "config": {"full_size": [8, 6], "repeats": 1, "timing_frames": 1},
+            "data": "d",
+            "sessions": 4,
+            "frames": 16,
+            "model": "shipped",
+            "reference": "none",
+            "timing": [],
+            "bins": [],
+            "coverage": [],
+            "hard": hard,
+            "onset_table": [row],
+        }
+    )
+    assert "| m | 4 | 2 | 1 |" in text and "| missed | 1 | 1 |" in text
 
 
 def test_pareto_points() -> None:

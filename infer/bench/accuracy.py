@@ -23,7 +23,6 @@ from contactcal.infer.bench.scoring import (
     outline_iou,
     session_revised,
 )
-from contactcal.infer.calibration.fit import estimate_onset
 from contactcal.infer.calibration.gate_check import REST_KPA
 from contactcal.infer.image.read import load_image
 from contactcal.infer.methods.base import Method
@@ -187,37 +186,6 @@ def evaluate(
 def variant_name(label: str) -> str:
     """Method name of a U-Net variant in the tables: ``unet[label]``."""
     return f"unet[{label}]"
-
-
-def onset_errors(frames: Sequence[ScoredFrame]) -> list[dict[str, Any]]:
-    """Per (method, session): onset estimated from the method's frames vs the truth.
-
-    Returns:
-        Rows with ``method``, ``session``, ``onset_kpa`` (estimated, None when no contact range
-        was found), ``truth_masks_onset_kpa`` (the same rule on the exact masks),
-        ``mechanics_onset_kpa`` and ``error_kpa`` (estimated − mechanics, or None).
-    """
-    groups: dict[tuple[str, str], list[ScoredFrame]] = {}
-    for f in frames:
-        groups.setdefault((f.method, f.session), []).append(f)
-    out = []
-    for (method, session), fs in sorted(groups.items()):
-        p = [f.pressure_kpa for f in fs]
-        est = estimate_onset(p, [f.area_px for f in fs], [f.contact for f in fs])
-        truth = estimate_onset(p, [f.true_area_px for f in fs], [f.true_contact for f in fs])
-        mech = fs[0].onset_kpa
-        error = None if est is None or mech is None else est - mech
-        out.append(
-            {
-                "method": method,
-                "session": session,
-                "onset_kpa": est,
-                "truth_masks_onset_kpa": truth,
-                "mechanics_onset_kpa": mech,
-                "error_kpa": error,
-            }
-        )
-    return out
 
 
 def to_record(frame: ScoredFrame) -> dict[str, Any]:

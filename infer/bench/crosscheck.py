@@ -12,8 +12,9 @@ from collections.abc import Mapping, Sequence
 from pathlib import Path
 from typing import Any
 
-from contactcal.infer.bench.accuracy import evaluate, onset_errors, to_record
+from contactcal.infer.bench.accuracy import evaluate, to_record
 from contactcal.infer.bench.dataset import IndexRow, read_index, sessions_of
+from contactcal.infer.bench.onset import ONSET_COLUMNS, onset_errors, onset_shown
 from contactcal.infer.bench.report import BIN_COLUMNS, HARD_COLUMNS, accuracy_tables, md_table
 from contactcal.infer.bench.scoring import ScoredFrame, bin_label, bin_row, covering_bins
 
@@ -55,7 +56,8 @@ def score_dataset(
 
     Returns:
         Its results (``label``, ``data``, ``sessions``, ``frames``, ``records``, ``onset``,
-        ``bins``, ``hard``, ``coverage``: the keys of the main dataset's results, less timing)
+        ``bins``, ``hard``, ``coverage``, ``onset_table``: the keys of the main dataset's
+        results, less timing)
         and the scored frames.
     """
     frames = evaluate(sessions, model, use_reference, variants)
@@ -129,6 +131,8 @@ def crosscheck_text(results: Mapping[str, Any], main_label: str) -> str:
         parts.append(
             f"## Cross-check `{c['label']}`: area error per pressure bin\n\n"
             + md_table(c["bins"], BIN_COLUMNS)
+            + f"\n\n## Cross-check `{c['label']}`: contact onset (as the main dataset's)\n\n"
+            + md_table(onset_shown(c["onset_table"]), ONSET_COLUMNS)
             + f"\n\n## Cross-check `{c['label']}`: hard cases\n\n"
             + md_table(c["hard"], HARD_COLUMNS)
         )

@@ -7,6 +7,15 @@ from collections.abc import Mapping, Sequence
 from pathlib import Path
 from typing import Any
 
+from contactcal.infer.bench.onset import (
+    FALSE_ONSET,
+    MISSED,
+    ONSET_COLUMNS,
+    ONSET_NOTE,
+    found_errors,
+    onset_shown,
+    onset_table,
+)
 from contactcal.infer.bench.plots import plot_error_vs_pressure, plot_pareto, plot_robustness
 from contactcal.infer.bench.scoring import (
     ScoredFrame,
@@ -51,11 +60,6 @@ COVERAGE_COLUMNS: Columns = (
     ("contact_coverage", "coverage (contact)", True),
     ("median_rel_width", "median rel. width", True),
 )
-ONSET_COLUMNS: Columns = (
-    ("method", "method", False),
-    ("median_abs", "median abs. error kPa", False),
-    ("max_abs", "max abs. error kPa", False),
-)
 HARD_COLUMNS: Columns = (
     ("method", "method", False),
     ("sessions", "sessions", False),
@@ -64,7 +68,8 @@ HARD_COLUMNS: Columns = (
     ("median_abs_rel_error_3to5", "median abs. rel. error 3-5 kPa", True),
     ("no_contact_accuracy", "no-contact acc.", True),
     ("median_abs_onset_error_kpa", "median abs. onset error kPa", False),
-    ("onset_missing", "no onset found", False),
+    ("onset_missing", "missed onset", False),
+    ("false_onsets", "false onset", False),
 )
 
 
@@ -172,10 +177,9 @@ def hard_table(
                         [abs(f.rel_error) for f in cont if 3 <= f.pressure_kpa < 5]
                     ),
                     "no_contact_accuracy": _no_contact_accuracy(fs),
-                    "median_abs_onset_error_kpa": median_or_none(
-                        [abs(o["error_kpa"]) for o in ons if o["error_kpa"] is not None]
-                    ),
-                    "onset_missing": sum(o["onset_kpa"] is None for o in ons),
+                    "median_abs_onset_error_kpa": median_or_none(found_errors(ons)),
+                    "onset_missing": sum(o["outcome"] == MISSED for o in ons),
+                    "false_onsets": sum(o["outcome"] == FALSE_ONSET for o in ons),
                 }
             )
     return out
@@ -199,25 +203,6 @@ def coverage_table(
             sel = [f for f in fs if lo <= f.pressure_kpa < hi]
             out.append({"method": method, "bin_kpa": bin_label(lo, hi), **coverage_row(sel)})
         out.append({"method": method, "bin_kpa": "all", **coverage_row(fs)})
-    return out
-
-
-def onset_table(onset: Sequence[Mapping[str, Any]]) -> list[dict[str, Any]]:
-    """Per method: median and max |onset error| (kPa) over the sessions where one was found."""
-    out = []
-    for method in sorted({o["method"] for o in onset}):
-        errs = [
-            abs(o["error_kpa"])
-            for o in onset
-            if o["method"] == method and o["error_kpa"] is not None
-        ]
-        out.append(
-            {
-                "method": method,
-                "median_abs": median_or_none(errs),
-                "max_abs": max(errs, default=None),
-            }
-        )
     return out
 
 
@@ -278,7 +263,8 @@ def _few_frames_note(bins: Sequence[Mapping[str, Any]]) -> str:
 
 
 def report_text(results: Mapping[str, Any]) -> str:
-    """``report.md`` from the results (with their ``bins``, ``hard`` and ``coverage`` tables)."""
+    """``report.md`` from the results (with their ``bins``, ``hard``, ``coverage`` and
+    ``onset_table`` tables)."""
     cfg = results["config"]
     w, h = cfg["full_size"]
     sections = [
@@ -307,7 +293,8 @@ def report_text(results: Mapping[str, Any]) -> str:
         "width\nover the true area, frames with true contact.\n\n"
         + md_table(results["coverage"], COVERAGE_COLUMNS),
         "## Contact onset (estimated from each method's frames vs the mechanics' onset)\n\n"
-        + md_table(onset_table(results["onset"]), ONSET_COLUMNS),
+        + f"{ONSET_NOTE}\n\n"
+        + md_table(onset_shown(results["onset_table"]), ONSET_COLUMNS),
         "## Hard cases\n\n" + md_table(results["hard"], HARD_COLUMNS),
     ]
     if "robustness" in results:
@@ -320,13 +307,15 @@ def accuracy_tables(
     onset: Sequence[Mapping[str, Any]],
     bins: Sequence[tuple[float, float]],
 ) -> dict[str, list[dict[str, Any]]]:
-    """The ``bins``, ``hard`` and ``coverage`` tables of one dataset's scored frames (the last
-    bin opened when a frame lies past it: :func:`~contactcal.infer.bench.scoring.covering_bins`)."""
+    """The ``bins``, ``hard``, ``coverage`` and ``onset_table`` (:func:`onset_table`) tables of
+    one dataset's scored frames (the last bin opened when a frame lies past it:
+    :func:`~contactcal.infer.bench.scoring.covering_bins`)."""
     bins = covering_bins([f.pressure_kpa for f in frames], bins)
     return {
         "bins": bin_table(frames, bins),
         "hard": hard_table(frames, onset),
         "coverage": coverage_table(frames, bins),
+        "onset_table": onset_table(onset),
     }
 
 
@@ -349,7 +338,7 @@ def write_report(
     bins: Sequence[tuple[float, float]],
     extra_text: str = "",
 ) -> None:
-    """Add the ``bins``, ``hard`` and ``coverage`` tables to ``results``; write ``results.json``,
+    """Add the tables of :func:`accuracy_tables` to ``results``; write ``results.json``,
     the figures (``error_vs_pressure.png``, ``pareto.png``, with ``robustness`` results also
     ``robustness.png`` and ``robustness_no_contact.png``) and ``report.md`` into ``out_dir``,
     all or nothing (:data:`REPORT_FILES`).

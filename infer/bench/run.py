@@ -14,12 +14,7 @@ from collections.abc import Sequence
 from pathlib import Path
 from typing import Any
 
-from contactcal.infer.bench.accuracy import (
-    check_references,
-    evaluate,
-    onset_errors,
-    to_record,
-)
+from contactcal.infer.bench.accuracy import check_references, evaluate, to_record
 from contactcal.infer.bench.config import BenchConfig
 from contactcal.infer.bench.crosscheck import (
     crosscheck_text,
@@ -29,6 +24,7 @@ from contactcal.infer.bench.crosscheck import (
     side_by_side,
 )
 from contactcal.infer.bench.dataset import IndexRow, check_distinct, read_index, sessions_of
+from contactcal.infer.bench.onset import onset_errors
 from contactcal.infer.bench.report import write_report
 from contactcal.infer.bench.robustness import run_robustness
 from contactcal.infer.bench.scoring import ScoredFrame
@@ -57,7 +53,8 @@ def run_bench(
     Returns:
         The content of ``results.json``: header keys, ``config``, ``records`` (one per method
         and frame, with the stated ``area_interval_px`` and ``covered``), ``onset``, ``timing``,
-        ``bins``, ``hard`` and ``coverage`` (per method and pressure bin); with ``crosscheck``
+        ``bins``, ``hard`` and ``coverage`` (per method and pressure bin), ``onset_table``
+        (per method: sessions covered, onsets found, missed, false onsets); with ``crosscheck``
         also ``crosscheck`` (one results object per dataset, with its ``label``) and
         ``side_by_side`` (per method and bin, every dataset's error, recall and no-contact
         accuracy); with ``config.robustness_frames`` also ``robustness``
