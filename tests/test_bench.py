@@ -18,6 +18,7 @@ from contactcal.infer.bench import config as bench_config
 from contactcal.infer.bench import run as bench_run
 from contactcal.infer.bench.accuracy import from_record, to_record
 from contactcal.infer.bench.config import BenchConfig
+from contactcal.infer.bench.crosscheck import labels
 from contactcal.infer.bench.onset import onset_errors, onset_table
 from contactcal.infer.bench.plots import pareto_points
 from contactcal.infer.bench.report import (
@@ -537,6 +538,24 @@ def test_cli_refuses_a_crosscheck_that_is_the_data_or_another_crosscheck(
         err = capsys.readouterr().err.strip().splitlines()
         assert len(err) == 1 and says in err[0], err
     assert not (tmp_path / "out").exists()
+
+
+def test_crosscheck_labels_are_distinct(tmp_path: Path) -> None:
+    """``--data a/set#2 --crosscheck b/set`` once labelled both ``set#2``: the side-by-side
+    table showed the cross-check's numbers under the main dataset's name."""
+    assert labels(["a/set#2", "b/set", "c/set", "d/set#2"]) == ["set#2", "set", "set#3", "set#2#2"]
+    assert labels(["x/set", "y/set", "z/set"]) == ["set", "set#2", "set#3"]
+    main_set = write_dataset(tmp_path / "a" / "set#2", fingers=1)
+    other = write_dataset(tmp_path / "b" / "set", fingers=1, seed=3)
+    res = run_bench(main_set, tmp_path / "out", None, TINY, [other])
+    assert res["crosscheck"][0]["label"] == "set"
+    row = next(r for r in res["side_by_side"] if r["method"] == "unet" and r["bin_kpa"] == "5-10")
+    main_row = next(b for b in res["bins"] if b["method"] == "unet" and b["bin_kpa"] == "5-10")
+    other_row = next(
+        b for b in res["crosscheck"][0]["bins"] if b["method"] == "unet" and b["bin_kpa"] == "5-10"
+    )
+    assert row["median_abs_rel_error@set#2"] == main_row["median_abs_rel_error"]
+    assert row["median_abs_rel_error@set"] == other_row["median_abs_rel_error"]
 
 
 def test_a_session_without_a_zero_pressure_frame_is_refused(

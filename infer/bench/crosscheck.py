@@ -29,12 +29,16 @@ SIDE_KEYS = (
 
 
 def labels(folders: Sequence[str | os.PathLike[str]]) -> list[str]:
-    """Short, distinct names of dataset folders: the folder name, ``#2``… on repeats."""
+    """Short, distinct names of dataset folders: the folder name, or ``<name>#2``, ``#3``… the
+    first not taken (a folder named ``set#2`` keeps its name; a later ``set`` is not it)."""
     out: list[str] = []
     for f in folders:
         name = Path(f).resolve().name or str(f)
-        n = sum(1 for o in out if o == name or o.startswith(name + "#"))
-        out.append(name if n == 0 else f"{name}#{n + 1}")
+        label, n = name, 1
+        while label in out:  # distinct, so no dataset's columns overwrite another's
+            n += 1
+            label = f"{name}#{n}"
+        out.append(label)
     return out
 
 
