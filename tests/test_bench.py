@@ -35,6 +35,7 @@ from contactcal.infer.bench.scoring import (
     ScoredFrame,
     bin_table,
     covering_bins,
+    not_references,
 )
 from contactcal.infer.cli import main
 from contactcal.infer.image.read import load_image
@@ -110,7 +111,7 @@ def test_bins_recomputed_from_records(bench: tuple[Path, Path, dict[str, Any]]) 
     res = json.loads((out / "results.json").read_text())
     frames = [from_record(r) for r in res["records"]]
     assert [to_record(f) for f in frames] == res["records"]
-    assert json.loads(json.dumps(bin_table(frames, PRESSURE_BINS))) == res["bins"]
+    assert json.loads(json.dumps(bin_table(not_references(frames), PRESSURE_BINS))) == res["bins"]
     assert json.loads(json.dumps(onset_errors(frames))) == res["onset"]
     # One bin by hand: median |relative error| of the U-Net's contact frames at 5-10 kPa.
     rel = sorted(
@@ -122,11 +123,16 @@ def test_bins_recomputed_from_records(bench: tuple[Path, Path, dict[str, Any]]) 
     row = next(b for b in res["bins"] if b["method"] == "unet" and b["bin_kpa"] == "5-10")
     assert row["contact_frames"] == 4
     assert row["median_abs_rel_error"] == pytest.approx((rel[1] + rel[2]) / 2)
-    # Below 3 kPa no frame has contact: only the no-contact accuracy is defined.
+    # Below 3 kPa no frame has contact: only the no-contact accuracy is defined, over the 2 kPa
+    # frames (the 0 kPa ones are the sessions' references, not scored).
     low = next(b for b in res["bins"] if b["method"] == "classical" and b["bin_kpa"] == "0-3")
-    none = [r for r in res["records"] if r["method"] == "classical" and r["pressure_kpa"] < 3]
-    assert low["median_abs_rel_error"] is None and low["no_contact_frames"] == len(none) == 8
-    expected = sum(not r["contact"] for r in none) / 8
+    none = [
+        r
+        for r in res["records"]
+        if r["method"] == "classical" and r["pressure_kpa"] < 3 and not r["reference"]
+    ]
+    assert low["median_abs_rel_error"] is None and low["no_contact_frames"] == len(none) == 4
+    expected = sum(not r["contact"] for r in none) / 4
     assert low["no_contact_accuracy"] == pytest.approx(expected)
 
 
@@ -143,13 +149,32 @@ def test_interval_coverage(bench: tuple[Path, Path, dict[str, Any]]) -> None:
             assert iv is None and r["covered"] is None
     rows = [c for c in res["coverage"] if c["method"] == "unet"]
     assert [c["bin_kpa"] for c in rows] == ["0-3", "3-5", "5-10", "10-20", "all"]
-    unet = [r for r in res["records"] if r["method"] == "unet"]
-    assert rows[-1]["frames"] == 20
-    assert rows[-1]["coverage"] == pytest.approx(sum(r["covered"] for r in unet) / 20)
+    unet = [r for r in res["records"] if r["method"] == "unet" and not r["reference"]]
+    assert rows[-1]["frames"] == 16  # 20 frames less the 4 sessions' references
+    assert rows[-1]["coverage"] == pytest.approx(sum(r["covered"] for r in unet) / 16)
     assert {"method": "classical", "bin_kpa": "no interval"} in res["coverage"]
     report = (out / "report.md").read_text(encoding="utf-8")
     assert "## Coverage of the stated area interval" in report
-    assert "| classical | no interval |" in report and "| unet | all | 20 |" in report
+    assert "| classical | no interval |" in report and "| unet | all | 16 |" in report
+
+
+def test_reference_frames_are_marked_and_not_scored(
+    bench: tuple[Path, Path, dict[str, Any]],
+) -> None:
+    """Each session's reference frame, measured against itself, once landed in the 0-3 kPa bin
+    and the no-contact accuracy unsaid; its record stays, marked."""
+    _, out, res = bench
+    pairs = {(r["method"], r["session"]) for r in res["records"]}
+    refs = [r for r in res["records"] if r["reference"]]
+    assert len(refs) == len(pairs) == 16 and {(r["method"], r["session"]) for r in refs} == pairs
+    for r in refs:  # the record h15_rule.py drops: its (method, session)'s lowest pressure
+        same = [
+            x for x in res["records"] if (x["method"], x["session"]) == (r["method"], r["session"])
+        ]
+        assert r["pressure_kpa"] == min(x["pressure_kpa"] for x in same) == 0.0
+    assert sum(b["frames"] for b in res["bins"]) == len(res["records"]) - 16
+    report = (out / "report.md").read_text(encoding="utf-8")
+    assert report.count("reference frame is not scored") == 1
 
 
 def test_coverage_table_by_hand() -> None:
@@ -374,7 +399,10 @@ def test_no_reference_mode(bench: tuple[Path, Path, dict[str, Any]], tmp_path: P
     cfg = BenchConfig(repeats=1, timing_frames=1, full_size=(128, 96), threads=(1,))
     res = run_bench(data, tmp_path / "out", config=dataclasses_replace(cfg, use_reference=False))
     assert with_ref["reference"] == "session zero-pressure frame" and res["reference"] == "none"
-    assert "Reference frame: none." in (tmp_path / "out" / "report.md").read_text()
+    report = (tmp_path / "out" / "report.md").read_text()
+    assert "Reference frame: none." in report and "is not scored" not in report
+    assert not any(r["reference"] for r in res["records"])  # every frame is a frame like any
+    assert sum(b["frames"] for b in res["bins"]) == len(res["records"])
     key = lambda r: (r["method"], r["frame"])  # noqa: E731
     a = {key(r): r["area_px"] for r in with_ref["records"]}
     b = {key(r): r["area_px"] for r in res["records"]}

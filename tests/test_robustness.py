@@ -118,7 +118,7 @@ def test_speck_bright_near_the_centre_and_in_the_reference_too(
     with pytest.raises(ValueError, match="window speck level"):
         speck(frame, 1.5, np.random.default_rng(0), ring=ring)
     data = write_dataset(tmp_path / "d", fingers=1)
-    row, ref = sample_rows(sessions_of(read_index(data)), 5)[3]
+    row, ref = sample_rows(sessions_of(read_index(data)), 5)[2]
     s = load_sample(row, ref)
     s = Sample(s.row, s.reference.copy(), s.reference, s.mask, s.ring)  # frame == reference
     by_name = {p.name: p for p in PERTURBATIONS}
@@ -147,7 +147,7 @@ def test_suite_draws_the_same_speck_at_every_level(tmp_path: Path) -> None:
     """Paired draws: the speck's levels differ in strength, not in place; the dimmed sector (not
     paired) draws its sector anew at each level."""
     data = write_dataset(tmp_path / "d", fingers=1)
-    row, ref = sample_rows(sessions_of(read_index(data)), 5)[3]
+    row, ref = sample_rows(sessions_of(read_index(data)), 5)[2]
     recorder = _Recorder()
     measure_suite([load_sample(row, ref)], [recorder], seed=4)
     frames = iter(recorder.frames)
@@ -167,7 +167,7 @@ def test_suite_draws_the_same_speck_at_every_level(tmp_path: Path) -> None:
 
 def test_noise_reference_independent_others_same(tmp_path: Path) -> None:
     data = write_dataset(tmp_path / "d", fingers=1)
-    row, ref = sample_rows(sessions_of(read_index(data)), 5)[3]  # the 8 kPa frame
+    row, ref = sample_rows(sessions_of(read_index(data)), 5)[2]  # the 8 kPa frame
     s = load_sample(row, ref)
     s = Sample(s.row, s.reference.copy(), s.reference, s.mask, s.ring)  # frame == reference
     by_name = {p.name: p for p in PERTURBATIONS}
@@ -184,14 +184,19 @@ def test_noise_reference_independent_others_same(tmp_path: Path) -> None:
 def test_sampling_spread_and_deterministic(tmp_path: Path) -> None:
     data = write_dataset(tmp_path / "d", fingers=4)
     sessions = sessions_of(read_index(data))
-    pairs = sample_rows(sessions, 8)
-    assert pairs == sample_rows(sessions, 8) and len(pairs) == 8
-    assert {r.pressure_kpa for r, _ in pairs} == {0.0, 2.0, 4.0, 8.0, 14.0}
+    # 7 of the 16 frames past the references (8 would step by 2 over 4 sessions: 2 sessions)
+    pairs = sample_rows(sessions, 7)
+    assert pairs == sample_rows(sessions, 7) and len(pairs) == 7
+    assert {r.pressure_kpa for r, _ in pairs} == {2.0, 4.0, 8.0, 14.0}
     assert len({r.session for r, _ in pairs}) == 4
     assert all(ref == sessions[r.session_key][0] for r, ref in pairs)
-    assert len(sample_rows(sessions, 100)) == 20
+    every = sample_rows(sessions, 100)  # all 20 frames but the 4 references: a reference would
+    assert len(every) == 16 and all(r != ref for r, ref in every)  # be its own ("same") one
     with pytest.raises(ValueError, match=">= 1 frame"):
         sample_rows(sessions, 0)
+    only = {k: v[:1] for k, v in sessions.items()}
+    with pytest.raises(ValueError, match="index.csv: every session holds its reference frame only"):
+        sample_rows(only, 4)
 
 
 @pytest.fixture(scope="module")

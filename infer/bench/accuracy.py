@@ -35,7 +35,8 @@ def score_session(
     """Measure one session (``rows`` sorted by pressure; the first is its reference frame).
 
     With ``use_reference=False`` the method gets no reference frame (as ``measure`` without
-    ``--reference``); the frames are the same.
+    ``--reference``); the frames are the same. With it, the first frame is measured against
+    itself: its frames are marked ``reference`` (left out of the tables, kept for the onset).
 
     Returns:
         One :class:`ScoredFrame` per frame, plus one ``"<name> (soft area)"`` frame per frame for
@@ -44,7 +45,7 @@ def score_session(
     """
     k = method.start([r.frame for r in rows], rows[0].frame if use_reference else None).reduction
     out: list[ScoredFrame] = []
-    for r in rows:
+    for i, r in enumerate(rows):
         gray = load_image(r.frame, reduce=k)
         res = method.measure(gray)
         truth = _truth(r, (gray.shape[0] * k, gray.shape[1] * k))  # k divides the file's size
@@ -61,6 +62,7 @@ def score_session(
             hard=r.hard,
             area_interval_px=res.area_interval_px,
             iou=None if truth is None else outline_iou(res, truth),
+            reference=use_reference and i == 0,
         )
         out.append(scored)
         if res.soft_area_px is not None or name.startswith("unet"):

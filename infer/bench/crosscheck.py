@@ -16,7 +16,13 @@ from contactcal.infer.bench.accuracy import evaluate, to_record
 from contactcal.infer.bench.dataset import IndexRow, read_index, sessions_of
 from contactcal.infer.bench.onset import ONSET_COLUMNS, onset_errors, onset_shown
 from contactcal.infer.bench.report import BIN_COLUMNS, HARD_COLUMNS, accuracy_tables, md_table
-from contactcal.infer.bench.scoring import ScoredFrame, bin_label, bin_row, covering_bins
+from contactcal.infer.bench.scoring import (
+    ScoredFrame,
+    bin_label,
+    bin_row,
+    covering_bins,
+    not_references,
+)
 
 #: Bin of the side-by-side table that pools every frame at or above 5 kPa, kPa.
 POOLED_FROM_KPA = 5.0
@@ -84,13 +90,15 @@ def side_by_side(
     """Per method and pressure bin (plus ``≥5`` pooled): :data:`SIDE_KEYS` of every dataset.
 
     Args:
-        scored: dataset label → its scored frames (in report order).
+        scored: dataset label → its scored frames (in report order); the sessions' reference
+            frames are left out (:func:`~contactcal.infer.bench.scoring.not_references`).
         bins: pressure bins, kPa, ``[lo, hi)``.
 
     Returns:
         Rows with ``method``, ``bin_kpa`` and ``"<key>@<label>"`` per dataset (None where a
         quantity has no frames).
     """
+    scored = {label: not_references(fs) for label, fs in scored.items()}
     methods = sorted({f.method for fs in scored.values() for f in fs})
     bins = covering_bins([f.pressure_kpa for fs in scored.values() for f in fs], bins)
     ranges = [(bin_label(lo, hi), lo, hi) for lo, hi in bins]

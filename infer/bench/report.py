@@ -7,6 +7,7 @@ from collections.abc import Mapping, Sequence
 from pathlib import Path
 from typing import Any
 
+from contactcal.infer.bench.config import SESSION_REFERENCE
 from contactcal.infer.bench.onset import (
     FALSE_ONSET,
     MISSED,
@@ -24,6 +25,7 @@ from contactcal.infer.bench.scoring import (
     coverage_row,
     covering_bins,
     median_or_none,
+    not_references,
 )
 from contactcal.infer.bench.timing import TIMED_KPA
 from contactcal.infer.files.atomic import run_outputs, write_json, write_text
@@ -262,6 +264,18 @@ def _few_frames_note(bins: Sequence[Mapping[str, Any]]) -> str:
     )
 
 
+def _reference_note(results: Mapping[str, Any]) -> str:
+    """With reference frames: the sentence saying they are not scored ("" without)."""
+    if results["reference"] != SESSION_REFERENCE:
+        return ""
+    return (
+        "\nEach session's reference frame is not scored (it is measured against itself): the "
+        "error, coverage and\nhard-case tables, the figures and the robustness sample leave it "
+        "out; the onset reads whole\nsessions. Its records in `results.json` say "
+        '`"reference": true`.'
+    )
+
+
 def report_text(results: Mapping[str, Any]) -> str:
     """``report.md`` from the results (with their ``bins``, ``hard``, ``coverage`` and
     ``onset_table`` tables)."""
@@ -271,9 +285,9 @@ def report_text(results: Mapping[str, Any]) -> str:
         "# contactcal benchmark\n\n"
         f"Data: `{results['data']}` — {results['sessions']} sessions, {results['frames']} frames.\n"
         f"Model: `{results['model']}`{_digests(results)}. Reference frame: "
-        f"{results['reference']}. Areas are compared in input pixels with the exact masks; "
-        "relative\nerrors and the IoU of the method's outline with the mask over frames with true "
-        "contact. Timing: median of "
+        f"{results['reference']}.{_reference_note(results)} Areas are compared in input pixels "
+        "with the exact masks; relative\nerrors and the IoU of the method's outline with the "
+        "mask over frames with true contact. Timing: median of "
         f"{cfg['repeats']} runs over\n{_timed_frames(results)} frames upscaled to {w}×{h}, "
         "in one process. Rows `(soft area)`: the same prediction measured by its probability\n"
         "mass; rows `(session rule)`: the same frames after `calibrate`'s session rule (a region "
@@ -309,12 +323,15 @@ def accuracy_tables(
 ) -> dict[str, list[dict[str, Any]]]:
     """The ``bins``, ``hard``, ``coverage`` and ``onset_table`` (:func:`onset_table`) tables of
     one dataset's scored frames (the last bin opened when a frame lies past it:
-    :func:`~contactcal.infer.bench.scoring.covering_bins`)."""
-    bins = covering_bins([f.pressure_kpa for f in frames], bins)
+    :func:`~contactcal.infer.bench.scoring.covering_bins`). The sessions' reference frames are
+    left out of the tables (:func:`~contactcal.infer.bench.scoring.not_references`); ``onset``
+    was estimated from whole sessions."""
+    scored = not_references(frames)
+    bins = covering_bins([f.pressure_kpa for f in scored], bins)
     return {
-        "bins": bin_table(frames, bins),
-        "hard": hard_table(frames, onset),
-        "coverage": coverage_table(frames, bins),
+        "bins": bin_table(scored, bins),
+        "hard": hard_table(scored, onset),
+        "coverage": coverage_table(scored, bins),
         "onset_table": onset_table(onset),
     }
 
@@ -357,7 +374,7 @@ def write_report(
     text = report_text(results)
     with run_outputs() as outputs:  # every file of the report, or none
         write_json(outputs.stage(out / "results.json"), results)
-        plot_error_vs_pressure(outputs.stage(out / "error_vs_pressure.png"), frames)
+        plot_error_vs_pressure(outputs.stage(out / "error_vs_pressure.png"), not_references(frames))
         pareto = outputs.stage(out / "pareto.png")
         plot_pareto(pareto, results["bins"], results["timing"], (size[0], size[1]))
         if "robustness" in results:

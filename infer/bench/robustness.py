@@ -1,8 +1,9 @@
 """Robustness suite of ``contactcal bench --robustness``: every method's error per level of each
 perturbation (:mod:`~contactcal.infer.bench.perturb`) of a bounded sample of held-out frames.
 
-Frames are sampled deterministically: all frames of all sessions (reference frames included, as
-in the accuracy tables) ordered by pressure then session, ``n`` taken evenly spaced. Each is
+Frames are sampled deterministically: all frames of all sessions but their reference frames (one
+would be its own reference under the "same"-reference perturbations; the accuracy tables leave
+them out too) ordered by pressure then session, ``n`` taken evenly spaced. Each is
 perturbed at each level (its session's reference as the perturbation says), and measured by
 each method from decoded arrays (``set_reference`` then ``measure``; no reduced JPEG decode).
 A level's random draws come from ``numpy.random.default_rng([seed, frame, perturbation, level,
@@ -57,18 +58,29 @@ class Sample:
 def sample_rows(
     sessions: Mapping[str, Sequence[IndexRow]], n: int
 ) -> list[tuple[IndexRow, IndexRow]]:
-    """``n`` (frame, reference) row pairs spread evenly over pressures and sessions.
+    """``n`` (frame, reference) row pairs spread evenly over pressures and sessions, never a
+    session's reference frame itself.
 
     Args:
         sessions: rows per session, sorted by pressure (the first is the reference).
-        n: frames wanted (>= 1); all frames when the dataset has fewer.
+        n: frames wanted (>= 1); all frames but the references when the dataset has fewer.
+
+    Raises:
+        ValueError: ``n < 1``, or no session has a frame besides its reference (naming the
+            dataset's ``index.csv``).
     """
     if n < 1:
         raise ValueError(f"the robustness suite needs >= 1 frame, got {n}")
     pool = sorted(
-        ((r, rows[0]) for rows in sessions.values() for r in rows),
+        ((r, rows[0]) for rows in sessions.values() for r in rows[1:]),
         key=lambda pair: (pair[0].pressure_kpa, pair[0].session_key, str(pair[0].frame)),
     )
+    if not pool:
+        first = next(iter(sessions.values()))[0]
+        raise ValueError(
+            f"{first.dataset / 'index.csv'}: every session holds its reference frame only; the "
+            "robustness suite needs frames besides each session's 0 kPa frame"
+        )
     if n >= len(pool):
         return pool
     return [pool[int((i + 0.5) * len(pool) / n)] for i in range(n)]

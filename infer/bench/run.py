@@ -15,7 +15,7 @@ from pathlib import Path
 from typing import Any
 
 from contactcal.infer.bench.accuracy import check_references, evaluate, to_record
-from contactcal.infer.bench.config import BenchConfig
+from contactcal.infer.bench.config import SESSION_REFERENCE, BenchConfig
 from contactcal.infer.bench.crosscheck import (
     crosscheck_text,
     labels,
@@ -79,7 +79,7 @@ def run_bench(
     results: dict[str, Any] = {
         "data": str(Path(data).resolve()),
         "model": "shipped" if model is None else os.fspath(model),
-        "reference": "session zero-pressure frame" if config.use_reference else "none",
+        "reference": SESSION_REFERENCE if config.use_reference else "none",
         "models": model_digests(model, config.variants),
         "sessions": len(sessions),
         "frames": sum(len(v) for v in sessions.values()),
