@@ -293,6 +293,32 @@ def test_off_by_default_and_cli(
         BenchConfig(robustness_frames=-1)
 
 
+def test_variants_left_out_of_the_suite_are_said(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """A --variant was silently left out of the robustness suite."""
+    from contactcal.infer.methods.unet.runner import DEFAULT_MODEL
+
+    data = write_dataset(tmp_path / "data", fingers=1)
+    tiny = functools.partial(BenchConfig, full_size=TINY.full_size, threads=TINY.threads)
+    monkeypatch.setattr(bench_config, "BenchConfig", tiny)
+    monkeypatch.setattr(bench_run, "BenchConfig", tiny)
+    args = ["bench", "--data", str(data), "--repeats", "1", "--timing-frames", "1"]
+    args += ["--robustness", "--robustness-frames", "1"]
+    out = tmp_path / "v"
+    assert main([*args, "--out", str(out), "--variant", f"copy={DEFAULT_MODEL}"]) == 0
+    said = "--robustness measures --model and the classical routine only; variants unet[copy] "
+    said += "were not perturbed"
+    assert capsys.readouterr().err.splitlines().count(f"note: {said}") == 1
+    assert f"{said}." in (out / "report.md").read_text(encoding="utf-8")
+    rob = json.loads((out / "results.json").read_text())["robustness"]
+    assert rob["not_perturbed"] == ["unet[copy]"]
+    assert {r["method"] for r in rob["rows"]} == {"unet", "classical"}
+    assert main([*args, "--out", str(tmp_path / "plain")]) == 0
+    assert "not perturbed" not in capsys.readouterr().err
+    assert "not perturbed" not in (tmp_path / "plain" / "report.md").read_text(encoding="utf-8")
+
+
 def test_randomised_ranges_mark_the_levels_where_the_target_applies() -> None:
     """Baselines are always in range; the documented ranges include the levels they name and
     exclude the extremes beyond them; offset is not randomised at all."""

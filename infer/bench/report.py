@@ -18,6 +18,7 @@ from contactcal.infer.bench.onset import (
     onset_table,
 )
 from contactcal.infer.bench.plots import plot_error_vs_pressure, plot_pareto, plot_robustness
+from contactcal.infer.bench.robustness import unperturbed_note
 from contactcal.infer.bench.scoring import (
     ScoredFrame,
     bin_label,
@@ -104,6 +105,12 @@ def _ratio(row: Mapping[str, Any]) -> str | None:
     return text if interval is None else f"{text} ({interval[0]:.2f}-{interval[1]:.2f})"
 
 
+def _unperturbed(rob: Mapping[str, Any]) -> str:
+    """The sentence naming the ``--variant`` models the suite left out ("" for none)."""
+    note = unperturbed_note(rob.get("not_perturbed", []))
+    return f"\n\n{note}." if note else ""
+
+
 def robustness_text(rob: Mapping[str, Any]) -> str:
     """The report's robustness section: one table row per perturbation and level, each method's
     error at ≥ 5 kPa, its ratio to the baseline level and its no-contact accuracy."""
@@ -139,7 +146,9 @@ def robustness_text(rob: Mapping[str, Any]) -> str:
         f"The reference frame per perturbation:\n\n{refs}\n\n"
         "randomised: the level lies inside what the training renders or augmentation randomise "
         "(`suite.PERTURBATIONS`),\nwhere the error target (≤ 2× the unperturbed error) "
-        "applies.\n\n"
+        "applies."
+        + _unperturbed(rob)
+        + "\n\n"
         + _worst_in_range(rob["rows"], methods)
         + "\n\n"
         + md_table(list(table.values()), cols)

@@ -246,18 +246,38 @@ def summary_rows(
     return rows
 
 
+def unperturbed_note(methods: Sequence[str]) -> str:
+    """The sentence that ``methods`` (``--variant`` models) were left out of the suite ("" for
+    none): the suite measures ``--model`` and the classical routine only (each method costs ~50
+    perturbed measurements per frame)."""
+    if not methods:
+        return ""
+    return (
+        "--robustness measures --model and the classical routine only; variants "
+        f"{', '.join(methods)} were not perturbed"
+    )
+
+
 def run_robustness(
     sessions: Mapping[str, Sequence[IndexRow]],
     model: str | os.PathLike[str] | None,
     frames: int,
     seed: int = 0,
+    not_perturbed: Sequence[str] = (),
 ) -> dict[str, Any]:
     """The robustness suite on ``frames`` sampled frames (see the module docstring).
 
+    Args:
+        sessions: rows per session, sorted by pressure (the first is the reference).
+        model: the U-Net's ONNX model (None: the shipped one).
+        frames: frames to sample.
+        seed: seed of the random perturbations.
+        not_perturbed: the methods of the run the suite leaves out (``--variant`` models).
+
     Returns:
         ``results.json``'s ``"robustness"``: ``frames`` (the sampled files), ``seed``,
-        ``perturbations`` (name, levels, labels, baseline, unit, reference handling) and
-        ``rows`` (:func:`summary_rows`).
+        ``perturbations`` (name, levels, labels, baseline, unit, reference handling), ``rows``
+        (:func:`summary_rows`) and ``not_perturbed``.
     """
     samples = [load_sample(r, ref) for r, ref in sample_rows(sessions, frames)]
     methods = [make_method(name, model, threads=1) for name in METHODS]
@@ -278,4 +298,5 @@ def run_robustness(
             for p in PERTURBATIONS
         ],
         "rows": summary_rows(scored, METHODS, seed),
+        "not_perturbed": list(not_perturbed),
     }

@@ -14,7 +14,7 @@ from collections.abc import Sequence
 from pathlib import Path
 from typing import Any
 
-from contactcal.infer.bench.accuracy import check_references, evaluate, to_record
+from contactcal.infer.bench.accuracy import check_references, evaluate, to_record, variant_name
 from contactcal.infer.bench.config import SESSION_REFERENCE, BenchConfig
 from contactcal.infer.bench.crosscheck import (
     crosscheck_text,
@@ -94,7 +94,11 @@ def run_bench(
     }
     if config.robustness_frames:
         results["robustness"] = run_robustness(
-            sessions, model, config.robustness_frames, config.seed
+            sessions,
+            model,
+            config.robustness_frames,
+            config.seed,
+            [variant_name(label) for label, _ in config.variants],
         )
     extra = ""
     if crosscheck:
@@ -109,7 +113,7 @@ def model_digests(
     """Which files were measured: ``{"unet" | "unet[label]": {"path", "sha256"}}``, the
     method names of the records (the shipped model's path is the installed file's)."""
     files = {"unet": DEFAULT_MODEL if model is None else Path(model)}
-    files |= {f"unet[{label}]": Path(path) for label, path in variants}
+    files |= {variant_name(label): Path(path) for label, path in variants}
     return {k: {"path": os.fspath(v), "sha256": sha256_file(v)} for k, v in files.items()}
 
 
