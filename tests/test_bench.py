@@ -607,6 +607,35 @@ def test_a_session_without_a_zero_pressure_frame_is_refused(
     assert res["reference"] == "none" and res["frames"] == 3
 
 
+def test_a_broken_crosscheck_set_fails_before_any_work(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """A cross-check set's unreadable frame or mismatched mask was found only when the set was
+    scored, after the main dataset's scoring, timing and robustness suite."""
+    import cv2
+    import numpy as np
+
+    from contactcal.infer.bench.dataset import read_index
+
+    def work(*_: Any, **__: Any) -> None:
+        raise AssertionError("scored or timed before every dataset was checked")
+
+    for name in ("evaluate", "timing", "run_robustness"):
+        monkeypatch.setattr(bench_run, name, work)
+    data = write_dataset(tmp_path / "d", fingers=1)
+    other = write_dataset(tmp_path / "o", fingers=2, seed=2)
+    rows = read_index(other)
+    rows[3].frame.write_bytes(b"not an image")
+    with pytest.raises(ValueError, match=f"{rows[3].frame}: not a PNG file"):
+        run_bench(data, tmp_path / "out", None, TINY, [other])
+    cv2.imwrite(str(rows[3].frame), load_image(rows[2].frame))  # readable again
+    mask = np.zeros((50, 70), np.uint8)  # a no-contact frame's mask of another size
+    cv2.imwrite(str(rows[0].mask), mask)
+    with pytest.raises(ValueError, match=f"{rows[0].mask}: 70x50 px but its frame"):
+        run_bench(data, tmp_path / "out", None, TINY, [other])
+    assert not (tmp_path / "out").exists()
+
+
 def test_a_mask_of_another_size_than_its_frame_is_named(tmp_path: Path) -> None:
     """Once scored when its pixel count matched the index, else blamed on the count."""
     import cv2

@@ -16,6 +16,7 @@ from typing import Any
 import numpy as np
 
 from contactcal.infer.bench.dataset import IndexRow
+from contactcal.infer.bench.preflight import check_mask_size
 from contactcal.infer.bench.scoring import (
     SESSION_SUFFIX,
     SOFT_SUFFIX,
@@ -23,7 +24,6 @@ from contactcal.infer.bench.scoring import (
     outline_iou,
     session_revised,
 )
-from contactcal.infer.calibration.gate_check import REST_KPA
 from contactcal.infer.image.read import load_image
 from contactcal.infer.methods.base import Method
 from contactcal.infer.methods.registry import METHODS, make_method
@@ -73,34 +73,6 @@ def score_session(
     return out + session_ruled([f for f in out if f.method == name])
 
 
-def check_references(
-    sessions: Mapping[str, Sequence[IndexRow]], for_robustness: bool = False
-) -> None:
-    """Refuse a session without a frame at rest (at most :data:`REST_KPA`) to be its reference.
-
-    Args:
-        sessions: rows per session, sorted by pressure (the first is the reference).
-        for_robustness: the references are for the robustness suite only (``--no-reference
-            --robustness``): the message's advice says so.
-
-    Raises:
-        ValueError: naming the ``index.csv``, the session and its lowest pressure.
-    """
-    for rows in sessions.values():
-        ref = rows[0]
-        if ref.pressure_kpa > REST_KPA:
-            raise ValueError(
-                f"{ref.dataset / 'index.csv'}: session {ref.session} has no 0 kPa frame (its "
-                f"lowest pressure is {ref.pressure_kpa:g} kPa); bench needs each session's 0 kPa "
-                f"frame (at most {REST_KPA:g} kPa) as reference"
-                + (
-                    " for the robustness suite: add one, or run without --robustness"
-                    if for_robustness
-                    else ": add one, or run with --no-reference (and without --robustness)"
-                )
-            )
-
-
 def _truth(row: IndexRow, frame_shape: tuple[int, int]) -> np.ndarray | None:
     """``(H, W)`` bool exact mask of a frame with contact (None without), checked against its
     frame's ``(H, W)`` (px of the file) and the index: a damaged dataset would otherwise score a
@@ -113,12 +85,7 @@ def _truth(row: IndexRow, frame_shape: tuple[int, int]) -> np.ndarray | None:
     if not row.contact:
         return None
     truth = load_image(row.mask) > 0
-    (mh, mw), (fh, fw) = truth.shape, frame_shape
-    if (mh, mw) != (fh, fw):
-        raise ValueError(
-            f"{row.mask}: {mw}x{mh} px but its frame {row.frame} is {fw}x{fh} px; expected a "
-            "mask of its frame's size (render the session again)"
-        )
+    check_mask_size(row, (truth.shape[0], truth.shape[1]), frame_shape)
     if int(np.count_nonzero(truth)) != round(row.area_px):
         raise ValueError(
             f"{row.mask}: holds {int(np.count_nonzero(truth))} contact px but index.csv of "

@@ -14,7 +14,7 @@ from collections.abc import Sequence
 from pathlib import Path
 from typing import Any
 
-from contactcal.infer.bench.accuracy import check_references, evaluate, to_record, variant_name
+from contactcal.infer.bench.accuracy import evaluate, to_record, variant_name
 from contactcal.infer.bench.config import SESSION_REFERENCE, BenchConfig
 from contactcal.infer.bench.crosscheck import (
     crosscheck_text,
@@ -25,6 +25,7 @@ from contactcal.infer.bench.crosscheck import (
 )
 from contactcal.infer.bench.dataset import IndexRow, check_distinct, read_index, sessions_of
 from contactcal.infer.bench.onset import onset_errors
+from contactcal.infer.bench.preflight import check_datasets
 from contactcal.infer.bench.report import write_report
 from contactcal.infer.bench.robustness import run_robustness
 from contactcal.infer.bench.scoring import ScoredFrame
@@ -63,17 +64,15 @@ def run_bench(
     Raises:
         ValueError: unusable dataset folder (the message names the file), or a cross-check
             folder that is ``data`` or another cross-check folder, or a session without a 0 kPa
-            reference frame (:func:`~contactcal.infer.bench.accuracy.check_references`).
+            reference frame, or a frame or mask file that is not a readable image or a mask of
+            another size than its frame (:func:`~contactcal.infer.bench.preflight.check_datasets`).
     """
     config = config or BenchConfig()
     names = [f"--data {data}", *(f"--crosscheck {c}" for c in crosscheck)]
     check_distinct([data, *crosscheck], names)  # a copy would be scored as "<name>#2"
     sessions = sessions_of(read_index(data))
-    others = [read_sessions(c) for c in crosscheck]  # every folder checked before any work
-    if config.use_reference or config.robustness_frames:  # robustness always uses references
-        check_references(sessions, for_robustness=not config.use_reference)
-    for other in others if config.use_reference else []:
-        check_references(other)
+    others = [read_sessions(c) for c in crosscheck]
+    check_datasets(sessions, others, config)  # every folder checked before any work
     frames = evaluate(sessions, model, config.use_reference, config.variants)
     onset = onset_errors(frames)
     results: dict[str, Any] = {
