@@ -636,6 +636,27 @@ def test_a_broken_crosscheck_set_fails_before_any_work(
     assert not (tmp_path / "out").exists()
 
 
+def test_a_frame_of_another_size_than_its_reference_is_named(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """Once ``reference frame size 64×48 differs from the frame size 128×96``: no file named."""
+    import cv2
+
+    from contactcal.infer.bench.dataset import read_index
+
+    data = write_dataset(tmp_path / "d", fingers=1)
+    ref, big = read_index(data)[:2]  # 0 and 2 kPa: no contact, so an empty mask at any size
+    for path in (big.frame, big.mask):
+        cv2.imwrite(str(path), cv2.resize(load_image(path), (128, 96)))
+    argv = ["bench", "--data", str(data), "--out", str(tmp_path / "out"), "--repeats", "1"]
+    assert main([*argv, "--timing-frames", "1"]) == 2
+    (err,) = capsys.readouterr().err.strip().splitlines()
+    assert f"{big.frame}: 128x96 px but the reference frame of its session finger_0000, " in err
+    assert f"{ref.frame}, is 64x48 px" in err and not (tmp_path / "out").exists()
+    res = run_bench(data, tmp_path / "o", config=dataclasses_replace(TINY, use_reference=False))
+    assert res["frames"] == 5  # without references the sizes need not agree
+
+
 def test_a_mask_of_another_size_than_its_frame_is_named(tmp_path: Path) -> None:
     """Once scored when its pixel count matched the index, else blamed on the count."""
     import cv2

@@ -33,12 +33,14 @@ def check_datasets(
     Raises:
         ValueError: :func:`check_references` or :func:`check_files`, naming the file.
     """
-    if config.use_reference or config.robustness_frames:
+    main_refs = config.use_reference or bool(config.robustness_frames)
+    if main_refs:
         check_references(sessions, for_robustness=not config.use_reference)
     for other in others if config.use_reference else []:
         check_references(other)
-    for each in (sessions, *others):
-        check_files(each)
+    check_files(sessions, main_refs)
+    for other in others:
+        check_files(other, config.use_reference)
 
 
 def check_references(
@@ -100,13 +102,27 @@ def check_mask_size(row: IndexRow, mask: tuple[int, int], frame: tuple[int, int]
         )
 
 
-def check_files(sessions: Mapping[str, Sequence[IndexRow]]) -> None:
-    """Every frame and mask of a dataset is a readable image (:func:`file_size`) and each mask
-    is of its frame's size.
+def check_files(sessions: Mapping[str, Sequence[IndexRow]], with_reference: bool) -> None:
+    """Every frame and mask of a dataset is a readable image (:func:`file_size`), each mask is of
+    its frame's size and, ``with_reference``, each frame of its session's reference's size (the
+    U-Net once refused another size without naming the frame).
+
+    Args:
+        sessions: rows per session, sorted by pressure (the first is the reference).
+        with_reference: the frames are measured against their session's first frame.
 
     Raises:
-        ValueError: naming the file.
+        ValueError: naming the file (and the session and its reference frame).
     """
     for rows in sessions.values():
+        ref = file_size(rows[0].frame)
         for r in rows:
-            check_mask_size(r, file_size(r.mask), file_size(r.frame))
+            size = file_size(r.frame)
+            check_mask_size(r, file_size(r.mask), size)
+            if with_reference and size != ref:
+                raise ValueError(
+                    f"{r.frame}: {size[1]}x{size[0]} px but the reference frame of its session "
+                    f"{r.session}, {rows[0].frame}, is {ref[1]}x{ref[0]} px; expected every "
+                    "frame of a session at its reference's size (render the session again, or "
+                    "run with --no-reference and without --robustness)"
+                )

@@ -64,8 +64,9 @@ def run_bench(
     Raises:
         ValueError: unusable dataset folder (the message names the file), or a cross-check
             folder that is ``data`` or another cross-check folder, or a session without a 0 kPa
-            reference frame, or a frame or mask file that is not a readable image or a mask of
-            another size than its frame (:func:`~contactcal.infer.bench.preflight.check_datasets`).
+            reference frame, or a frame or mask file that is not a readable image, a mask of
+            another size than its frame, or a frame of another size than its reference
+            (:func:`~contactcal.infer.bench.preflight.check_datasets`).
     """
     config = config or BenchConfig()
     names = [f"--data {data}", *(f"--crosscheck {c}" for c in crosscheck)]
