@@ -65,6 +65,7 @@ def test_outputs_written(bench: tuple[Path, Path, dict[str, Any]]) -> None:
         assert heading in report
     assert "](error_vs_pressure.png)" in report and "](pareto.png)" in report
     assert "Bins are `[lo, hi)` kPa" in report
+    assert "each median leaves out\none untimed warm-up run of its configuration" in report
     few = [b for b in results["bins"] if 0 < b["contact_frames"] < 5]  # the tiny set's bins
     assert few, "expected bins of 1-4 contact frames in the tiny set"
     for b in few:
@@ -516,6 +517,25 @@ def test_cli_refuses_a_report_folder_it_cannot_write_before_the_work(
         "pareto.png"
     ]
     assert not (tmp_path / "o").exists()
+
+
+def test_timing_medians_leave_out_a_warm_up_run(monkeypatch: pytest.MonkeyPatch) -> None:
+    """The first run of a configuration (onnxruntime's first call) was among the timed ones."""
+    from types import SimpleNamespace
+
+    from contactcal.infer.bench import timing
+
+    clock = iter(range(10**6))  # one tick per perf_counter() call
+    cost = iter([1000, 1, 1])  # ticks each fn() call takes: the first is the cold one
+    monkeypatch.setattr(timing, "time", SimpleNamespace(perf_counter=lambda: float(next(clock))))
+
+    def fn() -> None:
+        for _ in range(next(cost)):
+            next(clock)
+
+    # Each timed run spans 2 ticks (its own and the clock's second read), 1 tick = 1000 ms.
+    assert timing.median_ms(fn, 2) == pytest.approx(2000.0)
+    assert next(cost, None) is None  # three calls: one warm-up, two timed
 
 
 def test_the_report_says_how_many_frames_were_timed() -> None:

@@ -298,7 +298,8 @@ def report_text(results: Mapping[str, Any]) -> str:
         "with the exact masks; relative\nerrors and the IoU of the method's outline with the "
         "mask over frames with true contact. Timing: median of "
         f"{cfg['repeats']} runs over\n{_timed_frames(results)} frames upscaled to {w}×{h}, "
-        "in one process. Rows `(soft area)`: the same prediction measured by its probability\n"
+        "in one process; each median leaves out\none untimed warm-up run of its "
+        "configuration. Rows `(soft area)`: the same prediction measured by its\nprobability "
         "mass; rows `(session rule)`: the same frames after `calibrate`'s session rule (a region "
         "that\nshrinks at the next pressure beyond both stated intervals, and a contact left "
         "below the\ncontact range, count as no contact), i.e. what a calibration reports.",
