@@ -82,7 +82,7 @@ def _cmd_bench(args: argparse.Namespace) -> int:
     )
     if cfg.robustness_frames:
         from contactcal.infer.bench.accuracy import variant_name
-        from contactcal.infer.bench.robustness import unperturbed_note
+        from contactcal.infer.bench.robustness_text import unperturbed_note
 
         if note := unperturbed_note([variant_name(label) for label, _ in variants]):
             print(f"note: {note}", file=sys.stderr)

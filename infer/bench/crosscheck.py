@@ -14,8 +14,9 @@ from typing import Any
 
 from contactcal.infer.bench.accuracy import evaluate, to_record
 from contactcal.infer.bench.dataset import IndexRow, read_index, sessions_of
+from contactcal.infer.bench.markdown import md_table
 from contactcal.infer.bench.onset import ONSET_COLUMNS, onset_errors, onset_shown
-from contactcal.infer.bench.report import BIN_COLUMNS, HARD_COLUMNS, accuracy_tables, md_table
+from contactcal.infer.bench.report import BIN_COLUMNS, HARD_COLUMNS, accuracy_tables
 from contactcal.infer.bench.scoring import (
     ScoredFrame,
     bin_label,

@@ -6,6 +6,7 @@ from __future__ import annotations
 from collections.abc import Mapping, Sequence
 from typing import Any
 
+from contactcal.infer.bench.markdown import Columns
 from contactcal.infer.bench.scoring import ScoredFrame, median_or_none
 from contactcal.infer.calibration.fit import estimate_onset
 
@@ -53,8 +54,8 @@ def onset_errors(frames: Sequence[ScoredFrame]) -> list[dict[str, Any]]:
     return out
 
 
-#: The report's onset table: (key, header, shown as %), as ``report.md_table`` takes them.
-ONSET_COLUMNS = (
+#: The report's onset table.
+ONSET_COLUMNS: Columns = (
     ("method", "method", False),
     ("sessions", "sessions", False),
     ("contact_sessions", "with true contact", False),

@@ -8,6 +8,7 @@ from pathlib import Path
 from typing import Any
 
 from contactcal.infer.bench.config import SESSION_REFERENCE
+from contactcal.infer.bench.markdown import Columns, md_table
 from contactcal.infer.bench.onset import (
     FALSE_ONSET,
     MISSED,
@@ -18,7 +19,7 @@ from contactcal.infer.bench.onset import (
     onset_table,
 )
 from contactcal.infer.bench.plots import plot_error_vs_pressure, plot_pareto, plot_robustness
-from contactcal.infer.bench.robustness import unperturbed_note
+from contactcal.infer.bench.robustness_text import robustness_text
 from contactcal.infer.bench.scoring import (
     ScoredFrame,
     bin_label,
@@ -30,9 +31,6 @@ from contactcal.infer.bench.scoring import (
 )
 from contactcal.infer.bench.timing import TIMED_KPA
 from contactcal.infer.files.atomic import run_outputs, write_json, write_text
-
-#: Markdown table columns: (key, header, shown as %).
-Columns = Sequence[tuple[str, str, bool]]
 
 BIN_COLUMNS: Columns = (
     ("method", "method", False),
@@ -74,88 +72,6 @@ HARD_COLUMNS: Columns = (
     ("onset_missing", "missed onset", False),
     ("false_onsets", "false onset", False),
 )
-
-
-def _worst_in_range(rows: Sequence[Mapping[str, Any]], methods: Sequence[str]) -> str:
-    """One line per method: the largest error ratio at a randomised, non-baseline level."""
-    lines = []
-    for m in methods:
-        cands = [
-            r
-            for r in rows
-            if r["method"] == m and r["in_range"] and not r["baseline"] and r["error_ratio"]
-        ]
-        if not cands:
-            lines.append(f"- {m}: no randomised level with a defined error ratio")
-            continue
-        w = max(cands, key=lambda r: r["error_ratio"])
-        lines.append(
-            f"- {m}: worst ratio inside the randomised ranges {_ratio(w)} "
-            f"({w['perturbation']} {w['label']})"
-        )
-    return "\n".join(lines)
-
-
-def _ratio(row: Mapping[str, Any]) -> str | None:
-    """A robustness row's error ratio with its 90 % interval: ``"2.19× (1.41-3.02)"``."""
-    ratio, interval = row["error_ratio"], row.get("error_ratio_interval")
-    if ratio is None:
-        return None
-    text = f"{ratio:.2f}×"
-    return text if interval is None else f"{text} ({interval[0]:.2f}-{interval[1]:.2f})"
-
-
-def _unperturbed(rob: Mapping[str, Any]) -> str:
-    """The sentence naming the ``--variant`` models the suite left out ("" for none)."""
-    note = unperturbed_note(rob.get("not_perturbed", []))
-    return f"\n\n{note}." if note else ""
-
-
-def robustness_text(rob: Mapping[str, Any]) -> str:
-    """The report's robustness section: one table row per perturbation and level, each method's
-    error at ≥ 5 kPa, its ratio to the baseline level and its no-contact accuracy."""
-    methods = list(dict.fromkeys(r["method"] for r in rob["rows"]))
-    cols: list[tuple[str, str, bool]] = [("perturbation", "perturbation", False)]
-    cols.append(("label", "level", False))
-    cols.append(("range", "randomised", False))
-    for m in methods:
-        cols += [(f"{m} err", f"{m} ≥5 kPa", True), (f"{m} ratio", "× base (90 % interval)", False)]
-        cols.append((f"{m} nc", f"{m} no-contact acc.", True))
-    table: dict[tuple[str, float], dict[str, Any]] = {}
-    for r in rob["rows"]:
-        row = table.setdefault(
-            (r["perturbation"], r["level"]), {**r, "range": "yes" if r["in_range"] else "no"}
-        )
-        m = r["method"]
-        row[f"{m} err"], row[f"{m} ratio"] = r["median_abs_rel_error_ge5"], _ratio(r)
-        row[f"{m} nc"] = r["no_contact_accuracy"]
-    first = rob["rows"][0]
-    refs = "\n".join(
-        f"- {p['name']} ({p['unit']}): reference {p['reference']}" for p in rob["perturbations"]
-    )
-    return (
-        "## Robustness to perturbed frames\n\n"
-        f"{len(rob['frames'])} frames sampled evenly across pressures and sessions (seed "
-        f"{rob['seed']}), each measured at every\nlevel of every perturbation "
-        "(`contactcal.infer.bench.perturb` documents the levels and the truth).\n"
-        f"≥5 kPa: median |relative area error| over the {first['contact_frames_ge5']} frames "
-        "with true contact at ≥ 5 kPa; × base: its\nratio to the perturbation's unperturbed "
-        "level, with a 90 % bootstrap interval over\nthose frames (each resample keeps a frame's "
-        "errors at both levels); no-contact acc.: share of the "
-        f"{first['no_contact_frames']} frames without true contact\nreported as no contact. "
-        f"The reference frame per perturbation:\n\n{refs}\n\n"
-        "randomised: the level lies inside what the training renders or augmentation randomise "
-        "(`suite.PERTURBATIONS`),\nwhere the error target (≤ 2× the unperturbed error) "
-        "applies."
-        + _unperturbed(rob)
-        + "\n\n"
-        + _worst_in_range(rob["rows"], methods)
-        + "\n\n"
-        + md_table(list(table.values()), cols)
-        + "\n\n![robustness](robustness.png)\n\n"
-        + "No-contact accuracy per level (frames without true contact):\n\n"
-        + "![robustness, no-contact accuracy](robustness_no_contact.png)"
-    )
 
 
 def _no_contact_accuracy(frames: Sequence[ScoredFrame]) -> float | None:
@@ -215,22 +131,6 @@ def coverage_table(
             out.append({"method": method, "bin_kpa": bin_label(lo, hi), **coverage_row(sel)})
         out.append({"method": method, "bin_kpa": "all", **coverage_row(fs)})
     return out
-
-
-def _fmt(v: object, pct: bool = False) -> str:
-    if v is None:
-        return "–"
-    if isinstance(v, float):
-        return f"{100 * v:.1f} %" if pct else f"{v:.3g}"
-    return str(v)
-
-
-def md_table(rows: Sequence[Mapping[str, Any]], cols: Columns) -> str:
-    """A Markdown table of ``rows`` (missing keys show as "–")."""
-    head = "| " + " | ".join(c[1] for c in cols) + " |"
-    sep = "|" + "---|" * len(cols)
-    body = ["| " + " | ".join(_fmt(r.get(key), pct) for key, _, pct in cols) + " |" for r in rows]
-    return "\n".join([head, sep, *body])
 
 
 def _digests(results: Mapping[str, Any]) -> str:

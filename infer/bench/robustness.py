@@ -246,18 +246,6 @@ def summary_rows(
     return rows
 
 
-def unperturbed_note(methods: Sequence[str]) -> str:
-    """The sentence that ``methods`` (``--variant`` models) were left out of the suite ("" for
-    none): the suite measures ``--model`` and the classical routine only (each method costs ~50
-    perturbed measurements per frame)."""
-    if not methods:
-        return ""
-    return (
-        "--robustness measures --model and the classical routine only; variants "
-        f"{', '.join(methods)} were not perturbed"
-    )
-
-
 def run_robustness(
     sessions: Mapping[str, Sequence[IndexRow]],
     model: str | os.PathLike[str] | None,
