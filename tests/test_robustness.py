@@ -245,6 +245,26 @@ def test_report_figure_and_results(bench: tuple[Path, dict[str, Any]]) -> None:
         assert f"| {r['perturbation']} | {r['label']} |" in report
 
 
+def test_the_error_change_in_points_beside_each_ratio(bench: tuple[Path, dict[str, Any]]) -> None:
+    """A ratio alone read large on a small baseline error; the change in points says how much."""
+    out, results = bench
+    rows = results["robustness"]["rows"]
+    base_of = {(b["perturbation"], b["method"]): b for b in rows if b["baseline"]}
+    for r in rows:
+        base = base_of[(r["perturbation"], r["method"])]["median_abs_rel_error_ge5"]
+        err = r["median_abs_rel_error_ge5"]
+        if err is None or base is None:
+            assert r["error_change_points"] is None
+        else:
+            assert r["error_change_points"] == pytest.approx(100 * (err - base))
+    assert any(r["error_change_points"] for r in rows)  # the tiny set has defined changes
+    report = (out / "report.md").read_text(encoding="utf-8")
+    assert "| − base, points |" in report
+    assert "applied on top of the\nheld-out renders' own randomised degradation" in report
+    r = next(r for r in rows if r["error_change_points"] and not r["baseline"])
+    assert f"| {r['error_change_points']:+.2f} |" in report
+
+
 def test_robustness_figure_of_an_unknown_metric_is_an_error(
     bench: tuple[Path, dict[str, Any]], tmp_path: Path
 ) -> None:

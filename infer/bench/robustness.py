@@ -211,7 +211,8 @@ def summary_rows(
 ) -> list[dict[str, Any]]:
     """Per perturbation, level (in ``levels`` order) and method: the error at ≥ 5 kPa, its ratio
     to the baseline level's with :func:`ratio_interval` (generator seeded by ``seed`` and the
-    row), and the no-contact accuracy (None where no frame defines one)."""
+    row), its change from the baseline level's (``error_change_points``: level − baseline, in
+    percentage points) and the no-contact accuracy (None where no frame defines one)."""
     rows = []
     for j, p in enumerate(PERTURBATIONS):
         base = {
@@ -239,6 +240,9 @@ def summary_rows(
                         if err is None or not base[method]
                         else err / base[method],
                         "error_ratio_interval": None if interval is None else list(interval),
+                        "error_change_points": None
+                        if err is None or base[method] is None
+                        else 100.0 * (err - base[method]),
                         "no_contact_frames": every["no_contact_frames"],
                         "no_contact_accuracy": every["no_contact_accuracy"],
                     }
