@@ -402,6 +402,15 @@ def test_no_reference_mode(bench: tuple[Path, Path, dict[str, Any]], tmp_path: P
     assert with_ref["reference"] == "session zero-pressure frame" and res["reference"] == "none"
     report = (tmp_path / "out" / "report.md").read_text()
     assert "Reference frame: none." in report and "is not scored" not in report
+    # which no-reference mode ran (docs/training.md says bench says it): the model's own
+    from contactcal.infer.methods.classical import ClassicalMethod
+    from contactcal.infer.methods.unet.method import UnetMethod
+
+    modes = {"unet": UnetMethod().NO_REFERENCE, "classical": ClassicalMethod.NO_REFERENCE}
+    assert res["no_reference"] == modes and "no_reference" not in with_ref
+    assert "blank placeholder" in modes["unet"]  # the shipped model: reference dropout
+    assert "Without reference frames, per method:" in report
+    assert all(f"- {m}: {note}." in report for m, note in modes.items())
     assert not any(r["reference"] for r in res["records"])  # every frame is a frame like any
     assert sum(b["frames"] for b in res["bins"]) == len(res["records"])
     key = lambda r: (r["method"], r["frame"])  # noqa: E731

@@ -136,20 +136,36 @@ def evaluate(
     use_reference: bool = True,
     variants: Sequence[tuple[str, str]] = (),
 ) -> list[ScoredFrame]:
-    """Measure every frame of every session with every method (``METHODS``), one thread.
-
-    ``variants`` are further U-Net models ``(label, path)``, scored as method ``unet[label]``.
-    """
+    """Measure every frame of every session with every method (:func:`bench_methods`), one
+    thread."""
     frames: list[ScoredFrame] = []
+    for name, method in bench_methods(model, variants):
+        for rows in sessions.values():
+            frames.extend(score_session(method, name, rows, use_reference))
+    return frames
+
+
+def bench_methods(
+    model: str | os.PathLike[str] | None, variants: Sequence[tuple[str, str]] = ()
+) -> list[tuple[str, Method]]:
+    """``(name, method)`` of every method scored, one thread: ``METHODS`` (the U-Net from
+    ``model``, None: the shipped one), then the ``variants`` ``(label, path)`` as
+    ``unet[label]``."""
     methods = [(name, make_method(name, model, threads=1, outline=True)) for name in METHODS]
     methods += [
         (variant_name(label), make_method("unet", path, 1, outline=True))
         for label, path in variants
     ]
-    for name, method in methods:
-        for rows in sessions.values():
-            frames.extend(score_session(method, name, rows, use_reference))
-    return frames
+    return methods
+
+
+def no_reference_modes(
+    model: str | os.PathLike[str] | None, variants: Sequence[tuple[str, str]] = ()
+) -> dict[str, str]:
+    """What each method does without a reference frame (its ``NO_REFERENCE`` note, as
+    ``measure`` prints it: for a U-Net, the model's own mode, blank placeholder or the frame
+    itself), by method name."""
+    return {name: method.NO_REFERENCE for name, method in bench_methods(model, variants)}
 
 
 def variant_name(label: str) -> str:

@@ -173,6 +173,16 @@ def _few_frames_note(bins: Sequence[Mapping[str, Any]]) -> str:
     )
 
 
+def _no_reference_modes(results: Mapping[str, Any]) -> str:
+    """Without reference frames: a paragraph saying what each method did instead
+    (``no_reference``; "" with them, or in results written before it was recorded)."""
+    modes = results.get("no_reference") or {}
+    if not modes:
+        return ""
+    lines = "\n".join(f"- {method}: {note}." for method, note in modes.items())
+    return f"\n\nWithout reference frames, per method:\n\n{lines}"
+
+
 def _reference_note(results: Mapping[str, Any]) -> str:
     """With reference frames: the sentence saying they are not scored ("" without)."""
     if results["reference"] != SESSION_REFERENCE:
@@ -202,7 +212,8 @@ def report_text(results: Mapping[str, Any]) -> str:
         "configuration. Rows `(soft area)`: the same prediction measured by its\nprobability "
         "mass; rows `(session rule)`: the same frames after `calibrate`'s session rule (a region "
         "that\nshrinks at the next pressure beyond both stated intervals, and a contact left "
-        "below the\ncontact range, count as no contact), i.e. what a calibration reports.",
+        "below the\ncontact range, count as no contact), i.e. what a calibration reports."
+        + _no_reference_modes(results),
         "## Area error per pressure bin\n\n"
         "Bins are `[lo, hi)` kPa (a frame at 3 kPa is in 3-5; the last bin holds 20 kPa)."
         + _few_frames_note(results["bins"])

@@ -14,7 +14,12 @@ from collections.abc import Sequence
 from pathlib import Path
 from typing import Any
 
-from contactcal.infer.bench.accuracy import evaluate, to_record, variant_name
+from contactcal.infer.bench.accuracy import (
+    evaluate,
+    no_reference_modes,
+    to_record,
+    variant_name,
+)
 from contactcal.infer.bench.config import SESSION_REFERENCE, BenchConfig
 from contactcal.infer.bench.crosscheck import (
     crosscheck_text,
@@ -52,10 +57,12 @@ def run_bench(
             ``data`` (:mod:`~contactcal.infer.bench.crosscheck`).
 
     Returns:
-        The content of ``results.json``: header keys, ``config``, ``records`` (one per method
-        and frame, with the stated ``area_interval_px`` and ``covered``), ``onset``, ``timing``,
-        ``bins``, ``hard`` and ``coverage`` (per method and pressure bin), ``onset_table``
-        (per method: sessions covered, onsets found, missed, false onsets); with ``crosscheck``
+        The content of ``results.json``: header keys (with ``use_reference=False`` also
+        ``no_reference``: what each method does without one), ``config``, ``records`` (one per
+        method and frame, with the stated ``area_interval_px`` and ``covered``), ``onset``,
+        ``timing``, ``bins``, ``hard`` and ``coverage`` (per method and pressure bin),
+        ``onset_table`` (per method: sessions covered, onsets found, missed, false onsets); with
+        ``crosscheck``
         also ``crosscheck`` (one results object per dataset, with its ``label``) and
         ``side_by_side`` (per method and bin, every dataset's error, recall and no-contact
         accuracy); with ``config.robustness_frames`` also ``robustness``
@@ -92,6 +99,8 @@ def run_bench(
         "onset": onset,
         "timing": timing(sessions, model, config),
     }
+    if not config.use_reference:  # which mode ran (a U-Net's blank placeholder or the frame)
+        results["no_reference"] = no_reference_modes(model, config.variants)
     if config.robustness_frames:
         results["robustness"] = run_robustness(
             sessions,
