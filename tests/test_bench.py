@@ -16,8 +16,10 @@ from procedural import write_dataset
 
 from contactcal.infer.bench import config as bench_config
 from contactcal.infer.bench import run as bench_run
-from contactcal.infer.bench.accuracy import from_record, onset_errors, to_record
+from contactcal.infer.bench.accuracy import from_record, to_record
 from contactcal.infer.bench.config import BenchConfig
+from contactcal.infer.bench.crosscheck import labels
+from contactcal.infer.bench.onset import onset_errors, onset_table
 from contactcal.infer.bench.plots import pareto_points
 from contactcal.infer.bench.report import (
     _timed_frames,
@@ -25,7 +27,7 @@ from contactcal.infer.bench.report import (
     coverage_table,
     hard_table,
     md_table,
-    onset_table,
+    report_text,
 )
 from contactcal.infer.bench.run import run_bench
 from contactcal.infer.bench.scoring import (
@@ -33,6 +35,7 @@ from contactcal.infer.bench.scoring import (
     ScoredFrame,
     bin_table,
     covering_bins,
+    not_references,
 )
 from contactcal.infer.cli import main
 from contactcal.infer.image.read import load_image
@@ -62,6 +65,7 @@ def test_outputs_written(bench: tuple[Path, Path, dict[str, Any]]) -> None:
         assert heading in report
     assert "](error_vs_pressure.png)" in report and "](pareto.png)" in report
     assert "Bins are `[lo, hi)` kPa" in report
+    assert "each median leaves out\none untimed warm-up run of its configuration" in report
     few = [b for b in results["bins"] if 0 < b["contact_frames"] < 5]  # the tiny set's bins
     assert few, "expected bins of 1-4 contact frames in the tiny set"
     for b in few:
@@ -108,7 +112,7 @@ def test_bins_recomputed_from_records(bench: tuple[Path, Path, dict[str, Any]]) 
     res = json.loads((out / "results.json").read_text())
     frames = [from_record(r) for r in res["records"]]
     assert [to_record(f) for f in frames] == res["records"]
-    assert json.loads(json.dumps(bin_table(frames, PRESSURE_BINS))) == res["bins"]
+    assert json.loads(json.dumps(bin_table(not_references(frames), PRESSURE_BINS))) == res["bins"]
     assert json.loads(json.dumps(onset_errors(frames))) == res["onset"]
     # One bin by hand: median |relative error| of the U-Net's contact frames at 5-10 kPa.
     rel = sorted(
@@ -120,11 +124,16 @@ def test_bins_recomputed_from_records(bench: tuple[Path, Path, dict[str, Any]]) 
     row = next(b for b in res["bins"] if b["method"] == "unet" and b["bin_kpa"] == "5-10")
     assert row["contact_frames"] == 4
     assert row["median_abs_rel_error"] == pytest.approx((rel[1] + rel[2]) / 2)
-    # Below 3 kPa no frame has contact: only the no-contact accuracy is defined.
+    # Below 3 kPa no frame has contact: only the no-contact accuracy is defined, over the 2 kPa
+    # frames (the 0 kPa ones are the sessions' references, not scored).
     low = next(b for b in res["bins"] if b["method"] == "classical" and b["bin_kpa"] == "0-3")
-    none = [r for r in res["records"] if r["method"] == "classical" and r["pressure_kpa"] < 3]
-    assert low["median_abs_rel_error"] is None and low["no_contact_frames"] == len(none) == 8
-    expected = sum(not r["contact"] for r in none) / 8
+    none = [
+        r
+        for r in res["records"]
+        if r["method"] == "classical" and r["pressure_kpa"] < 3 and not r["reference"]
+    ]
+    assert low["median_abs_rel_error"] is None and low["no_contact_frames"] == len(none) == 4
+    expected = sum(not r["contact"] for r in none) / 4
     assert low["no_contact_accuracy"] == pytest.approx(expected)
 
 
@@ -141,13 +150,32 @@ def test_interval_coverage(bench: tuple[Path, Path, dict[str, Any]]) -> None:
             assert iv is None and r["covered"] is None
     rows = [c for c in res["coverage"] if c["method"] == "unet"]
     assert [c["bin_kpa"] for c in rows] == ["0-3", "3-5", "5-10", "10-20", "all"]
-    unet = [r for r in res["records"] if r["method"] == "unet"]
-    assert rows[-1]["frames"] == 20
-    assert rows[-1]["coverage"] == pytest.approx(sum(r["covered"] for r in unet) / 20)
+    unet = [r for r in res["records"] if r["method"] == "unet" and not r["reference"]]
+    assert rows[-1]["frames"] == 16  # 20 frames less the 4 sessions' references
+    assert rows[-1]["coverage"] == pytest.approx(sum(r["covered"] for r in unet) / 16)
     assert {"method": "classical", "bin_kpa": "no interval"} in res["coverage"]
     report = (out / "report.md").read_text(encoding="utf-8")
     assert "## Coverage of the stated area interval" in report
-    assert "| classical | no interval |" in report and "| unet | all | 20 |" in report
+    assert "| classical | no interval |" in report and "| unet | all | 16 |" in report
+
+
+def test_reference_frames_are_marked_and_not_scored(
+    bench: tuple[Path, Path, dict[str, Any]],
+) -> None:
+    """Each session's reference frame, measured against itself, once landed in the 0-3 kPa bin
+    and the no-contact accuracy unsaid; its record stays, marked."""
+    _, out, res = bench
+    pairs = {(r["method"], r["session"]) for r in res["records"]}
+    refs = [r for r in res["records"] if r["reference"]]
+    assert len(refs) == len(pairs) == 16 and {(r["method"], r["session"]) for r in refs} == pairs
+    for r in refs:  # the record h15_rule.py drops: its (method, session)'s lowest pressure
+        same = [
+            x for x in res["records"] if (x["method"], x["session"]) == (r["method"], r["session"])
+        ]
+        assert r["pressure_kpa"] == min(x["pressure_kpa"] for x in same) == 0.0
+    assert sum(b["frames"] for b in res["bins"]) == len(res["records"]) - 16
+    report = (out / "report.md").read_text(encoding="utf-8")
+    assert report.count("reference frame is not scored") == 1
 
 
 def test_coverage_table_by_hand() -> None:
@@ -209,8 +237,8 @@ def test_tables_by_hand() -> None:
     assert rows["10-20"]["median_abs_rel_error"] == pytest.approx(0.01)
 
     onset = [
-        {"method": "m", "session": "s0", "onset_kpa": 5.0, "error_kpa": 2.0},
-        {"method": "m", "session": "s1", "onset_kpa": None, "error_kpa": None},
+        {"method": "m", "session": "s0", "onset_kpa": 5.0, "error_kpa": 2.0, "outcome": "found"},
+        {"method": "m", "session": "s1", "onset_kpa": None, "error_kpa": None, "outcome": "missed"},
     ]
     hard = {h["sessions"]: h for h in hard_table(frames, onset)}
     assert hard["normal"]["n"] == 1 and hard["hard"]["n"] == 1
@@ -220,7 +248,8 @@ def test_tables_by_hand() -> None:
     assert hard["normal"]["median_abs_onset_error_kpa"] == pytest.approx(2.0)
     assert hard["hard"]["median_abs_rel_error_ge5"] == pytest.approx(0.01)
     assert hard["hard"]["onset_missing"] == 1
-    assert onset_table(onset) == [{"method": "m", "median_abs": 2.0, "max_abs": 2.0}]
+    (row,) = onset_table(onset)
+    assert row["median_abs_error_kpa_found"] == row["max_abs_error_kpa_found"] == 2.0
     table = md_table([five], [("bin_kpa", "kPa", False), ("median_abs_rel_error", "err", True)])
     assert table.splitlines() == ["| kPa | err |", "|---|---|", "| 5-10 | 25.0 % |"]
 
@@ -244,6 +273,53 @@ def test_onset_errors_by_hand() -> None:
     assert row["onset_kpa"] == pytest.approx(3.0)
     assert row["truth_masks_onset_kpa"] == pytest.approx(3.0)
     assert row["mechanics_onset_kpa"] == 3.0 and row["error_kpa"] == pytest.approx(0.0)
+
+
+def test_the_onset_table_counts_every_session() -> None:
+    """A missed onset (true contact, none found) once dropped its session from the onset table's
+    median and max, and a correct "no contact" counted as "no onset found"."""
+    onset_at = {4.0: 40.0, 8.0: 80.0}  # true contact from 4 kPa on (onset 3 kPa)
+    frames = []
+    for session, contact, seen in (
+        ("found", True, True),
+        ("missed", True, False),
+        ("false", False, True),
+        ("none", False, False),
+    ):
+        for p in (0.0, 2.0, 4.0, 8.0):
+            true = onset_at.get(p, 0.0) if contact else 0.0
+            area = (onset_at.get(p, 0.0) or (30.0 if not contact and p else 0.0)) if seen else 0.0
+            frames.append(_frame(p, true, area, session=session))
+    onset = onset_errors(frames)
+    assert [o["outcome"] for o in onset] == ["false onset", "found", "missed", "no contact"]
+    (row,) = onset_table(onset)
+    assert {k: row[k] for k in ("sessions", "contact_sessions", "found", "missed")} == {
+        "sessions": 4,
+        "contact_sessions": 2,
+        "found": 1,
+        "missed": 1,
+    }
+    assert row["false_onsets"] == 1
+    found = next(o for o in onset if o["outcome"] == "found")
+    assert row["max_abs_error_kpa_found"] == pytest.approx(abs(found["error_kpa"]))
+    hard = hard_table(frames, onset)
+    assert [(h["onset_missing"], h["false_onsets"]) for h in hard] == [(1, 1)]
+    text = report_text(
+        {
+            "config": {"full_size": [8, 6], "repeats": 1, "timing_frames": 1},
+            "data": "d",
+            "sessions": 4,
+            "frames": 16,
+            "model": "shipped",
+            "reference": "none",
+            "timing": [],
+            "bins": [],
+            "coverage": [],
+            "hard": hard,
+            "onset_table": [row],
+        }
+    )
+    assert "| m | 4 | 2 | 1 |" in text and "| missed | 1 | 1 |" in text
 
 
 def test_pareto_points() -> None:
@@ -324,7 +400,19 @@ def test_no_reference_mode(bench: tuple[Path, Path, dict[str, Any]], tmp_path: P
     cfg = BenchConfig(repeats=1, timing_frames=1, full_size=(128, 96), threads=(1,))
     res = run_bench(data, tmp_path / "out", config=dataclasses_replace(cfg, use_reference=False))
     assert with_ref["reference"] == "session zero-pressure frame" and res["reference"] == "none"
-    assert "Reference frame: none." in (tmp_path / "out" / "report.md").read_text()
+    report = (tmp_path / "out" / "report.md").read_text()
+    assert "Reference frame: none." in report and "is not scored" not in report
+    # which no-reference mode ran (docs/training.md says bench says it): the model's own
+    from contactcal.infer.methods.classical import ClassicalMethod
+    from contactcal.infer.methods.unet.method import UnetMethod
+
+    modes = {"unet": UnetMethod().NO_REFERENCE, "classical": ClassicalMethod.NO_REFERENCE}
+    assert res["no_reference"] == modes and "no_reference" not in with_ref
+    assert "blank placeholder" in modes["unet"]  # the shipped model: reference dropout
+    assert "Without reference frames, per method:" in report
+    assert all(f"- {m}: {note}." in report for m, note in modes.items())
+    assert not any(r["reference"] for r in res["records"])  # every frame is a frame like any
+    assert sum(b["frames"] for b in res["bins"]) == len(res["records"])
     key = lambda r: (r["method"], r["frame"])  # noqa: E731
     a = {key(r): r["area_px"] for r in with_ref["records"]}
     b = {key(r): r["area_px"] for r in res["records"]}
@@ -440,6 +528,25 @@ def test_cli_refuses_a_report_folder_it_cannot_write_before_the_work(
     assert not (tmp_path / "o").exists()
 
 
+def test_timing_medians_leave_out_a_warm_up_run(monkeypatch: pytest.MonkeyPatch) -> None:
+    """The first run of a configuration (onnxruntime's first call) was among the timed ones."""
+    from types import SimpleNamespace
+
+    from contactcal.infer.bench import timing
+
+    clock = iter(range(10**6))  # one tick per perf_counter() call
+    cost = iter([1000, 1, 1])  # ticks each fn() call takes: the first is the cold one
+    monkeypatch.setattr(timing, "time", SimpleNamespace(perf_counter=lambda: float(next(clock))))
+
+    def fn() -> None:
+        for _ in range(next(cost)):
+            next(clock)
+
+    # Each timed run spans 2 ticks (its own and the clock's second read), 1 tick = 1000 ms.
+    assert timing.median_ms(fn, 2) == pytest.approx(2000.0)
+    assert next(cost, None) is None  # three calls: one warm-up, two timed
+
+
 def test_the_report_says_how_many_frames_were_timed() -> None:
     """Fewer frames than asked (a small set) are said as such; the network-only row (one
     prepared input) does not count."""
@@ -490,6 +597,24 @@ def test_cli_refuses_a_crosscheck_that_is_the_data_or_another_crosscheck(
     assert not (tmp_path / "out").exists()
 
 
+def test_crosscheck_labels_are_distinct(tmp_path: Path) -> None:
+    """``--data a/set#2 --crosscheck b/set`` once labelled both ``set#2``: the side-by-side
+    table showed the cross-check's numbers under the main dataset's name."""
+    assert labels(["a/set#2", "b/set", "c/set", "d/set#2"]) == ["set#2", "set", "set#3", "set#2#2"]
+    assert labels(["x/set", "y/set", "z/set"]) == ["set", "set#2", "set#3"]
+    main_set = write_dataset(tmp_path / "a" / "set#2", fingers=1)
+    other = write_dataset(tmp_path / "b" / "set", fingers=1, seed=3)
+    res = run_bench(main_set, tmp_path / "out", None, TINY, [other])
+    assert res["crosscheck"][0]["label"] == "set"
+    row = next(r for r in res["side_by_side"] if r["method"] == "unet" and r["bin_kpa"] == "5-10")
+    main_row = next(b for b in res["bins"] if b["method"] == "unet" and b["bin_kpa"] == "5-10")
+    other_row = next(
+        b for b in res["crosscheck"][0]["bins"] if b["method"] == "unet" and b["bin_kpa"] == "5-10"
+    )
+    assert row["median_abs_rel_error@set#2"] == main_row["median_abs_rel_error"]
+    assert row["median_abs_rel_error@set"] == other_row["median_abs_rel_error"]
+
+
 def test_a_session_without_a_zero_pressure_frame_is_refused(
     tmp_path: Path, capsys: pytest.CaptureFixture[str]
 ) -> None:
@@ -509,6 +634,56 @@ def test_a_session_without_a_zero_pressure_frame_is_refused(
         run_bench(write_dataset(tmp_path / "ok", fingers=1), tmp_path / "o", None, TINY, [data])
     res = run_bench(data, tmp_path / "out", config=dataclasses_replace(TINY, use_reference=False))
     assert res["reference"] == "none" and res["frames"] == 3
+
+
+def test_a_broken_crosscheck_set_fails_before_any_work(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """A cross-check set's unreadable frame or mismatched mask was found only when the set was
+    scored, after the main dataset's scoring, timing and robustness suite."""
+    import cv2
+    import numpy as np
+
+    from contactcal.infer.bench.dataset import read_index
+
+    def work(*_: Any, **__: Any) -> None:
+        raise AssertionError("scored or timed before every dataset was checked")
+
+    for name in ("evaluate", "timing", "run_robustness"):
+        monkeypatch.setattr(bench_run, name, work)
+    data = write_dataset(tmp_path / "d", fingers=1)
+    other = write_dataset(tmp_path / "o", fingers=2, seed=2)
+    rows = read_index(other)
+    rows[3].frame.write_bytes(b"not an image")
+    with pytest.raises(ValueError, match=f"{rows[3].frame}: not a PNG file"):
+        run_bench(data, tmp_path / "out", None, TINY, [other])
+    cv2.imwrite(str(rows[3].frame), load_image(rows[2].frame))  # readable again
+    mask = np.zeros((50, 70), np.uint8)  # a no-contact frame's mask of another size
+    cv2.imwrite(str(rows[0].mask), mask)
+    with pytest.raises(ValueError, match=f"{rows[0].mask}: 70x50 px but its frame"):
+        run_bench(data, tmp_path / "out", None, TINY, [other])
+    assert not (tmp_path / "out").exists()
+
+
+def test_a_frame_of_another_size_than_its_reference_is_named(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """Once ``reference frame size 64×48 differs from the frame size 128×96``: no file named."""
+    import cv2
+
+    from contactcal.infer.bench.dataset import read_index
+
+    data = write_dataset(tmp_path / "d", fingers=1)
+    ref, big = read_index(data)[:2]  # 0 and 2 kPa: no contact, so an empty mask at any size
+    for path in (big.frame, big.mask):
+        cv2.imwrite(str(path), cv2.resize(load_image(path), (128, 96)))
+    argv = ["bench", "--data", str(data), "--out", str(tmp_path / "out"), "--repeats", "1"]
+    assert main([*argv, "--timing-frames", "1"]) == 2
+    (err,) = capsys.readouterr().err.strip().splitlines()
+    assert f"{big.frame}: 128x96 px but the reference frame of its session finger_0000, " in err
+    assert f"{ref.frame}, is 64x48 px" in err and not (tmp_path / "out").exists()
+    res = run_bench(data, tmp_path / "o", config=dataclasses_replace(TINY, use_reference=False))
+    assert res["frames"] == 5  # without references the sizes need not agree
 
 
 def test_a_mask_of_another_size_than_its_frame_is_named(tmp_path: Path) -> None:

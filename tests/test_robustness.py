@@ -118,7 +118,7 @@ def test_speck_bright_near_the_centre_and_in_the_reference_too(
     with pytest.raises(ValueError, match="window speck level"):
         speck(frame, 1.5, np.random.default_rng(0), ring=ring)
     data = write_dataset(tmp_path / "d", fingers=1)
-    row, ref = sample_rows(sessions_of(read_index(data)), 5)[3]
+    row, ref = sample_rows(sessions_of(read_index(data)), 5)[2]
     s = load_sample(row, ref)
     s = Sample(s.row, s.reference.copy(), s.reference, s.mask, s.ring)  # frame == reference
     by_name = {p.name: p for p in PERTURBATIONS}
@@ -147,7 +147,7 @@ def test_suite_draws_the_same_speck_at_every_level(tmp_path: Path) -> None:
     """Paired draws: the speck's levels differ in strength, not in place; the dimmed sector (not
     paired) draws its sector anew at each level."""
     data = write_dataset(tmp_path / "d", fingers=1)
-    row, ref = sample_rows(sessions_of(read_index(data)), 5)[3]
+    row, ref = sample_rows(sessions_of(read_index(data)), 5)[2]
     recorder = _Recorder()
     measure_suite([load_sample(row, ref)], [recorder], seed=4)
     frames = iter(recorder.frames)
@@ -167,7 +167,7 @@ def test_suite_draws_the_same_speck_at_every_level(tmp_path: Path) -> None:
 
 def test_noise_reference_independent_others_same(tmp_path: Path) -> None:
     data = write_dataset(tmp_path / "d", fingers=1)
-    row, ref = sample_rows(sessions_of(read_index(data)), 5)[3]  # the 8 kPa frame
+    row, ref = sample_rows(sessions_of(read_index(data)), 5)[2]  # the 8 kPa frame
     s = load_sample(row, ref)
     s = Sample(s.row, s.reference.copy(), s.reference, s.mask, s.ring)  # frame == reference
     by_name = {p.name: p for p in PERTURBATIONS}
@@ -184,14 +184,19 @@ def test_noise_reference_independent_others_same(tmp_path: Path) -> None:
 def test_sampling_spread_and_deterministic(tmp_path: Path) -> None:
     data = write_dataset(tmp_path / "d", fingers=4)
     sessions = sessions_of(read_index(data))
-    pairs = sample_rows(sessions, 8)
-    assert pairs == sample_rows(sessions, 8) and len(pairs) == 8
-    assert {r.pressure_kpa for r, _ in pairs} == {0.0, 2.0, 4.0, 8.0, 14.0}
+    # 7 of the 16 frames past the references (8 would step by 2 over 4 sessions: 2 sessions)
+    pairs = sample_rows(sessions, 7)
+    assert pairs == sample_rows(sessions, 7) and len(pairs) == 7
+    assert {r.pressure_kpa for r, _ in pairs} == {2.0, 4.0, 8.0, 14.0}
     assert len({r.session for r, _ in pairs}) == 4
     assert all(ref == sessions[r.session_key][0] for r, ref in pairs)
-    assert len(sample_rows(sessions, 100)) == 20
+    every = sample_rows(sessions, 100)  # all 20 frames but the 4 references: a reference would
+    assert len(every) == 16 and all(r != ref for r, ref in every)  # be its own ("same") one
     with pytest.raises(ValueError, match=">= 1 frame"):
         sample_rows(sessions, 0)
+    only = {k: v[:1] for k, v in sessions.items()}
+    with pytest.raises(ValueError, match="index.csv: every session holds its reference frame only"):
+        sample_rows(only, 4)
 
 
 @pytest.fixture(scope="module")
@@ -240,6 +245,26 @@ def test_report_figure_and_results(bench: tuple[Path, dict[str, Any]]) -> None:
         assert f"| {r['perturbation']} | {r['label']} |" in report
 
 
+def test_the_error_change_in_points_beside_each_ratio(bench: tuple[Path, dict[str, Any]]) -> None:
+    """A ratio alone read large on a small baseline error; the change in points says how much."""
+    out, results = bench
+    rows = results["robustness"]["rows"]
+    base_of = {(b["perturbation"], b["method"]): b for b in rows if b["baseline"]}
+    for r in rows:
+        base = base_of[(r["perturbation"], r["method"])]["median_abs_rel_error_ge5"]
+        err = r["median_abs_rel_error_ge5"]
+        if err is None or base is None:
+            assert r["error_change_points"] is None
+        else:
+            assert r["error_change_points"] == pytest.approx(100 * (err - base))
+    assert any(r["error_change_points"] for r in rows)  # the tiny set has defined changes
+    report = (out / "report.md").read_text(encoding="utf-8")
+    assert "| − base, points |" in report
+    assert "applied on top of the\nheld-out renders' own randomised degradation" in report
+    r = next(r for r in rows if r["error_change_points"] and not r["baseline"])
+    assert f"| {r['error_change_points']:+.2f} |" in report
+
+
 def test_robustness_figure_of_an_unknown_metric_is_an_error(
     bench: tuple[Path, dict[str, Any]], tmp_path: Path
 ) -> None:
@@ -286,6 +311,32 @@ def test_off_by_default_and_cli(
     assert main([*args, "--out", str(out), "--robustness", "--robustness-frames", "0"]) == 2
     with pytest.raises(ValueError, match="robustness_frames"):
         BenchConfig(robustness_frames=-1)
+
+
+def test_variants_left_out_of_the_suite_are_said(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """A --variant was silently left out of the robustness suite."""
+    from contactcal.infer.methods.unet.runner import DEFAULT_MODEL
+
+    data = write_dataset(tmp_path / "data", fingers=1)
+    tiny = functools.partial(BenchConfig, full_size=TINY.full_size, threads=TINY.threads)
+    monkeypatch.setattr(bench_config, "BenchConfig", tiny)
+    monkeypatch.setattr(bench_run, "BenchConfig", tiny)
+    args = ["bench", "--data", str(data), "--repeats", "1", "--timing-frames", "1"]
+    args += ["--robustness", "--robustness-frames", "1"]
+    out = tmp_path / "v"
+    assert main([*args, "--out", str(out), "--variant", f"copy={DEFAULT_MODEL}"]) == 0
+    said = "--robustness measures --model and the classical routine only; variants unet[copy] "
+    said += "were not perturbed"
+    assert capsys.readouterr().err.splitlines().count(f"note: {said}") == 1
+    assert f"{said}." in (out / "report.md").read_text(encoding="utf-8")
+    rob = json.loads((out / "results.json").read_text())["robustness"]
+    assert rob["not_perturbed"] == ["unet[copy]"]
+    assert {r["method"] for r in rob["rows"]} == {"unet", "classical"}
+    assert main([*args, "--out", str(tmp_path / "plain")]) == 0
+    assert "not perturbed" not in capsys.readouterr().err
+    assert "not perturbed" not in (tmp_path / "plain" / "report.md").read_text(encoding="utf-8")
 
 
 def test_randomised_ranges_mark_the_levels_where_the_target_applies() -> None:

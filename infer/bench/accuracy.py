@@ -16,6 +16,7 @@ from typing import Any
 import numpy as np
 
 from contactcal.infer.bench.dataset import IndexRow
+from contactcal.infer.bench.preflight import check_mask_size
 from contactcal.infer.bench.scoring import (
     SESSION_SUFFIX,
     SOFT_SUFFIX,
@@ -23,8 +24,6 @@ from contactcal.infer.bench.scoring import (
     outline_iou,
     session_revised,
 )
-from contactcal.infer.calibration.fit import estimate_onset
-from contactcal.infer.calibration.gate_check import REST_KPA
 from contactcal.infer.image.read import load_image
 from contactcal.infer.methods.base import Method
 from contactcal.infer.methods.registry import METHODS, make_method
@@ -36,7 +35,8 @@ def score_session(
     """Measure one session (``rows`` sorted by pressure; the first is its reference frame).
 
     With ``use_reference=False`` the method gets no reference frame (as ``measure`` without
-    ``--reference``); the frames are the same.
+    ``--reference``); the frames are the same. With it, the first frame is measured against
+    itself: its frames are marked ``reference`` (left out of the tables, kept for the onset).
 
     Returns:
         One :class:`ScoredFrame` per frame, plus one ``"<name> (soft area)"`` frame per frame for
@@ -45,7 +45,7 @@ def score_session(
     """
     k = method.start([r.frame for r in rows], rows[0].frame if use_reference else None).reduction
     out: list[ScoredFrame] = []
-    for r in rows:
+    for i, r in enumerate(rows):
         gray = load_image(r.frame, reduce=k)
         res = method.measure(gray)
         truth = _truth(r, (gray.shape[0] * k, gray.shape[1] * k))  # k divides the file's size
@@ -62,6 +62,7 @@ def score_session(
             hard=r.hard,
             area_interval_px=res.area_interval_px,
             iou=None if truth is None else outline_iou(res, truth),
+            reference=use_reference and i == 0,
         )
         out.append(scored)
         if res.soft_area_px is not None or name.startswith("unet"):
@@ -70,34 +71,6 @@ def score_session(
             soft = float(res.soft_area_px) if res.soft_area_px is not None else 0.0
             out.append(_renamed(scored, name + SOFT_SUFFIX, soft))
     return out + session_ruled([f for f in out if f.method == name])
-
-
-def check_references(
-    sessions: Mapping[str, Sequence[IndexRow]], for_robustness: bool = False
-) -> None:
-    """Refuse a session without a frame at rest (at most :data:`REST_KPA`) to be its reference.
-
-    Args:
-        sessions: rows per session, sorted by pressure (the first is the reference).
-        for_robustness: the references are for the robustness suite only (``--no-reference
-            --robustness``): the message's advice says so.
-
-    Raises:
-        ValueError: naming the ``index.csv``, the session and its lowest pressure.
-    """
-    for rows in sessions.values():
-        ref = rows[0]
-        if ref.pressure_kpa > REST_KPA:
-            raise ValueError(
-                f"{ref.dataset / 'index.csv'}: session {ref.session} has no 0 kPa frame (its "
-                f"lowest pressure is {ref.pressure_kpa:g} kPa); bench needs each session's 0 kPa "
-                f"frame (at most {REST_KPA:g} kPa) as reference"
-                + (
-                    " for the robustness suite: add one, or run without --robustness"
-                    if for_robustness
-                    else ": add one, or run with --no-reference (and without --robustness)"
-                )
-            )
 
 
 def _truth(row: IndexRow, frame_shape: tuple[int, int]) -> np.ndarray | None:
@@ -112,12 +85,7 @@ def _truth(row: IndexRow, frame_shape: tuple[int, int]) -> np.ndarray | None:
     if not row.contact:
         return None
     truth = load_image(row.mask) > 0
-    (mh, mw), (fh, fw) = truth.shape, frame_shape
-    if (mh, mw) != (fh, fw):
-        raise ValueError(
-            f"{row.mask}: {mw}x{mh} px but its frame {row.frame} is {fw}x{fh} px; expected a "
-            "mask of its frame's size (render the session again)"
-        )
+    check_mask_size(row, (truth.shape[0], truth.shape[1]), frame_shape)
     if int(np.count_nonzero(truth)) != round(row.area_px):
         raise ValueError(
             f"{row.mask}: holds {int(np.count_nonzero(truth))} contact px but index.csv of "
@@ -168,56 +136,41 @@ def evaluate(
     use_reference: bool = True,
     variants: Sequence[tuple[str, str]] = (),
 ) -> list[ScoredFrame]:
-    """Measure every frame of every session with every method (``METHODS``), one thread.
-
-    ``variants`` are further U-Net models ``(label, path)``, scored as method ``unet[label]``.
-    """
+    """Measure every frame of every session with every method (:func:`bench_methods`), one
+    thread."""
     frames: list[ScoredFrame] = []
-    methods = [(name, make_method(name, model, threads=1, outline=True)) for name in METHODS]
-    methods += [
-        (variant_name(label), make_method("unet", path, 1, outline=True))
-        for label, path in variants
-    ]
-    for name, method in methods:
+    for name, method in bench_methods(model, variants):
         for rows in sessions.values():
             frames.extend(score_session(method, name, rows, use_reference))
     return frames
 
 
+def bench_methods(
+    model: str | os.PathLike[str] | None, variants: Sequence[tuple[str, str]] = ()
+) -> list[tuple[str, Method]]:
+    """``(name, method)`` of every method scored, one thread: ``METHODS`` (the U-Net from
+    ``model``, None: the shipped one), then the ``variants`` ``(label, path)`` as
+    ``unet[label]``."""
+    methods = [(name, make_method(name, model, threads=1, outline=True)) for name in METHODS]
+    methods += [
+        (variant_name(label), make_method("unet", path, 1, outline=True))
+        for label, path in variants
+    ]
+    return methods
+
+
+def no_reference_modes(
+    model: str | os.PathLike[str] | None, variants: Sequence[tuple[str, str]] = ()
+) -> dict[str, str]:
+    """What each method does without a reference frame (its ``NO_REFERENCE`` note, as
+    ``measure`` prints it: for a U-Net, the model's own mode, blank placeholder or the frame
+    itself), by method name."""
+    return {name: method.NO_REFERENCE for name, method in bench_methods(model, variants)}
+
+
 def variant_name(label: str) -> str:
     """Method name of a U-Net variant in the tables: ``unet[label]``."""
     return f"unet[{label}]"
-
-
-def onset_errors(frames: Sequence[ScoredFrame]) -> list[dict[str, Any]]:
-    """Per (method, session): onset estimated from the method's frames vs the truth.
-
-    Returns:
-        Rows with ``method``, ``session``, ``onset_kpa`` (estimated, None when no contact range
-        was found), ``truth_masks_onset_kpa`` (the same rule on the exact masks),
-        ``mechanics_onset_kpa`` and ``error_kpa`` (estimated − mechanics, or None).
-    """
-    groups: dict[tuple[str, str], list[ScoredFrame]] = {}
-    for f in frames:
-        groups.setdefault((f.method, f.session), []).append(f)
-    out = []
-    for (method, session), fs in sorted(groups.items()):
-        p = [f.pressure_kpa for f in fs]
-        est = estimate_onset(p, [f.area_px for f in fs], [f.contact for f in fs])
-        truth = estimate_onset(p, [f.true_area_px for f in fs], [f.true_contact for f in fs])
-        mech = fs[0].onset_kpa
-        error = None if est is None or mech is None else est - mech
-        out.append(
-            {
-                "method": method,
-                "session": session,
-                "onset_kpa": est,
-                "truth_masks_onset_kpa": truth,
-                "mechanics_onset_kpa": mech,
-                "error_kpa": error,
-            }
-        )
-    return out
 
 
 def to_record(frame: ScoredFrame) -> dict[str, Any]:

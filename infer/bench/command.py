@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import argparse
 import re
+import sys
 from pathlib import Path
 from typing import Any
 
@@ -79,6 +80,12 @@ def _cmd_bench(args: argparse.Namespace) -> int:
         use_reference=not args.no_reference,
         variants=variants,
     )
+    if cfg.robustness_frames:
+        from contactcal.infer.bench.accuracy import variant_name
+        from contactcal.infer.bench.robustness_text import unperturbed_note
+
+        if note := unperturbed_note([variant_name(label) for label, _ in variants]):
+            print(f"note: {note}", file=sys.stderr)
     model = None if args.model is None else str(args.model)
     writes = [n for n in REPORT_FILES if args.robustness or n not in ROBUSTNESS_FILES]
     replaced = replaced_note(args.out, writes, "report")

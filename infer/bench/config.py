@@ -6,6 +6,9 @@ from dataclasses import dataclass, field
 
 from contactcal.infer.bench.scoring import PRESSURE_BINS
 
+#: ``results.json``'s ``reference`` when each session's zero-pressure frame is the reference.
+SESSION_REFERENCE = "session zero-pressure frame"
+
 
 @dataclass(frozen=True)
 class BenchConfig:

@@ -12,10 +12,18 @@ from collections.abc import Mapping, Sequence
 from pathlib import Path
 from typing import Any
 
-from contactcal.infer.bench.accuracy import evaluate, onset_errors, to_record
+from contactcal.infer.bench.accuracy import evaluate, to_record
 from contactcal.infer.bench.dataset import IndexRow, read_index, sessions_of
-from contactcal.infer.bench.report import BIN_COLUMNS, HARD_COLUMNS, accuracy_tables, md_table
-from contactcal.infer.bench.scoring import ScoredFrame, bin_label, bin_row, covering_bins
+from contactcal.infer.bench.markdown import md_table
+from contactcal.infer.bench.onset import ONSET_COLUMNS, onset_errors, onset_shown
+from contactcal.infer.bench.report import BIN_COLUMNS, HARD_COLUMNS, accuracy_tables
+from contactcal.infer.bench.scoring import (
+    ScoredFrame,
+    bin_label,
+    bin_row,
+    covering_bins,
+    not_references,
+)
 
 #: Bin of the side-by-side table that pools every frame at or above 5 kPa, kPa.
 POOLED_FROM_KPA = 5.0
@@ -28,12 +36,16 @@ SIDE_KEYS = (
 
 
 def labels(folders: Sequence[str | os.PathLike[str]]) -> list[str]:
-    """Short, distinct names of dataset folders: the folder name, ``#2``… on repeats."""
+    """Short, distinct names of dataset folders: the folder name, or ``<name>#2``, ``#3``… the
+    first not taken (a folder named ``set#2`` keeps its name; a later ``set`` is not it)."""
     out: list[str] = []
     for f in folders:
         name = Path(f).resolve().name or str(f)
-        n = sum(1 for o in out if o == name or o.startswith(name + "#"))
-        out.append(name if n == 0 else f"{name}#{n + 1}")
+        label, n = name, 1
+        while label in out:  # distinct, so no dataset's columns overwrite another's
+            n += 1
+            label = f"{name}#{n}"
+        out.append(label)
     return out
 
 
@@ -55,7 +67,8 @@ def score_dataset(
 
     Returns:
         Its results (``label``, ``data``, ``sessions``, ``frames``, ``records``, ``onset``,
-        ``bins``, ``hard``, ``coverage``: the keys of the main dataset's results, less timing)
+        ``bins``, ``hard``, ``coverage``, ``onset_table``: the keys of the main dataset's
+        results, less timing)
         and the scored frames.
     """
     frames = evaluate(sessions, model, use_reference, variants)
@@ -78,13 +91,15 @@ def side_by_side(
     """Per method and pressure bin (plus ``≥5`` pooled): :data:`SIDE_KEYS` of every dataset.
 
     Args:
-        scored: dataset label → its scored frames (in report order).
+        scored: dataset label → its scored frames (in report order); the sessions' reference
+            frames are left out (:func:`~contactcal.infer.bench.scoring.not_references`).
         bins: pressure bins, kPa, ``[lo, hi)``.
 
     Returns:
         Rows with ``method``, ``bin_kpa`` and ``"<key>@<label>"`` per dataset (None where a
         quantity has no frames).
     """
+    scored = {label: not_references(fs) for label, fs in scored.items()}
     methods = sorted({f.method for fs in scored.values() for f in fs})
     bins = covering_bins([f.pressure_kpa for fs in scored.values() for f in fs], bins)
     ranges = [(bin_label(lo, hi), lo, hi) for lo, hi in bins]
@@ -129,6 +144,8 @@ def crosscheck_text(results: Mapping[str, Any], main_label: str) -> str:
         parts.append(
             f"## Cross-check `{c['label']}`: area error per pressure bin\n\n"
             + md_table(c["bins"], BIN_COLUMNS)
+            + f"\n\n## Cross-check `{c['label']}`: contact onset (as the main dataset's)\n\n"
+            + md_table(onset_shown(c["onset_table"]), ONSET_COLUMNS)
             + f"\n\n## Cross-check `{c['label']}`: hard cases\n\n"
             + md_table(c["hard"], HARD_COLUMNS)
         )

@@ -7,7 +7,19 @@ from collections.abc import Mapping, Sequence
 from pathlib import Path
 from typing import Any
 
+from contactcal.infer.bench.config import SESSION_REFERENCE
+from contactcal.infer.bench.markdown import Columns, md_table
+from contactcal.infer.bench.onset import (
+    FALSE_ONSET,
+    MISSED,
+    ONSET_COLUMNS,
+    ONSET_NOTE,
+    found_errors,
+    onset_shown,
+    onset_table,
+)
 from contactcal.infer.bench.plots import plot_error_vs_pressure, plot_pareto, plot_robustness
+from contactcal.infer.bench.robustness_text import robustness_text
 from contactcal.infer.bench.scoring import (
     ScoredFrame,
     bin_label,
@@ -15,12 +27,10 @@ from contactcal.infer.bench.scoring import (
     coverage_row,
     covering_bins,
     median_or_none,
+    not_references,
 )
 from contactcal.infer.bench.timing import TIMED_KPA
 from contactcal.infer.files.atomic import run_outputs, write_json, write_text
-
-#: Markdown table columns: (key, header, shown as %).
-Columns = Sequence[tuple[str, str, bool]]
 
 BIN_COLUMNS: Columns = (
     ("method", "method", False),
@@ -51,11 +61,6 @@ COVERAGE_COLUMNS: Columns = (
     ("contact_coverage", "coverage (contact)", True),
     ("median_rel_width", "median rel. width", True),
 )
-ONSET_COLUMNS: Columns = (
-    ("method", "method", False),
-    ("median_abs", "median abs. error kPa", False),
-    ("max_abs", "max abs. error kPa", False),
-)
 HARD_COLUMNS: Columns = (
     ("method", "method", False),
     ("sessions", "sessions", False),
@@ -64,82 +69,9 @@ HARD_COLUMNS: Columns = (
     ("median_abs_rel_error_3to5", "median abs. rel. error 3-5 kPa", True),
     ("no_contact_accuracy", "no-contact acc.", True),
     ("median_abs_onset_error_kpa", "median abs. onset error kPa", False),
-    ("onset_missing", "no onset found", False),
+    ("onset_missing", "missed onset", False),
+    ("false_onsets", "false onset", False),
 )
-
-
-def _worst_in_range(rows: Sequence[Mapping[str, Any]], methods: Sequence[str]) -> str:
-    """One line per method: the largest error ratio at a randomised, non-baseline level."""
-    lines = []
-    for m in methods:
-        cands = [
-            r
-            for r in rows
-            if r["method"] == m and r["in_range"] and not r["baseline"] and r["error_ratio"]
-        ]
-        if not cands:
-            lines.append(f"- {m}: no randomised level with a defined error ratio")
-            continue
-        w = max(cands, key=lambda r: r["error_ratio"])
-        lines.append(
-            f"- {m}: worst ratio inside the randomised ranges {_ratio(w)} "
-            f"({w['perturbation']} {w['label']})"
-        )
-    return "\n".join(lines)
-
-
-def _ratio(row: Mapping[str, Any]) -> str | None:
-    """A robustness row's error ratio with its 90 % interval: ``"2.19× (1.41-3.02)"``."""
-    ratio, interval = row["error_ratio"], row.get("error_ratio_interval")
-    if ratio is None:
-        return None
-    text = f"{ratio:.2f}×"
-    return text if interval is None else f"{text} ({interval[0]:.2f}-{interval[1]:.2f})"
-
-
-def robustness_text(rob: Mapping[str, Any]) -> str:
-    """The report's robustness section: one table row per perturbation and level, each method's
-    error at ≥ 5 kPa, its ratio to the baseline level and its no-contact accuracy."""
-    methods = list(dict.fromkeys(r["method"] for r in rob["rows"]))
-    cols: list[tuple[str, str, bool]] = [("perturbation", "perturbation", False)]
-    cols.append(("label", "level", False))
-    cols.append(("range", "randomised", False))
-    for m in methods:
-        cols += [(f"{m} err", f"{m} ≥5 kPa", True), (f"{m} ratio", "× base (90 % interval)", False)]
-        cols.append((f"{m} nc", f"{m} no-contact acc.", True))
-    table: dict[tuple[str, float], dict[str, Any]] = {}
-    for r in rob["rows"]:
-        row = table.setdefault(
-            (r["perturbation"], r["level"]), {**r, "range": "yes" if r["in_range"] else "no"}
-        )
-        m = r["method"]
-        row[f"{m} err"], row[f"{m} ratio"] = r["median_abs_rel_error_ge5"], _ratio(r)
-        row[f"{m} nc"] = r["no_contact_accuracy"]
-    first = rob["rows"][0]
-    refs = "\n".join(
-        f"- {p['name']} ({p['unit']}): reference {p['reference']}" for p in rob["perturbations"]
-    )
-    return (
-        "## Robustness to perturbed frames\n\n"
-        f"{len(rob['frames'])} frames sampled evenly across pressures and sessions (seed "
-        f"{rob['seed']}), each measured at every\nlevel of every perturbation "
-        "(`contactcal.infer.bench.perturb` documents the levels and the truth).\n"
-        f"≥5 kPa: median |relative area error| over the {first['contact_frames_ge5']} frames "
-        "with true contact at ≥ 5 kPa; × base: its\nratio to the perturbation's unperturbed "
-        "level, with a 90 % bootstrap interval over\nthose frames (each resample keeps a frame's "
-        "errors at both levels); no-contact acc.: share of the "
-        f"{first['no_contact_frames']} frames without true contact\nreported as no contact. "
-        f"The reference frame per perturbation:\n\n{refs}\n\n"
-        "randomised: the level lies inside what the training renders or augmentation randomise "
-        "(`suite.PERTURBATIONS`),\nwhere the error target (≤ 2× the unperturbed error) "
-        "applies.\n\n"
-        + _worst_in_range(rob["rows"], methods)
-        + "\n\n"
-        + md_table(list(table.values()), cols)
-        + "\n\n![robustness](robustness.png)\n\n"
-        + "No-contact accuracy per level (frames without true contact):\n\n"
-        + "![robustness, no-contact accuracy](robustness_no_contact.png)"
-    )
 
 
 def _no_contact_accuracy(frames: Sequence[ScoredFrame]) -> float | None:
@@ -172,10 +104,9 @@ def hard_table(
                         [abs(f.rel_error) for f in cont if 3 <= f.pressure_kpa < 5]
                     ),
                     "no_contact_accuracy": _no_contact_accuracy(fs),
-                    "median_abs_onset_error_kpa": median_or_none(
-                        [abs(o["error_kpa"]) for o in ons if o["error_kpa"] is not None]
-                    ),
-                    "onset_missing": sum(o["onset_kpa"] is None for o in ons),
+                    "median_abs_onset_error_kpa": median_or_none(found_errors(ons)),
+                    "onset_missing": sum(o["outcome"] == MISSED for o in ons),
+                    "false_onsets": sum(o["outcome"] == FALSE_ONSET for o in ons),
                 }
             )
     return out
@@ -200,41 +131,6 @@ def coverage_table(
             out.append({"method": method, "bin_kpa": bin_label(lo, hi), **coverage_row(sel)})
         out.append({"method": method, "bin_kpa": "all", **coverage_row(fs)})
     return out
-
-
-def onset_table(onset: Sequence[Mapping[str, Any]]) -> list[dict[str, Any]]:
-    """Per method: median and max |onset error| (kPa) over the sessions where one was found."""
-    out = []
-    for method in sorted({o["method"] for o in onset}):
-        errs = [
-            abs(o["error_kpa"])
-            for o in onset
-            if o["method"] == method and o["error_kpa"] is not None
-        ]
-        out.append(
-            {
-                "method": method,
-                "median_abs": median_or_none(errs),
-                "max_abs": max(errs, default=None),
-            }
-        )
-    return out
-
-
-def _fmt(v: object, pct: bool = False) -> str:
-    if v is None:
-        return "–"
-    if isinstance(v, float):
-        return f"{100 * v:.1f} %" if pct else f"{v:.3g}"
-    return str(v)
-
-
-def md_table(rows: Sequence[Mapping[str, Any]], cols: Columns) -> str:
-    """A Markdown table of ``rows`` (missing keys show as "–")."""
-    head = "| " + " | ".join(c[1] for c in cols) + " |"
-    sep = "|" + "---|" * len(cols)
-    body = ["| " + " | ".join(_fmt(r.get(key), pct) for key, _, pct in cols) + " |" for r in rows]
-    return "\n".join([head, sep, *body])
 
 
 def _digests(results: Mapping[str, Any]) -> str:
@@ -277,22 +173,47 @@ def _few_frames_note(bins: Sequence[Mapping[str, Any]]) -> str:
     )
 
 
+def _no_reference_modes(results: Mapping[str, Any]) -> str:
+    """Without reference frames: a paragraph saying what each method did instead
+    (``no_reference``; "" with them, or in results written before it was recorded)."""
+    modes = results.get("no_reference") or {}
+    if not modes:
+        return ""
+    lines = "\n".join(f"- {method}: {note}." for method, note in modes.items())
+    return f"\n\nWithout reference frames, per method:\n\n{lines}"
+
+
+def _reference_note(results: Mapping[str, Any]) -> str:
+    """With reference frames: the sentence saying they are not scored ("" without)."""
+    if results["reference"] != SESSION_REFERENCE:
+        return ""
+    return (
+        "\nEach session's reference frame is not scored (it is measured against itself): the "
+        "error, coverage and\nhard-case tables, the figures and the robustness sample leave it "
+        "out; the onset reads whole\nsessions. Its records in `results.json` say "
+        '`"reference": true`.'
+    )
+
+
 def report_text(results: Mapping[str, Any]) -> str:
-    """``report.md`` from the results (with their ``bins``, ``hard`` and ``coverage`` tables)."""
+    """``report.md`` from the results (with their ``bins``, ``hard``, ``coverage`` and
+    ``onset_table`` tables)."""
     cfg = results["config"]
     w, h = cfg["full_size"]
     sections = [
         "# contactcal benchmark\n\n"
         f"Data: `{results['data']}` — {results['sessions']} sessions, {results['frames']} frames.\n"
         f"Model: `{results['model']}`{_digests(results)}. Reference frame: "
-        f"{results['reference']}. Areas are compared in input pixels with the exact masks; "
-        "relative\nerrors and the IoU of the method's outline with the mask over frames with true "
-        "contact. Timing: median of "
+        f"{results['reference']}.{_reference_note(results)} Areas are compared in input pixels "
+        "with the exact masks; relative\nerrors and the IoU of the method's outline with the "
+        "mask over frames with true contact. Timing: median of "
         f"{cfg['repeats']} runs over\n{_timed_frames(results)} frames upscaled to {w}×{h}, "
-        "in one process. Rows `(soft area)`: the same prediction measured by its probability\n"
+        "in one process; each median leaves out\none untimed warm-up run of its "
+        "configuration. Rows `(soft area)`: the same prediction measured by its\nprobability "
         "mass; rows `(session rule)`: the same frames after `calibrate`'s session rule (a region "
         "that\nshrinks at the next pressure beyond both stated intervals, and a contact left "
-        "below the\ncontact range, count as no contact), i.e. what a calibration reports.",
+        "below the\ncontact range, count as no contact), i.e. what a calibration reports."
+        + _no_reference_modes(results),
         "## Area error per pressure bin\n\n"
         "Bins are `[lo, hi)` kPa (a frame at 3 kPa is in 3-5; the last bin holds 20 kPa)."
         + _few_frames_note(results["bins"])
@@ -307,7 +228,8 @@ def report_text(results: Mapping[str, Any]) -> str:
         "width\nover the true area, frames with true contact.\n\n"
         + md_table(results["coverage"], COVERAGE_COLUMNS),
         "## Contact onset (estimated from each method's frames vs the mechanics' onset)\n\n"
-        + md_table(onset_table(results["onset"]), ONSET_COLUMNS),
+        + f"{ONSET_NOTE}\n\n"
+        + md_table(onset_shown(results["onset_table"]), ONSET_COLUMNS),
         "## Hard cases\n\n" + md_table(results["hard"], HARD_COLUMNS),
     ]
     if "robustness" in results:
@@ -320,13 +242,18 @@ def accuracy_tables(
     onset: Sequence[Mapping[str, Any]],
     bins: Sequence[tuple[float, float]],
 ) -> dict[str, list[dict[str, Any]]]:
-    """The ``bins``, ``hard`` and ``coverage`` tables of one dataset's scored frames (the last
-    bin opened when a frame lies past it: :func:`~contactcal.infer.bench.scoring.covering_bins`)."""
-    bins = covering_bins([f.pressure_kpa for f in frames], bins)
+    """The ``bins``, ``hard``, ``coverage`` and ``onset_table`` (:func:`onset_table`) tables of
+    one dataset's scored frames (the last bin opened when a frame lies past it:
+    :func:`~contactcal.infer.bench.scoring.covering_bins`). The sessions' reference frames are
+    left out of the tables (:func:`~contactcal.infer.bench.scoring.not_references`); ``onset``
+    was estimated from whole sessions."""
+    scored = not_references(frames)
+    bins = covering_bins([f.pressure_kpa for f in scored], bins)
     return {
-        "bins": bin_table(frames, bins),
-        "hard": hard_table(frames, onset),
-        "coverage": coverage_table(frames, bins),
+        "bins": bin_table(scored, bins),
+        "hard": hard_table(scored, onset),
+        "coverage": coverage_table(scored, bins),
+        "onset_table": onset_table(onset),
     }
 
 
@@ -349,7 +276,7 @@ def write_report(
     bins: Sequence[tuple[float, float]],
     extra_text: str = "",
 ) -> None:
-    """Add the ``bins``, ``hard`` and ``coverage`` tables to ``results``; write ``results.json``,
+    """Add the tables of :func:`accuracy_tables` to ``results``; write ``results.json``,
     the figures (``error_vs_pressure.png``, ``pareto.png``, with ``robustness`` results also
     ``robustness.png`` and ``robustness_no_contact.png``) and ``report.md`` into ``out_dir``,
     all or nothing (:data:`REPORT_FILES`).
@@ -368,7 +295,7 @@ def write_report(
     text = report_text(results)
     with run_outputs() as outputs:  # every file of the report, or none
         write_json(outputs.stage(out / "results.json"), results)
-        plot_error_vs_pressure(outputs.stage(out / "error_vs_pressure.png"), frames)
+        plot_error_vs_pressure(outputs.stage(out / "error_vs_pressure.png"), not_references(frames))
         pareto = outputs.stage(out / "pareto.png")
         plot_pareto(pareto, results["bins"], results["timing"], (size[0], size[1]))
         if "robustness" in results:

@@ -1,8 +1,9 @@
 """Robustness suite of ``contactcal bench --robustness``: every method's error per level of each
 perturbation (:mod:`~contactcal.infer.bench.perturb`) of a bounded sample of held-out frames.
 
-Frames are sampled deterministically: all frames of all sessions (reference frames included, as
-in the accuracy tables) ordered by pressure then session, ``n`` taken evenly spaced. Each is
+Frames are sampled deterministically: all frames of all sessions but their reference frames (one
+would be its own reference under the "same"-reference perturbations; the accuracy tables leave
+them out too) ordered by pressure then session, ``n`` taken evenly spaced. Each is
 perturbed at each level (its session's reference as the perturbation says), and measured by
 each method from decoded arrays (``set_reference`` then ``measure``; no reduced JPEG decode).
 A level's random draws come from ``numpy.random.default_rng([seed, frame, perturbation, level,
@@ -57,18 +58,29 @@ class Sample:
 def sample_rows(
     sessions: Mapping[str, Sequence[IndexRow]], n: int
 ) -> list[tuple[IndexRow, IndexRow]]:
-    """``n`` (frame, reference) row pairs spread evenly over pressures and sessions.
+    """``n`` (frame, reference) row pairs spread evenly over pressures and sessions, never a
+    session's reference frame itself.
 
     Args:
         sessions: rows per session, sorted by pressure (the first is the reference).
-        n: frames wanted (>= 1); all frames when the dataset has fewer.
+        n: frames wanted (>= 1); all frames but the references when the dataset has fewer.
+
+    Raises:
+        ValueError: ``n < 1``, or no session has a frame besides its reference (naming the
+            dataset's ``index.csv``).
     """
     if n < 1:
         raise ValueError(f"the robustness suite needs >= 1 frame, got {n}")
     pool = sorted(
-        ((r, rows[0]) for rows in sessions.values() for r in rows),
+        ((r, rows[0]) for rows in sessions.values() for r in rows[1:]),
         key=lambda pair: (pair[0].pressure_kpa, pair[0].session_key, str(pair[0].frame)),
     )
+    if not pool:
+        first = next(iter(sessions.values()))[0]
+        raise ValueError(
+            f"{first.dataset / 'index.csv'}: every session holds its reference frame only; the "
+            "robustness suite needs frames besides each session's 0 kPa frame"
+        )
     if n >= len(pool):
         return pool
     return [pool[int((i + 0.5) * len(pool) / n)] for i in range(n)]
@@ -199,7 +211,8 @@ def summary_rows(
 ) -> list[dict[str, Any]]:
     """Per perturbation, level (in ``levels`` order) and method: the error at ≥ 5 kPa, its ratio
     to the baseline level's with :func:`ratio_interval` (generator seeded by ``seed`` and the
-    row), and the no-contact accuracy (None where no frame defines one)."""
+    row), its change from the baseline level's (``error_change_points``: level − baseline, in
+    percentage points) and the no-contact accuracy (None where no frame defines one)."""
     rows = []
     for j, p in enumerate(PERTURBATIONS):
         base = {
@@ -227,6 +240,9 @@ def summary_rows(
                         if err is None or not base[method]
                         else err / base[method],
                         "error_ratio_interval": None if interval is None else list(interval),
+                        "error_change_points": None
+                        if err is None or base[method] is None
+                        else 100.0 * (err - base[method]),
                         "no_contact_frames": every["no_contact_frames"],
                         "no_contact_accuracy": every["no_contact_accuracy"],
                     }
@@ -239,13 +255,21 @@ def run_robustness(
     model: str | os.PathLike[str] | None,
     frames: int,
     seed: int = 0,
+    not_perturbed: Sequence[str] = (),
 ) -> dict[str, Any]:
     """The robustness suite on ``frames`` sampled frames (see the module docstring).
 
+    Args:
+        sessions: rows per session, sorted by pressure (the first is the reference).
+        model: the U-Net's ONNX model (None: the shipped one).
+        frames: frames to sample.
+        seed: seed of the random perturbations.
+        not_perturbed: the methods of the run the suite leaves out (``--variant`` models).
+
     Returns:
         ``results.json``'s ``"robustness"``: ``frames`` (the sampled files), ``seed``,
-        ``perturbations`` (name, levels, labels, baseline, unit, reference handling) and
-        ``rows`` (:func:`summary_rows`).
+        ``perturbations`` (name, levels, labels, baseline, unit, reference handling), ``rows``
+        (:func:`summary_rows`) and ``not_perturbed``.
     """
     samples = [load_sample(r, ref) for r, ref in sample_rows(sessions, frames)]
     methods = [make_method(name, model, threads=1) for name in METHODS]
@@ -266,4 +290,5 @@ def run_robustness(
             for p in PERTURBATIONS
         ],
         "rows": summary_rows(scored, METHODS, seed),
+        "not_perturbed": list(not_perturbed),
     }

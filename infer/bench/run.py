@@ -15,12 +15,12 @@ from pathlib import Path
 from typing import Any
 
 from contactcal.infer.bench.accuracy import (
-    check_references,
     evaluate,
-    onset_errors,
+    no_reference_modes,
     to_record,
+    variant_name,
 )
-from contactcal.infer.bench.config import BenchConfig
+from contactcal.infer.bench.config import SESSION_REFERENCE, BenchConfig
 from contactcal.infer.bench.crosscheck import (
     crosscheck_text,
     labels,
@@ -29,6 +29,8 @@ from contactcal.infer.bench.crosscheck import (
     side_by_side,
 )
 from contactcal.infer.bench.dataset import IndexRow, check_distinct, read_index, sessions_of
+from contactcal.infer.bench.onset import onset_errors
+from contactcal.infer.bench.preflight import check_datasets
 from contactcal.infer.bench.report import write_report
 from contactcal.infer.bench.robustness import run_robustness
 from contactcal.infer.bench.scoring import ScoredFrame
@@ -55,9 +57,12 @@ def run_bench(
             ``data`` (:mod:`~contactcal.infer.bench.crosscheck`).
 
     Returns:
-        The content of ``results.json``: header keys, ``config``, ``records`` (one per method
-        and frame, with the stated ``area_interval_px`` and ``covered``), ``onset``, ``timing``,
-        ``bins``, ``hard`` and ``coverage`` (per method and pressure bin); with ``crosscheck``
+        The content of ``results.json``: header keys (with ``use_reference=False`` also
+        ``no_reference``: what each method does without one), ``config``, ``records`` (one per
+        method and frame, with the stated ``area_interval_px`` and ``covered``), ``onset``,
+        ``timing``, ``bins``, ``hard`` and ``coverage`` (per method and pressure bin),
+        ``onset_table`` (per method: sessions covered, onsets found, missed, false onsets); with
+        ``crosscheck``
         also ``crosscheck`` (one results object per dataset, with its ``label``) and
         ``side_by_side`` (per method and bin, every dataset's error, recall and no-contact
         accuracy); with ``config.robustness_frames`` also ``robustness``
@@ -66,23 +71,22 @@ def run_bench(
     Raises:
         ValueError: unusable dataset folder (the message names the file), or a cross-check
             folder that is ``data`` or another cross-check folder, or a session without a 0 kPa
-            reference frame (:func:`~contactcal.infer.bench.accuracy.check_references`).
+            reference frame, or a frame or mask file that is not a readable image, a mask of
+            another size than its frame, or a frame of another size than its reference
+            (:func:`~contactcal.infer.bench.preflight.check_datasets`).
     """
     config = config or BenchConfig()
     names = [f"--data {data}", *(f"--crosscheck {c}" for c in crosscheck)]
     check_distinct([data, *crosscheck], names)  # a copy would be scored as "<name>#2"
     sessions = sessions_of(read_index(data))
-    others = [read_sessions(c) for c in crosscheck]  # every folder checked before any work
-    if config.use_reference or config.robustness_frames:  # robustness always uses references
-        check_references(sessions, for_robustness=not config.use_reference)
-    for other in others if config.use_reference else []:
-        check_references(other)
+    others = [read_sessions(c) for c in crosscheck]
+    check_datasets(sessions, others, config)  # every folder checked before any work
     frames = evaluate(sessions, model, config.use_reference, config.variants)
     onset = onset_errors(frames)
     results: dict[str, Any] = {
         "data": str(Path(data).resolve()),
         "model": "shipped" if model is None else os.fspath(model),
-        "reference": "session zero-pressure frame" if config.use_reference else "none",
+        "reference": SESSION_REFERENCE if config.use_reference else "none",
         "models": model_digests(model, config.variants),
         "sessions": len(sessions),
         "frames": sum(len(v) for v in sessions.values()),
@@ -95,9 +99,15 @@ def run_bench(
         "onset": onset,
         "timing": timing(sessions, model, config),
     }
+    if not config.use_reference:  # which mode ran (a U-Net's blank placeholder or the frame)
+        results["no_reference"] = no_reference_modes(model, config.variants)
     if config.robustness_frames:
         results["robustness"] = run_robustness(
-            sessions, model, config.robustness_frames, config.seed
+            sessions,
+            model,
+            config.robustness_frames,
+            config.seed,
+            [variant_name(label) for label, _ in config.variants],
         )
     extra = ""
     if crosscheck:
@@ -112,7 +122,7 @@ def model_digests(
     """Which files were measured: ``{"unet" | "unet[label]": {"path", "sha256"}}``, the
     method names of the records (the shipped model's path is the installed file's)."""
     files = {"unet": DEFAULT_MODEL if model is None else Path(model)}
-    files |= {f"unet[{label}]": Path(path) for label, path in variants}
+    files |= {variant_name(label): Path(path) for label, path in variants}
     return {k: {"path": os.fspath(v), "sha256": sha256_file(v)} for k, v in files.items()}
 
 

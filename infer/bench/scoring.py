@@ -68,6 +68,7 @@ class ScoredFrame:
     onset_kpa: float | None = None  # kPa, the session's true onset
     hard: bool = False  # the session was drawn from the hard ranges
     area_interval_px: tuple[float, float] | None = None  # px, the stated interval; None: none
+    reference: bool = False  # the session's reference frame, measured against itself (bench)
 
     @property
     def true_contact(self) -> bool:
@@ -88,6 +89,12 @@ class ScoredFrame:
             return None
         lower, upper = self.area_interval_px
         return lower <= self.true_area_px <= upper
+
+
+def not_references(frames: Sequence[ScoredFrame]) -> list[ScoredFrame]:
+    """The frames a table scores: all but the sessions' reference frames (each measured against
+    itself; ``bench`` keeps them for the onset and in its records, marked ``reference``)."""
+    return [f for f in frames if not f.reference]
 
 
 def session_revised(frames: Sequence[ScoredFrame]) -> np.ndarray:

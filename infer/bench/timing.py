@@ -2,9 +2,9 @@
 
 Frames of the dataset are upscaled to ``BenchConfig.full_size`` (2592×1944) and timed end to
 end: on decoded arrays, and including the JPEG or PNG decode from a file. Each number is the
-median of several runs in one process, so ratios compare like with like. A configuration's
-thread count holds for onnxruntime and OpenCV alike (OpenCV would otherwise spread the classical
-routine's full-resolution filters over every core).
+median of several runs in one process after one untimed warm-up run, so ratios compare like
+with like. A configuration's thread count holds for onnxruntime and OpenCV alike (OpenCV would
+otherwise spread the classical routine's full-resolution filters over every core).
 """
 
 from __future__ import annotations
@@ -57,7 +57,9 @@ class Timed:
 
 
 def median_ms(fn: Callable[[], object], repeats: int) -> float:
-    """Median wall time of ``fn()`` over ``repeats`` runs, ms."""
+    """Median wall time of ``fn()`` over ``repeats`` runs after one untimed warm-up run (first-call
+    costs: onnxruntime's first run, OpenCV's buffers, the files' page cache), ms."""
+    fn()
     times = []
     for _ in range(repeats):
         t0 = time.perf_counter()
@@ -163,7 +165,6 @@ def time_network(model: str | os.PathLike[str] | None, repeats: int) -> dict[str
     def run() -> None:
         net.ort_session.run(None, {net.input_name: x})
 
-    run()  # warm-up
     return {
         "config": "unet network only",
         "threads": 1,
