@@ -15,9 +15,8 @@ from pathlib import Path
 from contactcal.infer.bench.config import BenchConfig
 from contactcal.infer.bench.dataset import IndexRow
 from contactcal.infer.calibration.gate_check import REST_KPA
-from contactcal.infer.image.jpeg import jpeg_size
 from contactcal.infer.image.png import png_size
-from contactcal.infer.image.read import load_image, read_file_bytes
+from contactcal.infer.image.read import frame_size, read_file_bytes
 
 
 def check_datasets(
@@ -73,18 +72,16 @@ def check_references(
 
 def file_size(path: Path) -> tuple[int, int]:
     """``(height, width)`` of an image file in pixels, as
-    :func:`~contactcal.infer.image.read.load_image` reads it: a PNG's or JPEG's from its header,
-    another format's decoded.
+    :func:`~contactcal.infer.image.read.load_image` reads it: a PNG's from its header, another
+    format's as :func:`~contactcal.infer.image.read.frame_size` reads it (a JPEG's header).
 
     Raises:
         ImageError: missing, unreadable, truncated, or not the format its suffix names.
     """
-    data = read_file_bytes(path)
+    data = read_file_bytes(path)  # the content checks, and a PNG's header
     if (size := png_size(data)) is not None:
         return size
-    if path.suffix.lower() in (".jpg", ".jpeg"):
-        return jpeg_size(path)
-    h, w = load_image(path).shape
+    w, h = frame_size(path)
     return h, w
 
 

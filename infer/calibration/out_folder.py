@@ -14,7 +14,7 @@ from pathlib import Path
 
 from contactcal.infer.calibration.record import earlier_record_note
 from contactcal.infer.files.atomic import TEMP_NAME
-from contactcal.infer.video.preview_files import PREVIEW_FILES
+from contactcal.infer.video.preview_files import previews_in
 
 
 def check_reused_out(out: Path, device_id: str | None, manifest: Path | None) -> str | None:
@@ -90,7 +90,7 @@ def check_no_recording(out: Path, manifest: Path) -> None:
     frames = out / "frames"
     if manifest.resolve() == (frames / "manifest.csv").resolve():
         return
-    held = [f"{n} (a recording's preview)" for n in PREVIEW_FILES if (out / n).is_file()]
+    held = [f"{n} (a recording's preview)" for n in previews_in(out)]
     if frames.is_dir() and any(TEMP_NAME.match(n) is None for n in os.listdir(frames)):
         held.insert(0, "frames/ (a recording's frames)")
     if held:

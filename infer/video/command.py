@@ -108,10 +108,10 @@ def check_fresh_recording(out: Path) -> None:
     Raises:
         ValueError: naming the folder or file and what to do.
     """
-    from contactcal.infer.video.preview_files import PREVIEW_FILES
+    from contactcal.infer.video.preview_files import previews_in
 
     check_fresh_frames(out / "frames")
-    stale = [str(out / name) for name in PREVIEW_FILES if (out / name).is_file()]
+    stale = [str(out / name) for name in previews_in(out)]
     if stale:
         raise ValueError(
             f"{' and '.join(stale)}: the preview of an earlier recording; expected a new --out "
