@@ -3,7 +3,6 @@
 from __future__ import annotations
 
 import csv
-import functools
 import hashlib
 import json
 import math
@@ -14,7 +13,6 @@ from typing import Any
 import pytest
 from procedural import write_dataset
 
-from contactcal.infer.bench import config as bench_config
 from contactcal.infer.bench import run as bench_run
 from contactcal.infer.bench.accuracy import from_record, to_record
 from contactcal.infer.bench.config import BenchConfig
@@ -365,14 +363,10 @@ def test_bad_dataset_folder(tmp_path: Path) -> None:
 def test_cli(
     bench: tuple[Path, Path, dict[str, Any]],
     tmp_path: Path,
-    monkeypatch: pytest.MonkeyPatch,
+    small_bench_cli: None,
     capsys: pytest.CaptureFixture[str],
 ) -> None:
     data, _, _ = bench
-    # The CLI times at 2592×1944 with 1 and 2 threads; keep the test fast.
-    tiny = functools.partial(BenchConfig, full_size=TINY.full_size, threads=TINY.threads)
-    monkeypatch.setattr(bench_config, "BenchConfig", tiny)
-    monkeypatch.setattr(bench_run, "BenchConfig", tiny)
     out = tmp_path / "report"
     args = ["bench", "--data", str(data), "--out", str(out), "--repeats", "1"]
     assert main([*args, "--timing-frames", "1"]) == 0

@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import functools
 import itertools
 import json
 from pathlib import Path
@@ -13,8 +12,6 @@ import pytest
 from procedural import draw_frame, write_dataset
 
 from contactcal.infer.bench import command as bench_command
-from contactcal.infer.bench import config as bench_config
-from contactcal.infer.bench import run as bench_run
 from contactcal.infer.bench.config import BenchConfig
 from contactcal.infer.bench.dataset import read_index, sessions_of
 from contactcal.infer.bench.perturb import SPECK_DISC, offset, resolution, speck
@@ -283,12 +280,9 @@ def test_baselines_agree(bench: tuple[Path, dict[str, Any]]) -> None:
 
 
 def test_off_by_default_and_cli(
-    tmp_path: Path, monkeypatch: pytest.MonkeyPatch, capsys: pytest.CaptureFixture[str]
+    tmp_path: Path, small_bench_cli: None, capsys: pytest.CaptureFixture[str]
 ) -> None:
     data = write_dataset(tmp_path / "data", fingers=2)
-    tiny = functools.partial(BenchConfig, full_size=TINY.full_size, threads=TINY.threads)
-    monkeypatch.setattr(bench_config, "BenchConfig", tiny)
-    monkeypatch.setattr(bench_run, "BenchConfig", tiny)
     args = ["bench", "--data", str(data), "--repeats", "1", "--timing-frames", "1"]
     assert main([*args, "--out", str(tmp_path / "plain")]) == 0
     assert "robustness" not in json.loads((tmp_path / "plain" / "results.json").read_text())
@@ -314,15 +308,12 @@ def test_off_by_default_and_cli(
 
 
 def test_variants_left_out_of_the_suite_are_said(
-    tmp_path: Path, monkeypatch: pytest.MonkeyPatch, capsys: pytest.CaptureFixture[str]
+    tmp_path: Path, small_bench_cli: None, capsys: pytest.CaptureFixture[str]
 ) -> None:
     """A --variant was silently left out of the robustness suite."""
     from contactcal.infer.methods.unet.runner import DEFAULT_MODEL
 
     data = write_dataset(tmp_path / "data", fingers=1)
-    tiny = functools.partial(BenchConfig, full_size=TINY.full_size, threads=TINY.threads)
-    monkeypatch.setattr(bench_config, "BenchConfig", tiny)
-    monkeypatch.setattr(bench_run, "BenchConfig", tiny)
     args = ["bench", "--data", str(data), "--repeats", "1", "--timing-frames", "1"]
     args += ["--robustness", "--robustness-frames", "1"]
     out = tmp_path / "v"
