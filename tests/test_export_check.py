@@ -17,6 +17,7 @@ from contactcal.train.export import load_run, to_onnx  # noqa: E402
 from contactcal.train.export_check import check_decisions  # noqa: E402
 from contactcal.train.loop import train  # noqa: E402
 from contactcal.train.model import UNet  # noqa: E402
+from contactcal.train.split import validation_rows  # noqa: E402
 
 
 @pytest.mark.slow
@@ -28,7 +29,8 @@ def test_decisions_agree_and_disagreement_is_caught(tmp_path: Path) -> None:
     net.load_state_dict(ckpt["model"])
     data_bytes = to_onnx(net, cfg.model.in_channels, cfg.input_size, 17).SerializeToString()
     spec = cfg.spec()
-    assert check_decisions(net, data_bytes, spec, info, cfg.val_fraction, cfg.seed) > 0
+    val = validation_rows(tmp_path / "run", info, cfg.val_fraction, cfg.seed)
+    assert check_decisions(net, data_bytes, spec, val) > 0
     # A graph that always says "contact everywhere" (logits +30) must be caught.
     other = UNet(cfg.model).eval()
     with torch.no_grad():
@@ -38,8 +40,8 @@ def test_decisions_agree_and_disagreement_is_caught(tmp_path: Path) -> None:
         last.fill_(30.0)
     wrong = to_onnx(other, cfg.model.in_channels, cfg.input_size, 17).SerializeToString()
     with pytest.raises(RuntimeError, match="decide differently"):
-        check_decisions(net, wrong, spec, info, cfg.val_fraction, cfg.seed)
+        check_decisions(net, wrong, spec, val)
     missing = {**info, "data_dirs": [str(tmp_path / "gone")]}
     with pytest.raises(ValueError, match="gone"):
-        check_decisions(net, data_bytes, spec, missing, cfg.val_fraction, cfg.seed)
+        validation_rows(tmp_path / "run", missing, cfg.val_fraction, cfg.seed)
     assert json.loads((tmp_path / "run" / "config.json").read_text())["data_dirs"]

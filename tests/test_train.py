@@ -25,10 +25,11 @@ from contactcal.train.augment import AugmentConfig, Augmenter, blur_kernel_size 
 from contactcal.train.checkpoint import config_diff, config_from_dict, config_to_dict  # noqa: E402
 from contactcal.train.commands import add_parsers, build_config  # noqa: E402
 from contactcal.train.config import TrainConfig  # noqa: E402
-from contactcal.train.data import build_cache, split_by_finger  # noqa: E402
+from contactcal.train.data import build_cache  # noqa: E402
 from contactcal.train.loop import train  # noqa: E402
 from contactcal.train.metrics import score_frame, segmentation_loss, summarise  # noqa: E402
 from contactcal.train.model import UNet, UNetConfig, count_parameters  # noqa: E402
+from contactcal.train.split import split_by_finger  # noqa: E402
 
 
 def tiny_config(**kw: object) -> TrainConfig:

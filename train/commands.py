@@ -7,7 +7,6 @@ deployment CLI stays fast and works without the ``train`` extra installed.
 from __future__ import annotations
 
 import argparse
-import json
 from pathlib import Path
 from typing import Any
 
@@ -144,15 +143,12 @@ def build_config(args: argparse.Namespace) -> Any:
     import dataclasses
 
     from contactcal.train.config import TrainConfig, saved_train_config
+    from contactcal.train.run_folder import read_run_info
 
     base = TrainConfig()
     saved = args.out / "config.json"
     if args.resume and saved.is_file():
-        try:
-            info = json.loads(saved.read_text(encoding="utf-8"))
-        except (OSError, json.JSONDecodeError) as exc:
-            raise ValueError(f"{saved}: unreadable run config ({exc})") from exc
-        base = saved_train_config(info.get("train"), str(saved))
+        base = saved_train_config(read_run_info(args.out).get("train"), str(saved))
     given = {
         "epochs": args.epochs,
         "device": args.device,

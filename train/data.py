@@ -6,8 +6,8 @@ code path: its session's lowest-pressure frame (the first row of
 :func:`~contactcal.infer.methods.unet.prepare.session_reference`; it fixes the shrink of large
 frames (:func:`~contactcal.infer.methods.unet.shrink.deployed_shrink`), the crop (and, for a
 2-channel model, the reference channel) of all of the session's frames. The mask is shrunk and
-cropped the same way (area resize, threshold 0.5). Train/validation split is by finger, never by
-frame: frames of one finger share its fingerprint texture and would leak.
+cropped the same way (area resize, threshold 0.5). The train/validation split (by finger, never
+by frame) is :mod:`contactcal.train.split`'s.
 """
 
 from __future__ import annotations
@@ -46,32 +46,6 @@ class CachedSet:
 
     def __len__(self) -> int:
         return int(self.x.shape[0])
-
-
-def split_by_finger(
-    rows: Sequence[IndexRow], val_fraction: float, seed: int
-) -> tuple[list[IndexRow], list[IndexRow]]:
-    """Deterministic train/validation split by finger (:attr:`IndexRow.finger_key`).
-
-    Args:
-        rows: all frames.
-        val_fraction: fraction of FINGERS held out (at least one when there are >= 2 fingers
-            and the fraction is > 0).
-        seed: split seed (numpy Generator).
-
-    Returns:
-        ``(train, val)`` rows, each in the input order; no finger appears in both.
-    """
-    if not 0.0 <= val_fraction < 1.0:
-        raise ValueError(f"val_fraction must be in [0, 1), got {val_fraction}")
-    fingers = sorted({r.finger_key for r in rows})
-    n_val = round(val_fraction * len(fingers))
-    if val_fraction > 0 and len(fingers) >= 2:
-        n_val = min(max(n_val, 1), len(fingers) - 1)
-    order = np.random.default_rng(seed).permutation(len(fingers))
-    held = {fingers[i] for i in order[:n_val]}
-    train = [r for r in rows if r.finger_key not in held]
-    return train, [r for r in rows if r.finger_key in held]
 
 
 def dataset_digest(data_dirs: Sequence[str | os.PathLike[str]]) -> str:

@@ -10,7 +10,8 @@ deployment's :func:`contactcal.infer.methods.unet.spec.read_spec` accepts:
   incl. ``input_size``), ``threshold`` (probability), ``min_contact_area_px`` (network pixels),
   ``output`` ("logits"), ``interval`` (JSON of
   :class:`~contactcal.infer.methods.unet.spec.IntervalSpec`: the stated 90 % interval of a frame's
-  area, ALWAYS calibrated here on the run's validation fingers by
+  area, ALWAYS calibrated here on the run's validation fingers (as its ``config.json`` records
+  them: :func:`contactcal.train.split.validation_rows`) by
   :func:`contactcal.train.interval.calibrate_run`; a run without validation fingers cannot be
   exported), and the optional ``region`` (:data:`~contactcal.infer.methods.unet.spec.REGIONS`),
   written as ``"largest"`` here; ``python -m contactcal.train.interval --region convex`` restates
@@ -50,6 +51,8 @@ from contactcal.train.data import dataset_digest
 from contactcal.train.export_check import ExportCheckError, check_decisions
 from contactcal.train.interval import calibrate_run
 from contactcal.train.model import UNet
+from contactcal.train.run_folder import read_run_info
+from contactcal.train.split import validation_rows
 
 #: torch vs onnxruntime tolerance on logits (float32; BN folding and kernel order differ).
 PARITY_ATOL = 1e-4
@@ -70,17 +73,7 @@ def load_run(run_dir: str | os.PathLike[str]) -> tuple[TrainConfig, dict, dict]:
     """
     run = Path(run_dir)
     path = run / "config.json"
-    if not path.is_file():
-        raise ValueError(f"{path}: missing run config (is {run} a `contactcal train` run folder?)")
-    try:
-        info = json.loads(path.read_text(encoding="utf-8"))
-    except (OSError, json.JSONDecodeError) as exc:
-        raise ValueError(f"{path}: unreadable run config ({exc})") from exc
-    if not isinstance(info, dict) or "train" not in info:
-        raise ValueError(
-            f"{path}: not a `contactcal train` run config (no 'train' settings: a dataset's "
-            f"config?); expected a run folder, e.g. runs/r1"
-        )
+    info = read_run_info(run)
     cfg = saved_train_config(info.get("train"), str(path))
     check_data_dirs(info.get("data_dirs"), path, info.get("data_digest"))
     return cfg, info, load_checkpoint(run / "best.pt")
@@ -200,7 +193,8 @@ def export_onnx(
 
     Raises:
         ValueError: bad run folder or output name, or no validation fingers to calibrate the
-            area interval on.
+            area interval on (or a recorded split that the data contradicts:
+            :func:`~contactcal.train.split.validation_rows`).
         RuntimeError: the exported model fails the checker, the parity test or the metadata
             self-check (nothing is written then).
     """
@@ -216,7 +210,8 @@ def export_onnx(
     model.load_state_dict(ckpt["model"])
     model.eval()
     proto = to_onnx(model, cfg.model.in_channels, cfg.input_size, opset)
-    interval, _ = calibrate_run(model, cfg.spec(), info, cfg.val_fraction, cfg.seed)
+    val = validation_rows(run_dir, info, cfg.val_fraction, cfg.seed)  # as the run recorded them
+    interval, _ = calibrate_run(model, cfg.spec(), val)
     spec = dataclasses.replace(cfg.spec(), interval=interval)
     onnx.helper.set_model_props(proto, metadata(spec, info, ckpt))
     try:
@@ -225,7 +220,7 @@ def export_onnx(
         raise ExportCheckError(f"exported model fails onnx.checker: {exc}") from exc
     data = proto.SerializeToString()
     check_parity(model, data, cfg.model.in_channels)
-    check_decisions(model, data, spec, info, cfg.val_fraction, cfg.seed)
+    check_decisions(model, data, spec, val)
     self_check(data, spec, out)  # the bytes about to be written, read back as deployment does
     with atomic_open(out, "wb") as fh:
         fh.write(data)

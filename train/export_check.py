@@ -9,14 +9,16 @@ area must agree with the torch model's.
 
 from __future__ import annotations
 
+from collections.abc import Sequence
+
 import onnxruntime as ort
 import torch
 
-from contactcal.infer.bench.dataset import read_datasets, spread
+from contactcal.infer.bench.dataset import IndexRow, spread
 from contactcal.infer.methods.unet.postprocess import postprocess
 from contactcal.infer.methods.unet.runner import sigmoid
 from contactcal.infer.methods.unet.spec import ModelSpec
-from contactcal.train.data import build_cache, split_by_finger
+from contactcal.train.data import build_cache
 
 #: Largest area difference (network pixels) between torch's and onnxruntime's decision: logits
 #: agree to PARITY_ATOL, so a pixel within that of the threshold may flip.
@@ -34,9 +36,7 @@ def check_decisions(
     model: torch.nn.Module,
     onnx_bytes: bytes,
     spec: ModelSpec,
-    info: dict,
-    val_fraction: float,
-    seed: int,
+    val: Sequence[IndexRow],
 ) -> int:
     """Compare torch's and onnxruntime's contact decisions on validation frames of the run.
 
@@ -44,20 +44,16 @@ def check_decisions(
         model: the torch model (eval mode).
         onnx_bytes: the exported graph.
         spec: the exported spec.
-        info: the run's ``config.json`` (``data_dirs``).
-        val_fraction, seed: the run's split (validation fingers, as in training).
+        val: the frames of the run's validation fingers
+            (:func:`~contactcal.train.split.validation_rows`).
 
     Returns:
         The number of frames checked.
 
     Raises:
-        ValueError: the run's dataset folders cannot be read.
         RuntimeError: a decision differs.
     """
-    rows = read_datasets(info.get("data_dirs") or [])
-    train_rows, val_rows = split_by_finger(rows, val_fraction, seed)
-    pool = val_rows or train_rows
-    picks = [pool[i] for i in spread(len(pool), DECISION_FRAMES)]
+    picks = [val[i] for i in spread(len(val), DECISION_FRAMES)]
     cache = build_cache(picks, spec.preprocess, spec.channels)
     sess = ort.InferenceSession(onnx_bytes, providers=["CPUExecutionProvider"])
     with torch.no_grad():

@@ -34,7 +34,7 @@ from typing import Any
 
 import numpy as np
 
-from contactcal.infer.bench.dataset import read_index
+from contactcal.infer.bench.dataset import IndexRow, read_index
 from contactcal.infer.methods.unet.postprocess import Band, Segmentation, boundary_band
 from contactcal.infer.methods.unet.spec import REGIONS, IntervalSpec, ModelSpec
 from contactcal.train.restate import (
@@ -137,22 +137,24 @@ def calibrate(
 
 
 def calibrate_run(
-    model: Any, spec: ModelSpec, info: dict, val_fraction: float, seed: int
+    model: Any, spec: ModelSpec, val: Sequence[IndexRow]
 ) -> tuple[IntervalSpec, dict[str, Any]]:
     """Calibrate on a training run's validation fingers with its torch model (eval mode).
 
+    Args:
+        model: the run's torch model (eval mode).
+        spec: its deployment spec.
+        val: the frames of its validation fingers
+            (:func:`~contactcal.train.split.validation_rows`).
+
     Raises:
-        ValueError: the run has no validation fingers, or :func:`calibrate` fails.
+        ValueError: :func:`calibrate` fails.
     """
     import torch
 
-    from contactcal.infer.bench.dataset import read_datasets
     from contactcal.infer.methods.unet.postprocess import postprocess
-    from contactcal.train.data import build_cache, split_by_finger
+    from contactcal.train.data import build_cache
 
-    _, val = split_by_finger(read_datasets(info.get("data_dirs") or []), val_fraction, seed)
-    if not val:
-        raise ValueError("the run has no validation fingers to calibrate the area interval on")
     cache = build_cache(val, spec.preprocess, spec.channels)
     segs = []
     with torch.no_grad():

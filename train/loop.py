@@ -30,19 +30,20 @@ from contactcal.infer.bench.scoring import ScoredFrame, bin_table
 from contactcal.infer.files.atomic import write_json
 from contactcal.train.augment import Augmenter
 from contactcal.train.checkpoint import (
-    config_diff,
     config_to_dict,
     load_checkpoint,
     rng_state,
     save_checkpoint,
     set_rng_state,
 )
-from contactcal.train.config import TrainConfig, resolve_device, saved_train_config
-from contactcal.train.data import CachedSet, build_cache, dataset_digest, split_by_finger
+from contactcal.train.config import TrainConfig, resolve_device
+from contactcal.train.data import CachedSet, build_cache, dataset_digest
 from contactcal.train.ema import WeightAverage
 from contactcal.train.metrics import evaluate, segmentation_loss, summarise
 from contactcal.train.model import UNet, count_parameters
 from contactcal.train.report import METRIC_COLUMNS, plot_curves, write_csv
+from contactcal.train.run_folder import check_run_folder, resume_checkpoint
+from contactcal.train.split import Split, split_by_finger, split_record
 
 
 @dataclass
@@ -74,7 +75,7 @@ class Run:
 
 
 def _run_info(
-    cfg: TrainConfig, data_dirs: Sequence[Path], digest: str, split: dict, dev: Any
+    cfg: TrainConfig, data_dirs: Sequence[Path], digest: str, split: Split, dev: Any
 ) -> dict[str, Any]:
     """The content of ``config.json``."""
     return {
@@ -106,37 +107,15 @@ def _split(cfg: TrainConfig, dirs: list[Path]) -> tuple[list[IndexRow], list[Ind
     return train_rows, val_rows
 
 
-def _resume_checkpoint(out: Path, cfg: TrainConfig, digest: str, resume: bool) -> dict | None:
-    """``last.pt`` when resuming (same config and data), else None (and no run in ``out``)."""
-    if not resume:
-        if (out / "last.pt").exists():
-            raise ValueError(
-                f"{out}: already holds a run (last.pt); pass --resume or another --out"
-            )
-        return None
-    ckpt = load_checkpoint(out / "last.pt")
-    saved = saved_train_config(ckpt["config"], str(out / "last.pt"))
-    diff = [k for k in config_diff(saved, cfg) if k not in ("device", "num_threads")]
-    if diff:
-        raise ValueError(f"{out}: --resume with a different config ({', '.join(diff)})")
-    if ckpt["data_digest"] != digest:
-        raise ValueError(f"{out}: --resume with different data (index.csv digest changed)")
-    if "augment_rng" not in ckpt:
-        raise ValueError(
-            f"{out / 'last.pt'}: written by an older contactcal (no augmentation generator "
-            "state), cannot be resumed exactly; start a new run"
-        )
-    return ckpt
-
-
 def _prepare(dirs: list[Path], out: Path, cfg: TrainConfig, resume: bool, progress: bool) -> Run:
     """Step 1: data, split, model, optimiser, schedule and generators (restored on resume)."""
+    check_run_folder(out, resume)
     train_rows, val_rows = _split(cfg, dirs)  # validates the folders first
-    digest = dataset_digest(dirs)
+    digest, split = dataset_digest(dirs), split_record(train_rows, val_rows)
     device = resolve_device(cfg.device)
     if cfg.num_threads > 0:
         torch.set_num_threads(cfg.num_threads)
-    ckpt = _resume_checkpoint(out, cfg, digest, resume)
+    ckpt = resume_checkpoint(out, cfg, digest, split) if resume else None
     torch.manual_seed(cfg.seed)  # weight init
     model = UNet(cfg.model).to(device)
     c = cfg.model.in_channels
@@ -166,10 +145,6 @@ def _prepare(dirs: list[Path], out: Path, cfg: TrainConfig, resume: bool, progre
         set_rng_state(ckpt["rng"])
         run.start, run.history = int(ckpt["epoch"]) + 1, list(ckpt["history"])
         run.best, run.best_epoch = float(ckpt["best_score"]), int(ckpt["best_epoch"])
-    split = {
-        "train": sorted({r.finger_key for r in train_rows}),
-        "val": sorted({r.finger_key for r in val_rows}),
-    }
     run.info = _run_info(cfg, dirs, digest, split, device)  # written with the first last.pt
     return run
 
@@ -286,7 +261,8 @@ def train(
             ``curves.png`` and ``val_bins.csv``.
         config: run settings (None: the defaults); with ``resume`` it must equal the run's
             saved config.
-        resume: continue from ``out_dir/last.pt`` (model, optimizer, scheduler, epoch, RNGs).
+        resume: continue from ``out_dir/last.pt`` (model, optimizer, scheduler, epoch, RNGs)
+            with the run's data and split.
         progress: tqdm bars.
 
     Returns:

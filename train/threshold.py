@@ -21,11 +21,11 @@ from typing import Any
 import numpy as np
 import torch
 
-from contactcal.infer.bench.dataset import read_datasets
 from contactcal.infer.methods.unet.postprocess import postprocess
-from contactcal.train.data import build_cache, split_by_finger
+from contactcal.train.data import build_cache
 from contactcal.train.export import load_run
 from contactcal.train.model import UNet
+from contactcal.train.split import validation_rows
 
 
 def largest_region_areas(run_dir: str | os.PathLike[str]) -> tuple[np.ndarray, np.ndarray]:
@@ -35,12 +35,11 @@ def largest_region_areas(run_dir: str | os.PathLike[str]) -> tuple[np.ndarray, n
         ``(areas, contact)``: ``(N,) float64`` and ``(N,) bool``.
 
     Raises:
-        ValueError: the run has no validation fingers or its data folders are missing.
+        ValueError: the run has no validation fingers, its data folders are missing, or its
+            recorded split is contradicted (:func:`~contactcal.train.split.validation_rows`).
     """
     cfg, info, ckpt = load_run(run_dir)
-    _, val = split_by_finger(read_datasets(info["data_dirs"]), cfg.val_fraction, cfg.seed)
-    if not val:
-        raise ValueError(f"{run_dir}: the run has no validation fingers to tune on")
+    val = validation_rows(run_dir, info, cfg.val_fraction, cfg.seed)
     cache = build_cache(val, cfg.preprocess, cfg.model.in_channels)
     net = UNet(cfg.model)
     net.load_state_dict(ckpt["model"])

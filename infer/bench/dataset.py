@@ -5,6 +5,7 @@
 from __future__ import annotations
 
 import csv
+import functools
 import math
 import os
 from collections.abc import Sequence
@@ -44,10 +45,11 @@ class IndexRow:
     onset_kpa: float  # kPa, the mechanics' contact onset
     hard: bool  # drawn from the hard (extreme) ranges
 
-    @property
+    @functools.cached_property
     def finger_key(self) -> str:
-        """``"<dataset folder>#<finger>"``: unique across datasets (split key)."""
-        return f"{self.dataset}#{self.finger}"
+        """``"<dataset folder, resolved>#<finger>"``: unique across datasets, and the same under
+        any spelling of the folder (the key of training's split by finger, which runs record)."""
+        return f"{self.dataset.resolve()}#{self.finger}"
 
     @property
     def session_key(self) -> str:
