@@ -33,7 +33,13 @@ def add_parsers(sub: Any) -> None:
     t.add_argument(
         "--data", nargs="+", type=Path, required=True, metavar="DIR", help="dataset folder(s)"
     )
-    t.add_argument("--out", type=Path, required=True, metavar="RUN_DIR", help="run folder")
+    t.add_argument(
+        "--out",
+        type=Path,
+        required=True,
+        metavar="RUN_DIR",
+        help="run folder: new or empty, or with --resume an unfinished run's (holding last.pt)",
+    )
     t.add_argument("--epochs", type=int, help="number of epochs (default 40)")
     t.add_argument("--device", choices=("cpu", "cuda", "auto"), help="default auto")
     t.add_argument("--resume", action="store_true", help="continue from RUN_DIR/last.pt")

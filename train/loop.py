@@ -257,8 +257,9 @@ def train(
 
     Args:
         data_dirs: dataset folders (``index.csv`` layout).
-        out_dir: run folder; receives ``config.json``, ``last.pt``, ``best.pt``, ``metrics.csv``,
-            ``curves.png`` and ``val_bins.csv``.
+        out_dir: run folder, new or empty (or the run's, with ``resume``); receives
+            ``config.json``, ``last.pt``, ``best.pt``, ``metrics.csv``, ``curves.png`` and
+            ``val_bins.csv``.
         config: run settings (None: the defaults); with ``resume`` it must equal the run's
             saved config.
         resume: continue from ``out_dir/last.pt`` (model, optimizer, scheduler, epoch, RNGs)
@@ -270,7 +271,8 @@ def train(
         ``parameters``, ``epochs_run``, ``out_dir``, and the final ``val`` summary.
 
     Raises:
-        ValueError: bad dataset, config, or resume request.
+        ValueError: bad dataset, config, or resume request, or an ``out_dir`` that is not new,
+            empty or (with ``resume``) a run holding ``last.pt``.
     """
     cfg = (config or TrainConfig()).resolved()
     run = _prepare([Path(d) for d in data_dirs], Path(out_dir), cfg, resume, progress)

@@ -1,7 +1,9 @@
 """A run folder: its ``config.json``, what ``train`` may write there, what ``--resume`` continues.
 
-``train`` starts no new run in a folder that holds one (:func:`check_run_folder`). A resumed run
-must have the run's config, data and split (:func:`resume_checkpoint`).
+``train`` writes a new run only into a new or empty folder, and continues (``--resume``) only a
+run that holds ``last.pt``: never over a finished run's files or files it did not write
+(:func:`check_run_folder`). A resumed run must have the run's config, data and split
+(:func:`resume_checkpoint`).
 """
 
 from __future__ import annotations
@@ -11,9 +13,10 @@ import os
 from pathlib import Path
 from typing import Any
 
+from contactcal.infer.files.atomic import TEMP_NAME
 from contactcal.train.checkpoint import config_diff, load_checkpoint
 from contactcal.train.config import TrainConfig, saved_train_config
-from contactcal.train.split import Split, check_same_split, recorded_split
+from contactcal.train.split import Split, check_same_split, few, recorded_split
 
 
 def read_run_info(run_dir: str | os.PathLike[str]) -> dict[str, Any]:
@@ -39,13 +42,36 @@ def read_run_info(run_dir: str | os.PathLike[str]) -> dict[str, Any]:
 
 
 def check_run_folder(out: Path, resume: bool) -> None:
-    """Refuse a new run (no ``resume``) in a folder that holds one (``last.pt``).
+    """Refuse an ``out`` that ``train`` would write over: a new run needs a new or empty folder
+    (staged temporaries of a killed write aside), ``resume`` a run that holds ``last.pt``.
 
     Raises:
-        ValueError: naming the folder and what to do instead.
+        ValueError: naming the folder and what was expected.
     """
-    if not resume and (out / "last.pt").exists():
-        raise ValueError(f"{out}: already holds a run (last.pt); pass --resume or another --out")
+    if resume and (out / "last.pt").is_file():
+        return
+    if out.exists() and not out.is_dir():
+        raise ValueError(f"{out}: not a folder; expected a run folder (--out), e.g. runs/r1")
+    held = (
+        sorted(e.name for e in os.scandir(out) if not TEMP_NAME.match(e.name))
+        if out.exists()
+        else []
+    )
+    if resume:
+        state = f"holds {few(held)}" if held else "is empty" if out.exists() else "does not exist"
+        raise ValueError(
+            f"{out}: nothing to --resume (no last.pt; the folder {state}); expected an unfinished "
+            "run's folder (one holding last.pt), or a new or empty folder without --resume"
+        )
+    if "last.pt" in held:
+        raise ValueError(
+            f"{out}: already holds a run (last.pt); pass --resume to continue it, or another --out"
+        )
+    if held:
+        raise ValueError(
+            f"{out}: holds {few(held)}, which a new run would write over; expected an empty or "
+            "new folder, or --resume on an unfinished run (one holding last.pt)"
+        )
 
 
 def resume_checkpoint(out: Path, cfg: TrainConfig, digest: str, split: Split) -> dict[str, Any]:

@@ -19,7 +19,9 @@ R=runs/$N
 # the floored camera augmentation (658f4ff, amended rule) must be in the code that trains
 git merge-base --is-ancestor 658f4ff HEAD || { echo "chain: check out 658f4ff or later" >&2; exit 2; }
 mkdir -p $R out
-[[ -f $R/commit ]] || git rev-parse HEAD > $R/commit  # the code the run started with
+# The code the run started with, beside its folder: train starts a run only in an empty folder.
+# (H15's and H17's chains recorded it inside, as runs/NAME/commit, before that rule.)
+[[ -f $R/commit || -f $R.commit ]] || git rev-parse HEAD > $R.commit
 if [[ ! -f $R/val_bins.csv ]]; then  # written last by a finished run
   RESUME=()
   [[ -f $R/last.pt ]] && RESUME=(--resume)
