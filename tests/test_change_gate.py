@@ -147,7 +147,7 @@ def test_gate_model_writes_the_threshold_and_refuses_bad_paths(tmp_path: Path) -
     new, src = onnx.load(str(out)), onnx.load(str(DEFAULT_MODEL))
     assert new.graph.SerializeToString() == src.graph.SerializeToString()
     after = {p.key: p.value for p in new.metadata_props}
-    assert float(after["min_change"]) == summary["min_change"]
+    assert json.loads(after["min_change"])["value"] == summary["min_change"]
     assert UnetMethod(out).describe()["spec"]["min_change"] == summary["min_change"]
     assert json.loads(after["interval"]) == json.loads(
         {p.key: p.value for p in src.metadata_props}["interval"]
@@ -155,6 +155,30 @@ def test_gate_model_writes_the_threshold_and_refuses_bad_paths(tmp_path: Path) -
     for bad in (tmp_path / "x.txt", DEFAULT_MODEL):
         assert main([str(DEFAULT_MODEL), "--data", str(data), "--out", str(bad)]) == 2
     assert not (tmp_path / "x.txt").exists()
+
+
+@pytest.mark.parametrize(
+    ("option", "value", "expected"),
+    [
+        ("--seed", "-1", "an integer >= 0"),
+        ("--draws", "0", "at least 1 speck"),
+        ("--speck", "1.5", "speck levels in (0, 1]"),
+    ],
+)
+def test_gate_options_are_named_in_errors(
+    option: str, value: str, expected: str, tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    pytest.importorskip("onnx")
+    from procedural import write_dataset
+
+    from contactcal.train.change_gate import main
+
+    data, out = write_dataset(tmp_path / "d", fingers=1), tmp_path / "g.onnx"
+    argv = [str(DEFAULT_MODEL), "--data", str(data), "--out", str(out), option, value]
+    assert main(argv) == 2
+    err = capsys.readouterr().err
+    assert err.startswith(f"error: {option} {value}: expected {expected}")
+    assert err.count("\n") == 1 and not out.exists()
 
 
 def _session(root: Path) -> list:

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import json
 from pathlib import Path
 
 import pytest
@@ -14,7 +15,8 @@ def test_floor_is_restated_and_read_back(tmp_path: Path) -> None:
     from contactcal.train.floor import floor_model, main
 
     out = tmp_path / "f1.onnx"
-    assert floor_model(DEFAULT_MODEL, 1.0, out) == {"norm_floor_percentile": 1.0, "before": 0.0}
+    summary = floor_model(DEFAULT_MODEL, 1.0, out)
+    assert summary["norm_floor_percentile"] == 1.0 and summary["before"] == 0.0
     seg = OnnxSegmenter(out)
     assert seg.spec.preprocess.norm_floor_percentile == 1.0
     base = OnnxSegmenter().spec
@@ -31,6 +33,46 @@ def test_floor_is_restated_and_read_back(tmp_path: Path) -> None:
         main([str(DEFAULT_MODEL), "--percentile", "99.5", "--out", str(tmp_path / "x.onnx")]) == 2
     )
     assert not (tmp_path / "x.onnx").exists()
+
+
+def test_a_new_floor_says_the_calibrated_entries_are_stale(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """The interval and the change gate were calibrated on the old inputs: the summary and a
+    warning line say so and what to rerun, gate first; nothing stale when nothing changed."""
+    onnx = pytest.importorskip("onnx")
+    from contactcal.train.floor import floor_model, main
+
+    out = tmp_path / "f1.onnx"
+    assert main([str(DEFAULT_MODEL), "--percentile", "1", "--out", str(out)]) == 0
+    captured = capsys.readouterr()
+    stale = json.loads(captured.out[: captured.out.rindex("wrote ")])["stale"]
+    assert stale.startswith(
+        "the change gate (min_change) and the area interval (interval) were calibrated before "
+        f"this change and are kept as before; rerun `python -m contactcal.train.change_gate {out} "
+    )
+    assert stale.index("train.change_gate") < stale.index("train.interval")
+    assert captured.err == f"warning: {out}: {stale}\n"
+    assert floor_model(DEFAULT_MODEL, 0.0, tmp_path / "f0.onnx")["stale"] is None
+    proto = onnx.load(str(DEFAULT_MODEL))  # a model without a change gate
+    meta = {p.key: p.value for p in proto.metadata_props if p.key != "min_change"}
+    del proto.metadata_props[:]
+    onnx.helper.set_model_props(proto, meta)
+    onnx.save(proto, str(tmp_path / "ungated.onnx"))
+    stale = floor_model(tmp_path / "ungated.onnx", 1.0, tmp_path / "g1.onnx")["stale"]
+    assert stale.startswith("the area interval (interval) was calibrated before this change")
+
+
+def test_floor_names_the_option_it_refuses(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    from contactcal.train.floor import main
+
+    out = tmp_path / "x.onnx"
+    assert main([str(DEFAULT_MODEL), "--percentile", "99.5", "--out", str(out)]) == 2
+    err = capsys.readouterr().err
+    assert err.startswith("error: --percentile 99.5: norm_floor_percentile must be in [0, ")
+    assert err.count("\n") == 1 and not out.exists()
 
 
 def test_floor_refuses_a_file_that_is_not_a_model(

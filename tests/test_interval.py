@@ -165,6 +165,22 @@ def test_calibration_reaches_its_level_on_its_frames() -> None:
     assert iv.threshold_low < 0.5 < iv.threshold_high
 
 
+def test_a_candidate_that_cannot_reach_the_level_is_null_in_standard_json() -> None:
+    """A threshold pair whose looser threshold misses a faint true contact has no factor: its
+    summary says so (null, ``reaches_level`` false), never ``Infinity``."""
+    base = dataclasses.replace(SPEC, interval=None)
+    segs = [postprocess(disk(r, 1.0), BOX, SHAPE, base) for r in (10.0, 14.0, 18.0)]
+    faint = np.zeros((SIZE, SIZE), np.float32)
+    faint[20:40, 20:40] = 0.2  # kept below p 0.27 (margins 0.5, 1), found from p 0.12 (2, 3)
+    segs.append(postprocess(faint, BOX, SHAPE, base))
+    _, summary = calibrate(segs, [s.area_px for s in segs[:3]] + [1600.0], base)
+    text = json.dumps(summary, allow_nan=False)  # raises on a non-finite number
+    cand = json.loads(text)["candidates"]
+    for m in ("0.5", "1.0"):
+        assert cand[m] == {"reaches_level": False, "widen": None, "median_rel_width": None}
+    assert cand["3.0"]["reaches_level"] and cand["3.0"]["widen"] >= 0.0
+
+
 def test_recalibrate_changes_only_the_interval(tmp_path: Path) -> None:
     onnx = pytest.importorskip("onnx")
     from procedural import write_dataset
@@ -189,7 +205,7 @@ def test_recalibrate_changes_only_the_interval(tmp_path: Path) -> None:
         assert {k for k in after if after[k] != before.get(k)} <= {"interval", "region"}
         assert after.keys() == before.keys() | {"region"}
         assert after["region"] == before.get("region", "largest")
-        assert json.loads(after["interval"]) == summary["interval"]
+        assert json.loads(after["interval"]) == {**summary["interval"], "data": summary["data"]}
         assert OnnxSegmenter(out).spec.interval is not None
     assert "region" not in meta and after["region"] == "largest"  # the legacy path ran last
     with pytest.raises(ValueError, match="must not be the input"):

@@ -160,7 +160,7 @@ def test_recalibrate_states_the_region(tmp_path: Path) -> None:
         after = {p.key: p.value for p in new.metadata_props}
         assert new.graph.SerializeToString() == proto.graph.SerializeToString()
         assert after["region"] == summary["region"] == expected
-        assert json.loads(after["interval"]) == summary["interval"]
+        assert json.loads(after["interval"]) == {**summary["interval"], "data": summary["data"]}
         assert OnnxSegmenter(out).spec.region == expected
     with pytest.raises(ValueError, match="legacy.onnx: region must be one of"):
         recalibrate_model(legacy, [data], tmp_path / "x.onnx", region="hull")

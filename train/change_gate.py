@@ -15,7 +15,11 @@ read here from validation frames, never from the benchmark:
   (lower contrast ~0.85× at the suite's 0.75, blur) still leaves the first contacts above it.
 
 ``python -m contactcal.train.change_gate MODEL --data DIR... [--speck L...] --out NEW.onnx``
-writes the model again with ``min_change`` set (graph and weights copied untouched).
+writes the model again with ``min_change`` set (graph and weights copied untouched). It refuses a
+folder given twice and the model's training data as far as the model records it, and records in
+the ``min_change`` entry what it was calibrated on (:mod:`contactcal.train.calibration_data`).
+The model's interval was calibrated with its previous gate (the gate decides which frames are in
+contact), so the output says to calibrate the interval again.
 """
 
 from __future__ import annotations
@@ -33,12 +37,14 @@ from contactcal.infer.bench.perturb import speck
 from contactcal.infer.image.read import load_image
 from contactcal.infer.methods.unet.method import UnetMethod
 from contactcal.infer.methods.unet.ring import locate_ring
+from contactcal.train.calibration_data import calibration_data, with_record
 from contactcal.train.restate import (
     check_paths,
     load_proto,
     restating_parser,
     run_restating,
     save_restated,
+    stale,
 )
 
 #: The gate sits this factor below the smallest change of a validation region in contact. The
@@ -95,6 +101,17 @@ def _session_changes(
     return out
 
 
+def _check_options(specks: Sequence[float], draws: int, seed: int) -> None:
+    """Raise ValueError naming the option (``--speck``, ``--draws``, ``--seed``) that is bad."""
+    bad = [s for s in specks if not 0.0 < s <= 1.0]
+    if bad:
+        raise ValueError(f"--speck {bad[0]:g}: expected speck levels in (0, 1] (fraction of white)")
+    if draws < 1:
+        raise ValueError(f"--draws {draws}: expected at least 1 speck per session and level")
+    if seed < 0:
+        raise ValueError(f"--seed {seed}: expected an integer >= 0 (numpy seeds are not negative)")
+
+
 def collect_changes(
     model: str | os.PathLike[str],
     data_dirs: Sequence[str | os.PathLike[str]],
@@ -118,10 +135,10 @@ def collect_changes(
         ``(change (N,), contact (N,) bool, frames measured per speck level)``.
 
     Raises:
-        ValueError: a speck level outside (0, 1], or ``draws`` < 1.
+        ValueError: a speck level outside (0, 1], ``draws`` < 1 or ``seed`` < 0 (the message
+            names the option: ``--speck``, ``--draws``, ``--seed``).
     """
-    if draws < 1 or any(not 0.0 < s <= 1.0 for s in specks):
-        raise ValueError(f"speck levels must be in (0, 1] and draws >= 1, got {specks}, {draws}")
+    _check_options(specks, draws, seed)
     m = UnetMethod(model, change_gate=False)
     cfg = m.segmenter.spec.preprocess
     rows: list[tuple[float, bool]] = []
@@ -156,27 +173,34 @@ def gate_model(
     Args:
         model: an exported ``.onnx`` model with a reference channel.
         data_dirs: ``contactcal synth`` datasets that are neither its training, its benchmark
-            nor any held-out check data.
+            nor any held-out check data; what of this is checked:
+            :mod:`contactcal.train.calibration_data`.
         out: the new ``.onnx`` file; must not be ``model`` (inputs are never overwritten).
         specks, draws, seed: window specks added to the frames (:func:`collect_changes`).
 
     Returns:
-        The summary (:func:`margin_threshold`) with the frames measured per speck level.
+        The summary (:func:`margin_threshold`) with the frames measured per speck level, the
+        datasets' record (``data``, also written in the ``min_change`` entry) and ``stale``
+        (:func:`~contactcal.train.restate.stale`: the interval, when the gate changed).
 
     Raises:
-        ValueError: bad output name, a model without a reference channel, or data without a
-            region in contact.
+        ValueError: bad output name or option, a model without a reference channel, a folder
+            given twice, the model's training data, or data without a region in contact.
     """
 
     src, dst = check_paths(model, out)
     base = UnetMethod(src).segmenter.spec
     if not base.uses_reference:
         raise ValueError(f"{src}: the change gate needs a model with a reference channel")
-    change, contact, frames = collect_changes(src, data_dirs, specks, draws, seed)
+    dirs, record = calibration_data(src, data_dirs)
+    change, contact, frames = collect_changes(src, dirs, specks, draws, seed)
     t, summary = margin_threshold(change, contact)
     spec = dataclasses.replace(base, min_change=t)
-    save_restated(load_proto(src), {"min_change": repr(t)}, spec, dst)
-    return {**summary, "frames": frames, "specks": list(specks), "draws": draws, "seed": seed}
+    entry = with_record(spec.to_metadata()["min_change"], record)
+    save_restated(load_proto(src), {"min_change": entry}, spec, dst)
+    extra = {"specks": list(specks), "draws": draws, "seed": seed, "data": record}
+    again = stale(["interval"] if t != base.min_change else [], dst)
+    return {**summary, "frames": frames, **extra, "stale": again}
 
 
 def main(argv: Sequence[str] | None = None) -> int:

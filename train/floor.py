@@ -5,6 +5,11 @@ level ``P`` (``u = (g − F) / (P − F)``; :mod:`contactcal.infer.methods.unet.
 makes the input invariant to a camera's black level and contrast. The weights are not touched:
 whether a model trained without a floor takes it is for validation renders to say (``contactcal
 bench --data VALIDATION --model NEW.onnx --robustness``), never the benchmark's held-out sets.
+
+A new floor changes every network input, so the entries calibrated on the old inputs are kept
+but stale: the interval, and the change gate (``min_change``, in network input units: the floor
+scales the frame-reference difference by ``P / (P − F)``) when the model has one. The summary's
+``stale`` says so and what to rerun (:func:`contactcal.train.restate.stale`).
 """
 
 from __future__ import annotations
@@ -21,6 +26,7 @@ from contactcal.train.restate import (
     metadata_of,
     run_restating,
     save_restated,
+    stale,
 )
 
 
@@ -35,10 +41,13 @@ def floor_model(
         out: the new ``.onnx`` file; must not be ``model`` (inputs are never overwritten).
 
     Returns:
-        ``{"norm_floor_percentile": new, "before": old}``.
+        ``{"norm_floor_percentile": new, "before": old, "stale": …}``: ``stale`` names the
+        calibrated entries the change left stale and what to rerun, None when the floor is
+        unchanged.
 
     Raises:
-        ValueError: bad output name, or a percentile outside ``[0, norm_percentile)``.
+        ValueError: bad output name, or a percentile outside ``[0, norm_percentile)`` (the
+            message names ``--percentile``).
     """
 
     from contactcal.infer.methods.unet.spec import read_spec
@@ -46,10 +55,16 @@ def floor_model(
     src, dst = check_paths(model, out)
     proto = load_proto(src)
     spec = read_spec(metadata_of(proto), src)
-    pre = dataclasses.replace(spec.preprocess, norm_floor_percentile=percentile)
+    try:
+        pre = dataclasses.replace(spec.preprocess, norm_floor_percentile=percentile)
+    except ValueError as exc:
+        raise ValueError(f"--percentile {percentile:g}: {exc}") from None
     new = dataclasses.replace(spec, preprocess=pre)
     save_restated(proto, {"preprocess": new.to_metadata()["preprocess"]}, new, dst)
-    return {"norm_floor_percentile": percentile, "before": spec.preprocess.norm_floor_percentile}
+    before = spec.preprocess.norm_floor_percentile
+    calibrated = ["interval", *(["min_change"] if spec.min_change > 0.0 else [])]
+    again = stale(calibrated if percentile != before else [], dst)
+    return {"norm_floor_percentile": percentile, "before": before, "stale": again}
 
 
 def main(argv: Sequence[str] | None = None) -> int:

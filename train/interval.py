@@ -18,7 +18,9 @@ Here the thresholds (symmetric in logits around the decision threshold, one of
 ``python -m contactcal.train.interval`` recalibrates an exported model's ``interval`` metadata on
 rendered data (:func:`recalibrate_model`; the weights are copied untouched), and with ``--region``
 states the model's contact region (``region`` metadata, :data:`REGIONS`) at the same time: the
-interval is the region's, so the two are set together.
+interval is the region's, so the two are set together. It refuses a folder given twice and the
+model's training data as far as the model records it, and records in the ``interval`` entry what
+it was calibrated on (:mod:`contactcal.train.calibration_data`).
 """
 
 from __future__ import annotations
@@ -37,6 +39,7 @@ import numpy as np
 from contactcal.infer.bench.dataset import IndexRow, read_index
 from contactcal.infer.methods.unet.postprocess import Band, Segmentation, boundary_band
 from contactcal.infer.methods.unet.spec import REGIONS, IntervalSpec, ModelSpec
+from contactcal.train.calibration_data import calibration_data, with_record
 from contactcal.train.restate import (
     check_paths,
     load_proto,
@@ -73,6 +76,16 @@ def _pair(spec: ModelSpec, margin: float, level: float) -> IntervalSpec:
     return IntervalSpec(level, sig(logit - margin), sig(logit + margin), 0.0, 1)
 
 
+def _candidate(widen: float, width: float, reaches: bool) -> dict[str, Any]:
+    """One candidate pair in the summary, standard JSON: its factor and median relative width,
+    both null where no factor reaches the level on its frames (``reaches_level`` false)."""
+    return {
+        "reaches_level": reaches,
+        "widen": widen if reaches else None,
+        "median_rel_width": width if reaches else None,
+    }
+
+
 def _try(
     pair: IntervalSpec, segs: Sequence[Segmentation], truths: np.ndarray, spec: ModelSpec
 ) -> tuple[float, float, int]:
@@ -105,7 +118,8 @@ def calibrate(
         level: the stated coverage.
 
     Returns:
-        ``(interval, summary)``; the summary lists each candidate's factor and median width.
+        ``(interval, summary)``; the summary lists each candidate's factor and median width
+        (:func:`_candidate`: null for a candidate that cannot reach ``level``).
 
     Raises:
         ValueError: no usable frames, or no candidate reaches ``level`` (more frames than
@@ -128,7 +142,7 @@ def calibrate(
     summary = {
         "frames": len(t),
         "frames_used": used,
-        "candidates": {str(m): {"widen": v[0], "median_rel_width": v[1]} for m, v in tried.items()},
+        "candidates": {str(m): _candidate(v[0], v[1], m in ok) for m, v in tried.items()},
         "margin_logit": margin,
         "median_rel_width": width,
         "interval": dataclasses.asdict(interval),
@@ -212,27 +226,31 @@ def recalibrate_model(
     Args:
         model: an exported ``.onnx`` model (with or without an ``interval`` key).
         data_dirs: ``contactcal synth`` datasets that are neither its training, its benchmark
-            nor any held-out check data.
+            nor any held-out check data; what of this is checked:
+            :mod:`contactcal.train.calibration_data`.
         out: the new ``.onnx`` file; must not be ``model`` (inputs are never overwritten).
         region: the contact region to state (one of :data:`REGIONS`); None keeps the model's.
 
     Returns:
-        The calibration summary (:func:`calibrate`), with the region it was calibrated for.
+        The calibration summary (:func:`calibrate`), with the region it was calibrated for and
+        the datasets' record (``data``, also written in the ``interval`` entry).
 
     Raises:
-        ValueError: bad output name, an unknown region, or data the calibration cannot use.
+        ValueError: bad output name, an unknown region, a folder given twice, the model's
+            training data, or data the calibration cannot use.
     """
 
     src, dst = check_paths(model, out)
     if region is not None and region not in REGIONS:
         raise ValueError(f"{src}: region must be one of {', '.join(REGIONS)}, got {region!r}")
-    segs, truths, base = _segment_dataset(src, [Path(d) for d in data_dirs], region)
+    dirs, record = calibration_data(src, data_dirs)
+    segs, truths, base = _segment_dataset(src, dirs, region)
     interval, summary = calibrate(segs, truths, base)
     spec = dataclasses.replace(base, interval=interval)
     new = spec.to_metadata()
-    updates = {"interval": new["interval"], "region": new["region"]}
+    updates = {"interval": with_record(new["interval"], record), "region": new["region"]}
     save_restated(load_proto(src), updates, spec, dst)
-    return {**summary, "region": spec.region}
+    return {**summary, "region": spec.region, "data": record}
 
 
 def main(argv: Sequence[str] | None = None) -> int:

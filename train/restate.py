@@ -2,8 +2,10 @@
 
 The graph and weights are copied untouched; the new metadata must pass ``onnx.checker`` (full
 check) and read back through deployment's ``read_spec`` as the intended spec before the file is
-written (atomically). Used by :mod:`contactcal.train.interval` (``interval``, ``region``) and
-:mod:`contactcal.train.change_gate` (``min_change``).
+written (atomically). Used by :mod:`contactcal.train.interval` (``interval``, ``region``),
+:mod:`contactcal.train.change_gate` (``min_change``) and :mod:`contactcal.train.floor`
+(``preprocess``). A tool whose change leaves a calibrated entry stale says so (:func:`stale`):
+in its summary's ``stale`` and in a warning line.
 """
 
 from __future__ import annotations
@@ -12,12 +14,42 @@ import argparse
 import json
 import os
 import sys
-from collections.abc import Callable, Mapping
+from collections.abc import Callable, Collection, Mapping
 from pathlib import Path
 from typing import Any
 
 from contactcal.infer.files.atomic import atomic_open
 from contactcal.infer.methods.unet.spec import ModelSpec, read_spec
+
+#: Each calibrated metadata entry: what it is, and the tool that calibrates it; in the order to
+#: rerun them (the interval is calibrated with the model's change gate on, the gate with it off).
+RECALIBRATED_BY = {
+    "min_change": ("the change gate (min_change)", "python -m contactcal.train.change_gate"),
+    "interval": ("the area interval (interval)", "python -m contactcal.train.interval"),
+}
+
+
+def stale(entries: Collection[str], out: Path) -> str | None:
+    """The summary's ``stale``: which calibrated entries a change left stale and what to rerun.
+
+    Args:
+        entries: keys of :data:`RECALIBRATED_BY` calibrated before the change (and kept as they
+            were in the written model).
+        out: the written model, the one to calibrate again.
+
+    Returns:
+        One sentence naming the entries and the tools to rerun, in order; None when ``entries``
+        is empty.
+    """
+    order = [RECALIBRATED_BY[k] for k in RECALIBRATED_BY if k in entries]
+    if not order:
+        return None
+    what = " and ".join(name for name, _ in order)
+    tools = ", then ".join(f"`{tool} {out} --data DIR... --out NEW.onnx`" for _, tool in order)
+    return (
+        f"{what} {'was' if len(order) == 1 else 'were'} calibrated before this change and "
+        f"{'is' if len(order) == 1 else 'are'} kept as before; rerun {tools} on validation renders"
+    )
 
 
 def check_paths(model: str | os.PathLike[str], out: str | os.PathLike[str]) -> tuple[Path, Path]:
@@ -89,7 +121,8 @@ def restating_parser(prog: str, description: str) -> argparse.ArgumentParser:
 
 
 def run_restating(restate: Callable[[], dict[str, Any]], out: Path) -> int:
-    """Run a restating tool: print its summary and 0, or one error line and 2 (nothing written).
+    """Run a restating tool: print its summary (standard JSON) and 0, or one error line and 2
+    (nothing written); a summary's ``stale`` (:func:`stale`) is also a warning line on stderr.
 
     Args:
         restate: writes ``out`` and returns the summary (raises ``ValueError`` / ``OSError``).
@@ -100,6 +133,8 @@ def run_restating(restate: Callable[[], dict[str, Any]], out: Path) -> int:
     except (ValueError, OSError) as exc:
         print(f"error: {exc}", file=sys.stderr)
         return 2
-    print(json.dumps(summary, indent=1))
+    print(json.dumps(summary, indent=1, allow_nan=False))
     print(f"wrote {out}")
+    if summary.get("stale"):
+        print(f"warning: {out}: {summary['stale']}", file=sys.stderr)
     return 0

@@ -34,6 +34,11 @@ OPTIONAL_SPEC_KEYS = {"region": "largest", "min_change": "0.0"}
 #: are ellipses; the hull restores edge lobes the network left out, at the price of the pixels
 #: it adds across a ragged outline).
 REGIONS = ("largest", "convex")
+#: The key under which ``interval`` (in its JSON object) and ``min_change`` (as
+#: ``{"value": min_change, "data": …}``) may record the datasets a restating tool calibrated them
+#: on (:mod:`contactcal.train.calibration_data`). Provenance: accepted, recorded, not interpreted
+#: (the spec does not carry it); an entry without it (export's, the shipped model's) reads the same.
+CALIBRATION_DATA_KEY = "data"
 #: Metadata keys that describe the model's provenance (all required; recorded, not interpreted).
 PROVENANCE_KEYS = (
     "data_digest",
@@ -152,14 +157,17 @@ class ModelSpec:
 
 
 def _fields(
-    key: str, text: str, cls: type, legacy: Mapping[str, Any] | None = None
+    key: str, text: str, cls: type, legacy: Mapping[str, Any] | None = None, recorded: bool = False
 ) -> dict[str, Any]:
     """The JSON object of metadata ``key``, with exactly the fields of dataclass ``cls``; the
-    ``legacy`` fields (those a model may predate) filled in with their values where absent."""
+    ``legacy`` fields (those a model may predate) filled in with their values where absent; with
+    ``recorded``, its :data:`CALIBRATION_DATA_KEY` record (if any) accepted and left out."""
     values = json.loads(text)
     if not isinstance(values, dict):
         raise ValueError(f"{key}: expected a JSON object")
     values = {**(legacy or {}), **values}
+    if recorded:
+        values.pop(CALIBRATION_DATA_KEY, None)
     names = {f.name for f in dataclasses.fields(cls)}
     unknown, missing = sorted(set(values) - names), sorted(names - set(values))
     if unknown or missing:
@@ -177,7 +185,7 @@ def _preprocess(text: str) -> PreprocessConfig:
 
 
 def _interval(text: str) -> IntervalSpec:
-    values = _fields("interval", text, IntervalSpec)
+    values = _fields("interval", text, IntervalSpec, recorded=True)
     floats = sorted(set(values) - {"frames"})
     bad = [
         k for k in floats if isinstance(values[k], bool) or not isinstance(values[k], int | float)
@@ -187,16 +195,32 @@ def _interval(text: str) -> IntervalSpec:
     return IntervalSpec(**{**values, **{k: float(values[k]) for k in floats}})
 
 
+def _recorded_value(text: str) -> float:
+    """The number of ``{"value": number, "data": …}`` (an entry with its calibration record,
+    :data:`CALIBRATION_DATA_KEY`); NaN for any other text."""
+    try:
+        entry = json.loads(text)
+    except json.JSONDecodeError:
+        return math.nan
+    if not isinstance(entry, dict) or set(entry) != {"value", CALIBRATION_DATA_KEY}:
+        return math.nan
+    value = entry["value"]
+    number = isinstance(value, int | float) and not isinstance(value, bool)
+    return float(value) if number else math.nan
+
+
 def _min_change(text: str, path: str | Path) -> float:
-    """Metadata ``min_change`` as a number >= 0, or an error naming the file and the fix."""
+    """Metadata ``min_change`` as a number >= 0 (written as a number, or with its calibration
+    record as ``{"value": number, "data": …}``), or an error naming the file and the fix."""
     try:
         value = float(text)
     except ValueError:
-        value = math.nan
+        value = _recorded_value(text)
     if not (math.isfinite(value) and value >= 0.0):
         raise ModelError(
-            f"{path}: invalid model metadata: min_change must be a finite number >= 0, got "
-            f"{text!r}; restate it with `python -m contactcal.train.change_gate MODEL …`"
+            f"{path}: invalid model metadata: min_change must be a finite number >= 0 (or "
+            f'{{"value": that number, "{CALIBRATION_DATA_KEY}": …}}), got {text!r}; restate it '
+            "with `python -m contactcal.train.change_gate MODEL …`"
         )
     return value
 
@@ -211,7 +235,8 @@ def read_spec(meta: Mapping[str, str], path: str | Path) -> ModelSpec:
     Returns:
         The spec. A model without an optional key (exported before it existed) gets the value it
         was deployed with (:data:`OPTIONAL_SPEC_KEYS`): ``region`` ``"largest"``, ``min_change``
-        0 (no gate).
+        0 (no gate). The calibration record that ``interval`` and ``min_change`` may carry
+        (:data:`CALIBRATION_DATA_KEY`) is accepted and not part of the spec.
 
     Raises:
         ModelError: a missing, unknown or invalid key; the message names it and the file.

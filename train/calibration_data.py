@@ -1,0 +1,107 @@
+"""The datasets a restating tool calibrates a model's metadata on: checked, then recorded.
+
+:mod:`contactcal.train.interval` (``interval``) and :mod:`contactcal.train.change_gate`
+(``min_change``) calibrate on validation renders, never on the model's training data. Before any
+frame is read, :func:`calibration_data` refuses:
+
+* a folder given twice (the same resolved path): its frames would count twice;
+* the model's training data, as far as the model records it. Its metadata's ``data_digest`` is
+  :func:`~contactcal.train.data.dataset_digest` of its training folders' ``index.csv`` files,
+  concatenated in training order (a run's ``config.json`` ``data_digest``, copied by
+  ``contactcal export``; the folder names are not recorded). A calibration folder, or a run of
+  consecutive calibration folders as given, with that digest is refused.
+
+Not checked, since the model records nothing that could tell: one of several training folders
+given alone, the training folders in another order or with other folders between them, a copy
+whose ``index.csv`` differs in any byte, the run's validation fingers (they are inside the
+training folders), and benchmark or held-out check sets (no model records them). A model whose
+``data_digest`` is empty gets the duplicate check only.
+
+The written entry records what it was calibrated on (:data:`CALIBRATION_DATA_KEY`, provenance
+that deployment accepts and does not interpret): per folder its name, the sha256 of its
+``index.csv`` and its frame count.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+from collections.abc import Sequence
+from pathlib import Path
+from typing import Any
+
+from contactcal.infer.bench.dataset import read_index
+from contactcal.infer.methods.unet.spec import CALIBRATION_DATA_KEY
+from contactcal.train.data import dataset_digest
+from contactcal.train.restate import load_proto, metadata_of
+
+
+def calibration_data(
+    model: Path, data_dirs: Sequence[str | os.PathLike[str]]
+) -> tuple[list[Path], list[dict[str, Any]]]:
+    """Check ``data_dirs`` for calibrating ``model`` and describe them.
+
+    Args:
+        model: the exported ``.onnx`` model to be calibrated.
+        data_dirs: the ``--data`` folders (``contactcal synth`` layout), in the order given.
+
+    Returns:
+        ``(folders, record)``: the folders as paths, and per folder ``{"folder": name,
+        "index_sha256": hex, "frames": index rows}`` (what :func:`with_record` writes).
+
+    Raises:
+        ValueError: a folder given twice, a folder that is not a dataset, or the model's training
+            data (the message names the folders and the option).
+    """
+    dirs = [Path(d) for d in data_dirs]
+    _refuse_repeats(dirs)
+    frames = [len(read_index(d)) for d in dirs]
+    _refuse_training_data(dirs, metadata_of(load_proto(model)).get("data_digest", ""))
+    record = [
+        {"folder": d.resolve().name, "index_sha256": dataset_digest([d]), "frames": n}
+        for d, n in zip(dirs, frames, strict=True)
+    ]
+    return dirs, record
+
+
+def _refuse_repeats(dirs: Sequence[Path]) -> None:
+    """Raise ValueError naming a folder given twice (compared as resolved paths)."""
+    first: dict[Path, Path] = {}
+    for d in dirs:
+        same = first.setdefault(d.resolve(), d)
+        if same is not d:
+            raise ValueError(
+                f"--data {d}: the same folder as {same}, given twice (its frames would count "
+                "twice); expected each dataset folder once"
+            )
+
+
+def _refuse_training_data(dirs: Sequence[Path], digest: str) -> None:
+    """Raise ValueError when a run of consecutive ``dirs`` has the model's training ``digest``."""
+    if not digest:
+        return
+    for i in range(len(dirs)):
+        for j in range(i + 1, len(dirs) + 1):
+            if dataset_digest(dirs[i:j]) == digest:
+                raise ValueError(
+                    f"--data {' '.join(str(d) for d in dirs[i:j])}: the model was trained on "
+                    "this data (its index.csv digest is the model's data_digest); expected "
+                    "validation renders it was not trained on"
+                )
+
+
+def with_record(entry: str, record: Sequence[dict[str, Any]]) -> str:
+    """A metadata entry's text with its calibration record (:data:`CALIBRATION_DATA_KEY`).
+
+    Args:
+        entry: the entry as :meth:`ModelSpec.to_metadata` writes it: ``interval``'s JSON object
+            (the record becomes one more key) or ``min_change``'s number (it becomes
+            ``{"value": number, "data": record}``).
+        record: :func:`calibration_data`'s record.
+
+    Returns:
+        Standard JSON (a non-finite number raises ValueError).
+    """
+    value = json.loads(entry)
+    fields = value if isinstance(value, dict) else {"value": value}
+    return json.dumps({**fields, CALIBRATION_DATA_KEY: list(record)}, allow_nan=False)
