@@ -9,12 +9,13 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from contactcal.infer.calibration.curve import MM2
+from contactcal.infer.calibration.curve import MM2, PX
 from contactcal.infer.calibration.steps import (
     OffStep,
     Step,
     frames_off_their_step,
     off_step_warning,
+    step_outlier_floor,
 )
 from contactcal.infer.cli import main
 from contactcal.infer.pipeline.examples import example_manifest
@@ -38,15 +39,15 @@ def test_a_step_of_agreeing_frames_or_of_two_says_nothing() -> None:
         _step([0.0, 0.0, 0.0]),
         _step([100.0, 160.0]),
     ]
-    assert frames_off_their_step(steps, MM2) == []
+    assert frames_off_their_step(steps, 5.0) == []
 
 
 def test_the_frames_stated_interval_widens_its_tolerance() -> None:
     """15 % above the median: named unless the frame's own interval holds the median."""
     wide = _step([100.0, 100.0, 115.0], [(95.0, 105.0)] * 2 + [(98.0, 130.0)])
-    assert frames_off_their_step([wide], MM2) == []
+    assert frames_off_their_step([wide], 5.0) == []
     narrow = _step([100.0, 100.0, 115.0], [(95.0, 105.0)] * 2 + [(108.0, 122.0)])
-    assert frames_off_their_step([narrow], MM2) == [
+    assert frames_off_their_step([narrow], 5.0) == [
         OffStep("f2.jpg", "loading", 8.0, 115.0, True, 100.0, 10.0)
     ]
 
@@ -56,12 +57,12 @@ def test_a_contact_disagreement_is_named_without_nan() -> None:
     without contact too, against a median of 0 (no division, no NaN in the text)."""
     lost = _step([120.0, 0.0, 118.0], [(110.0, 130.0), (0.0, 140.0), (108.0, 128.0)])
     stray = _step([0.0, 0.0, 30.0])
-    off = frames_off_their_step([lost, stray], MM2)
+    off = frames_off_their_step([lost, stray], 5.0)
     assert [(o.file, o.contact, o.step_median) for o in off] == [
         ("f1.jpg", False, 118.0),
         ("f2.jpg", True, 0.0),
     ]
-    text = off_step_warning(off, MM2, 5)
+    text = off_step_warning(off, MM2, 5.0, 5)
     assert "f1.jpg reads no contact against the step's median 118.0 mm²;" in text
     assert "f2.jpg reads 30.0 mm² against the step's median 0.0 mm² (no contact)" in text
     assert "look at those 2 frames" in text and "nan" not in text and "inf" not in text
@@ -69,14 +70,29 @@ def test_a_contact_disagreement_is_named_without_nan() -> None:
 
 def test_the_warning_names_the_frame_and_its_departure() -> None:
     off = [OffStep("p12.0kpa_b.jpg", "loading", 12.0, 151.2, True, 120.4, 12.04)]
-    assert off_step_warning(off, MM2, 5) == (
+    assert off_step_warning(off, MM2, 5.0, 5) == (
         "warning: step 12 kPa (loading): p12.0kpa_b.jpg reads 151.2 mm² against the step's "
         "median 120.4 mm² (+26 %); look at that frame (a slipped finger, an unsettled pressure "
         "or a mislabelled file): beyond 10 % of the step's median, 5 mm² and the frame's own "
         "stated interval (the record's extra.frames_off_their_step)"
     )
-    many = off_step_warning(off * 7, MM2, 5)
+    many = off_step_warning(off * 7, MM2, 5.0, 5)
     assert many.count("p12.0kpa_b.jpg") == 5 and "; and 2 more; look at those 7 frames" in many
+
+
+def test_the_px_floor_scales_with_the_frames_area() -> None:
+    """5 mm² on the example rig is 320 px on its 400-px frames: the same membrane filmed 2592 px
+    wide spans (2592/400)² as many pixels, so an onset step's ordinary 1000-px flip there is not
+    named, while the same flip on 400-px frames is."""
+    assert step_outlier_floor(MM2, 2592) == 5.0
+    assert step_outlier_floor(PX, 400) == 320.0
+    assert step_outlier_floor(PX, 2592) == pytest.approx(320.0 * 6.48**2)
+    onset = _step([3000.0, 2000.0, 2900.0])
+    assert frames_off_their_step([onset], step_outlier_floor(PX, 2592)) == []
+    off = frames_off_their_step([onset], step_outlier_floor(PX, 400))
+    assert [o.file for o in off] == ["f1.jpg"]
+    text = off_step_warning(off, PX, step_outlier_floor(PX, 2592), 5)
+    assert "beyond 10 % of the step's median, 13437 px and the frame's own" in text
 
 
 def _three_per_step(tmp_path: Path, swap: dict[str, str]) -> Path:

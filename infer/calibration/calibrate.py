@@ -27,7 +27,11 @@ from contactcal.infer.calibration.provenance import (
 from contactcal.infer.calibration.record import write_calibration
 from contactcal.infer.calibration.session import SessionFit, fit_session
 from contactcal.infer.calibration.session_checks import check_inverse_contact, session_points
-from contactcal.infer.calibration.steps import OffStep, frames_off_their_step, off_step_warning
+from contactcal.infer.calibration.steps import (
+    frames_off_their_step,
+    off_step_warning,
+    step_outlier_floor,
+)
 from contactcal.infer.calibration.table import format_table
 from contactcal.infer.files.atomic import OutputSet, run_outputs
 from contactcal.infer.pipeline.manifest import (
@@ -159,7 +163,8 @@ def calibrate_session(
     unit = PX if measure.scale is None else MM2
     fit = fit_session(results, unit, options.curve, options.inverse_phase, session.phase_source)
     check_inverse_contact(where, fit)
-    off = frames_off_their_step([s for ph in fit.phases.values() for s in ph.steps], unit)
+    floor = step_outlier_floor(unit, measured[0].width)
+    off = frames_off_their_step([s for ph in fit.phases.values() for s in ph.steps], floor)
     recorded = Path(manifest_as if manifest_as is not None else manifest).resolve()
     provenance = replace(
         provenance if provenance is not None else Provenance(),
@@ -183,7 +188,8 @@ def calibrate_session(
     with run_outputs([manifest, model, *files], join=outputs) as outs:
         paths = write_calibration(out_dir, results, fit, method.name, extra, provenance, outs)
     table = format_table(results, fit, provenance.device_id)
-    notes = _notes(session, results, checks, same, options, off, unit)
+    off_warning = off_step_warning(off, unit, floor, LISTED_FRAMES) if off else None
+    notes = _notes(session, results, checks, same, options, off_warning)
     table += "".join("\n" + line for line in notes)
     return CalibrationReport(table, frames, measured, fit.curve, paths, fit)
 
@@ -194,12 +200,11 @@ def _notes(
     checks: dict[str, object],
     same: list[dict[str, Any]],
     options: SessionOptions,
-    off: list[OffStep],
-    unit: str,
+    off_warning: str | None,
 ) -> list[str]:
     """The warning and note lines printed under the table, in a fixed order: the reference
     (gated above 0 kPa, or not at rest), identical frames, rows out of order, frames off their
-    step (``off``, areas in ``unit``), pooled readings, readings below 0 kPa, a sweep
+    step (``off_warning``, None when none is), pooled readings, readings below 0 kPa, a sweep
     top far above the display's range."""
     lines = []
     if checks["reference_gated_above_zero"]:
@@ -221,8 +226,8 @@ def _notes(
         lines.append(
             OUT_OF_ORDER_WARNING.format(rows=" and ".join(session.out_of_order), verb=verb)
         )
-    if off:
-        lines.append(off_step_warning(off, unit, LISTED_FRAMES))
+    if off_warning is not None:
+        lines.append(off_warning)
     if session.pooled is not None:
         lines.append(POOLED_NOTE.format(p=session.pooled, t=options.step_tolerance_kpa))
     if session.at_rest is not None:

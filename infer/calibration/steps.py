@@ -14,7 +14,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from contactcal.infer.calibration.curve import MM2, PX
+from contactcal.infer.calibration.curve import MM2
 from contactcal.infer.calibration.phases import PHASES
 from contactcal.infer.calibration.points import CalibrationPoint
 
@@ -39,14 +39,34 @@ STEP_OUTLIER_MIN_FRAMES = 3
 #: Near saturation (the top steps differ by ~1 % per kPa) an unsettled frame departs less than
 #: this and goes unnamed.
 STEP_OUTLIER_SHARE = 0.10
-#: The least departure named, per curve unit: near the onset a step's areas are a few mm², where
+#: The least departure named, in mm²: near the onset a step's areas are a few mm², where
 #: a share of the median is a few dozen pixels and a frame just below the model's
 #: smallest contact region reads "no contact" beside one just above it. 5 mm² is about twice the
 #: shipped U-Net's smallest contact region on the example rig (77.7 network px on its 290-px ring
-#: crop: 177 px, 2.8 mm²); in px (a curve without a pixel scale) the same 5 mm² at the example
-#: rig's 0.126 mm/px. Higher hides a frame without contact in the first contact steps (the
+#: crop: 177 px, 2.8 mm²). Higher hides a frame without contact in the first contact steps (the
 #: example's reads 20 mm²); lower names the onset's ordinary flips.
-STEP_OUTLIER_FLOOR = {MM2: 5.0, PX: 320.0}
+STEP_OUTLIER_FLOOR_MM2 = 5.0
+#: The same floor for a curve in px (no pixel scale): 5 mm² at the example rig's 0.126 mm/px is
+#: 320 px on its frames, 400 px wide; frames of another width see the same membrane at another
+#: scale, so the floor scales with the frame's area (~13 400 px at 2592 px wide).
+STEP_OUTLIER_FLOOR_PX = 320.0  # px, on frames STEP_OUTLIER_FLOOR_WIDTH_PX wide
+STEP_OUTLIER_FLOOR_WIDTH_PX = 400  # px
+
+
+def step_outlier_floor(unit: str, width_px: int) -> float:
+    """The least departure :func:`frames_off_their_step` names, in ``unit`` (mm² or px).
+
+    Args:
+        unit: the curve's area unit (:data:`~contactcal.infer.calibration.curve.MM2` or ``PX``).
+        width_px: the frames' width, px (scales the px floor with the frame's area).
+
+    Returns:
+        :data:`STEP_OUTLIER_FLOOR_MM2` in mm², else :data:`STEP_OUTLIER_FLOOR_PX` scaled by
+        ``(width_px / STEP_OUTLIER_FLOOR_WIDTH_PX)²``.
+    """
+    if unit == MM2:
+        return STEP_OUTLIER_FLOOR_MM2
+    return STEP_OUTLIER_FLOOR_PX * (width_px / STEP_OUTLIER_FLOOR_WIDTH_PX) ** 2
 
 
 @dataclass(frozen=True)
@@ -155,12 +175,12 @@ def group_steps(points: Sequence[CalibrationPoint], unit: str) -> dict[str, list
     return out
 
 
-def frames_off_their_step(steps: Sequence[Step], unit: str) -> list[OffStep]:
+def frames_off_their_step(steps: Sequence[Step], floor: float) -> list[OffStep]:
     """The frames whose area departs from their step's median by more than their tolerance.
 
     Only steps of at least :data:`STEP_OUTLIER_MIN_FRAMES` frames are looked at. A frame's
-    tolerance is the largest of :data:`STEP_OUTLIER_SHARE` of the median, the unit's
-    :data:`STEP_OUTLIER_FLOOR` and, when the frame states an area interval and agrees with the
+    tolerance is the largest of :data:`STEP_OUTLIER_SHARE` of the median, ``floor``
+    (:func:`step_outlier_floor`) and, when the frame states an area interval and agrees with the
     step on contact, the interval's side towards the median (the frame's own stated uncertainty:
     a frame whose interval holds the median is never named). A frame whose contact flag differs
     from its step's (no contact in a step in contact, or the reverse) gets no interval term: its
@@ -168,12 +188,11 @@ def frames_off_their_step(steps: Sequence[Step], unit: str) -> list[OffStep]:
 
     Args:
         steps: steps of any phases, e.g. every phase's of a fit.
-        unit: the steps' area unit (:data:`~contactcal.infer.calibration.curve.MM2` or ``PX``).
+        floor: the least departure named, in the steps' area unit (:func:`step_outlier_floor`).
 
     Returns:
         The frames named, in the steps' order and each step's frame order.
     """
-    floor = STEP_OUTLIER_FLOOR[unit]
     out = []
     for s in steps:
         if s.n < STEP_OUTLIER_MIN_FRAMES:
@@ -188,16 +207,17 @@ def frames_off_their_step(steps: Sequence[Step], unit: str) -> list[OffStep]:
     return out
 
 
-def off_step_warning(off: Sequence[OffStep], unit: str, listed: int) -> str:
-    """The printed warning for :func:`frames_off_their_step`'s frames (at least one), naming
-    the first ``listed``."""
+def off_step_warning(off: Sequence[OffStep], unit: str, floor: float, listed: int) -> str:
+    """The printed warning for :func:`frames_off_their_step`'s frames (at least one, areas and
+    ``floor`` in ``unit``), naming the first ``listed``."""
     shown = "; ".join(_off_step_line(o, unit) for o in off[:listed])
     more = f"; and {len(off) - listed} more" if len(off) > listed else ""
     those = "that frame" if len(off) == 1 else f"those {len(off)} frames"
-    share, floor = f"{100 * STEP_OUTLIER_SHARE:g} %", f"{STEP_OUTLIER_FLOOR[unit]:g} {unit}"
+    share = f"{100 * STEP_OUTLIER_SHARE:g} %"
+    least = f"{floor:g} {unit}" if unit == MM2 else f"{floor:.0f} {unit}"
     return (
         f"warning: {shown}{more}; look at {those} (a slipped finger, an unsettled pressure or a "
-        f"mislabelled file): beyond {share} of the step's median, {floor} and the frame's own "
+        f"mislabelled file): beyond {share} of the step's median, {least} and the frame's own "
         "stated interval (the record's extra.frames_off_their_step)"
     )
 
