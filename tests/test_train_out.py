@@ -39,8 +39,12 @@ def test_train_never_writes_over_a_folder_it_would_not_continue(
     expected = "expected an empty or new folder, or --resume on an unfinished run"
     resume = "nothing to --resume (no last.pt; the folder"
     cases = [
-        (mine, [], f"holds notes.txt, which a new run would write over; {expected}"),
-        (done, [], "holds best.pt, config.json, curves.png and 2 more, which a new run would"),
+        (
+            mine,
+            [],
+            f"holds notes.txt, which a new run would mix its files with or write over; {expected}",
+        ),
+        (done, [], "holds best.pt, config.json, curves.png and 2 more, which a new run would mix"),
         (done, ["--resume"], f"{resume} holds best.pt, config.json, curves.png and 2 more)"),
         (tmp_path / "new", ["--resume"], f"{resume} does not exist)"),
         (tmp_path / "file", [], "not a folder; expected a run folder"),

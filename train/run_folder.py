@@ -69,8 +69,9 @@ def check_run_folder(out: Path, resume: bool) -> None:
         )
     if held:
         raise ValueError(
-            f"{out}: holds {few(held)}, which a new run would write over; expected an empty or "
-            "new folder, or --resume on an unfinished run (one holding last.pt)"
+            f"{out}: holds {few(held)}, which a new run would mix its files with or write over; "
+            "expected an empty or new folder, or --resume on an unfinished run (one holding "
+            "last.pt)"
         )
 
 
