@@ -150,3 +150,28 @@ def test_resume_keeps_the_split_and_refuses_another(
     assert train([a, "pb"], run, cfg, resume=True, progress=False)["epochs_run"] == 1
     again = json.loads((run / "config.json").read_text())["split"]
     assert again == split and again["val"][0].startswith(f"{tmp_path.resolve()}/p")
+
+
+def test_data_rendered_otherwise_is_refused_by_export_and_resume(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """The same frames' rows (index.csv) rendered otherwise (the folder's config.json: another
+    spp) pass the index digest; the run's render_digest refuses them at export and --resume. A run
+    recorded before render_digest (none in its config.json) is not compared."""
+    from contactcal.train.export import load_run
+
+    monkeypatch.chdir(tmp_path)
+    a, b = _pair(tmp_path)
+    (a / "config.json").write_text(json.dumps({"render": {"spp": 16}}))
+    run, cfg = tmp_path / "run", tiny_config(epochs=1)
+    train([a, b], run, cfg, progress=False)
+    load_run(run)  # the data as trained: accepted
+    (a / "config.json").write_text(json.dumps({"render": {"spp": 4}}))
+    with pytest.raises(ValueError, match=r"config\.json: the run's dataset folders .* rendered "):
+        load_run(run)
+    with pytest.raises(ValueError, match=r"--resume with data rendered otherwise"):
+        train([a, b], run, cfg, resume=True, progress=False)
+    info = json.loads((run / "config.json").read_text())
+    del info["render_digest"]
+    (run / "config.json").write_text(json.dumps(info))
+    load_run(run)

@@ -47,7 +47,7 @@ from contactcal.infer.files.atomic import atomic_open
 from contactcal.infer.methods.unet.spec import ModelSpec, read_spec
 from contactcal.train.checkpoint import load_checkpoint
 from contactcal.train.config import TrainConfig, saved_train_config
-from contactcal.train.data import dataset_digest
+from contactcal.train.data import dataset_digest, render_digest
 from contactcal.train.export_check import ExportCheckError, check_decisions
 from contactcal.train.interval import calibrate_run
 from contactcal.train.model import UNet
@@ -75,11 +75,13 @@ def load_run(run_dir: str | os.PathLike[str]) -> tuple[TrainConfig, dict, dict]:
     path = run / "config.json"
     info = read_run_info(run)
     cfg = saved_train_config(info.get("train"), str(path))
-    check_data_dirs(info.get("data_dirs"), path, info.get("data_digest"))
+    check_data_dirs(info.get("data_dirs"), path, info.get("data_digest"), info.get("render_digest"))
     return cfg, info, load_checkpoint(run / "best.pt")
 
 
-def check_data_dirs(dirs: object, config_path: Path, digest: object = None) -> None:
+def check_data_dirs(
+    dirs: object, config_path: Path, digest: object = None, render: object = None
+) -> None:
     """Refuse a run whose ``data_dirs`` are missing, not found, or not the data it trained on.
 
     Args:
@@ -88,6 +90,8 @@ def check_data_dirs(dirs: object, config_path: Path, digest: object = None) -> N
         config_path: the run's ``config.json``, for the message.
         digest: the config's ``data_digest`` (:func:`~contactcal.train.data.dataset_digest`
             of the folders at training time); None or absent: not compared.
+        render: the config's ``render_digest`` (:func:`~contactcal.train.data.render_digest`:
+            how the folders were rendered); None or absent (runs before it): not compared.
 
     Raises:
         ValueError: naming the config, the folder and how to fix it.
@@ -107,6 +111,13 @@ def check_data_dirs(dirs: object, config_path: Path, digest: object = None) -> N
             "hold the data it was trained on (their index.csv digest differs from data_digest); "
             "the export calibrates and checks on the run's validation fingers, so put the "
             "original data back (a re-render with the same command and seed is identical)"
+        )
+    if isinstance(render, str) and render and render_digest(dirs) != render:
+        raise ValueError(
+            f"{config_path}: the run's dataset folders {', '.join(dirs)} (data_dirs) were "
+            "rendered otherwise than the data it was trained on (their config.json digest "
+            "differs from render_digest: another size, spp, seed or Mitsuba variant); put the "
+            "original renders back (the same command, seed and variant)"
         )
 
 

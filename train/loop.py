@@ -37,7 +37,7 @@ from contactcal.train.checkpoint import (
     set_rng_state,
 )
 from contactcal.train.config import TrainConfig, resolve_device
-from contactcal.train.data import CachedSet, build_cache, dataset_digest
+from contactcal.train.data import CachedSet, build_cache, dataset_digest, render_digest
 from contactcal.train.ema import WeightAverage
 from contactcal.train.metrics import evaluate, segmentation_loss, summarise
 from contactcal.train.model import UNet, count_parameters
@@ -75,13 +75,14 @@ class Run:
 
 
 def _run_info(
-    cfg: TrainConfig, data_dirs: Sequence[Path], digest: str, split: Split, dev: Any
+    cfg: TrainConfig, data_dirs: Sequence[Path], digests: tuple[str, str], split: Split, dev: Any
 ) -> dict[str, Any]:
     """The content of ``config.json``."""
     return {
         "train": config_to_dict(cfg),
         "data_dirs": [str(Path(d).resolve()) for d in data_dirs],  # export reads them anywhere
-        "data_digest": digest,
+        "data_digest": digests[0],  # the frames' rows (index.csv): the model's provenance
+        "render_digest": digests[1],  # how they were rendered (config.json): export checks it
         "split": split,
         "device": str(dev),
         "contactcal_version": __version__,
@@ -115,7 +116,8 @@ def _prepare(dirs: list[Path], out: Path, cfg: TrainConfig, resume: bool, progre
     device = resolve_device(cfg.device)
     if cfg.num_threads > 0:
         torch.set_num_threads(cfg.num_threads)
-    ckpt = resume_checkpoint(out, cfg, digest, split) if resume else None
+    render = render_digest(dirs)
+    ckpt = resume_checkpoint(out, cfg, (digest, render), split) if resume else None
     torch.manual_seed(cfg.seed)  # weight init
     model = UNet(cfg.model).to(device)
     c = cfg.model.in_channels
@@ -145,7 +147,7 @@ def _prepare(dirs: list[Path], out: Path, cfg: TrainConfig, resume: bool, progre
         set_rng_state(ckpt["rng"])
         run.start, run.history = int(ckpt["epoch"]) + 1, list(ckpt["history"])
         run.best, run.best_epoch = float(ckpt["best_score"]), int(ckpt["best_epoch"])
-    run.info = _run_info(cfg, dirs, digest, split, device)  # written with the first last.pt
+    run.info = _run_info(cfg, dirs, (digest, render), split, device)  # written with last.pt
     return run
 
 

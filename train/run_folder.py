@@ -75,13 +75,17 @@ def check_run_folder(out: Path, resume: bool) -> None:
         )
 
 
-def resume_checkpoint(out: Path, cfg: TrainConfig, digest: str, split: Split) -> dict[str, Any]:
+def resume_checkpoint(
+    out: Path, cfg: TrainConfig, digests: tuple[str, str], split: Split
+) -> dict[str, Any]:
     """``out/last.pt``, to continue with this call's config, data and split (the run's).
 
     Args:
         out: the run folder.
         cfg: this call's config (device and threads may differ from the run's).
-        digest: this call's :func:`~contactcal.train.data.dataset_digest`.
+        digests: this call's :func:`~contactcal.train.data.dataset_digest` and
+            :func:`~contactcal.train.data.render_digest` (the latter compared with the run's
+            ``config.json`` where it records one: runs before it did not).
         split: this call's split (:func:`~contactcal.train.split.split_record`).
 
     Raises:
@@ -92,7 +96,7 @@ def resume_checkpoint(out: Path, cfg: TrainConfig, digest: str, split: Split) ->
     diff = [k for k in config_diff(saved, cfg) if k not in ("device", "num_threads")]
     if diff:
         raise ValueError(f"{out}: --resume with a different config ({', '.join(diff)})")
-    if ckpt["data_digest"] != digest:
+    if ckpt["data_digest"] != digests[0]:
         raise ValueError(f"{out}: --resume with different data (index.csv digest changed)")
     if "augment_rng" not in ckpt:
         raise ValueError(
@@ -101,6 +105,12 @@ def resume_checkpoint(out: Path, cfg: TrainConfig, digest: str, split: Split) ->
         )
     if (out / "config.json").is_file():  # absent only if killed before its first config.json
         info = read_run_info(out)
+        if info.get("render_digest", digests[1]) != digests[1]:
+            raise ValueError(
+                f"{out}: --resume with data rendered otherwise (the folders' config.json digest "
+                "differs from the run's render_digest: another size, spp, seed or variant); "
+                "expected the run's own renders: put them back, or start a new run"
+            )
         check_same_split(
             recorded_split(info, out / "config.json"),
             split,
