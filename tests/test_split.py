@@ -95,6 +95,24 @@ def test_a_recorded_split_is_read_as_the_data_dirs_it_names() -> None:
         recorded_split({"data_dirs": dirs}, path)
 
 
+def test_an_older_record_reads_as_its_folders_resolved(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """data_dirs recorded relative (runs before they were resolved) resolve from the working
+    folder, as the frames are read; a key folder typed through a symlink, naming no entry, is
+    paired with the one entry no key names (two such are refused)."""
+    monkeypatch.chdir(tmp_path)
+    path = Path("runs/r1/config.json")
+    root = tmp_path.resolve()
+    old = {"data_dirs": ["data/a", "data/b"], "split": {"train": ["data/a#0"], "val": ["b#1"]}}
+    assert recorded_split(old, path) == {"val": [f"{root}/data/b#1"], "train": [f"{root}/data/a#0"]}
+    linked = {"data_dirs": ["/w/a", "/w/b"], "split": {"train": ["/w/a#0"], "val": ["ln#1"]}}
+    assert recorded_split(linked, path)["val"] == ["/w/b#1"]
+    two = {"data_dirs": ["/w/a", "/w/b"], "split": {"train": ["ln2#0"], "val": ["ln#1"]}}
+    with pytest.raises(ValueError, match="names none of the run's data_dirs.*through a symlink"):
+        recorded_split(two, path)
+
+
 def test_export_takes_the_validation_fingers_the_run_recorded(
     tmp_path: Path, monkeypatch: pytest.MonkeyPatch
 ) -> None:
@@ -112,6 +130,10 @@ def test_export_takes_the_validation_fingers_the_run_recorded(
     prefix = f"{tmp_path.resolve()}/"
     typed = {side: [k.removeprefix(prefix) for k in keys] for side, keys in info["split"].items()}
     assert validation_rows(run, {**info, "split": typed}, 0.25, 0) == val
+    relative = {**info, "data_dirs": ["pa", "pb"], "split": typed}  # before e0f48ea
+    assert [r.finger_key for r in validation_rows(run, relative, 0.25, 0)] == [
+        r.finger_key for r in val
+    ]
     other = {"val": info["split"]["train"][:1], "train": info["split"]["train"][1:] + typed["val"]}
     said = f"{run / 'config.json'}: the split recomputed from data_dirs (val_fraction 0.25, seed 0)"
     with pytest.raises(ValueError, match=re.escape(said) + ": its validation fingers differ"):

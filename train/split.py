@@ -11,9 +11,9 @@ record that the split recomputed from ``data_dirs`` contradicts; ``train --resum
 that would split otherwise than the record (:func:`check_same_split`).
 
 Runs written before the split was keyed on resolved folders recorded their keys as the folders
-were typed (``data/v3#4``): each key is read as the ``data_dirs`` entry it names
-(:func:`recorded_split`). Folders typed relative to one parent (all ``data/...``) sort the same
-resolved, so those runs split as before.
+were typed (``data/v3#4``), and the oldest their ``data_dirs`` as typed too: each key is read as the
+``data_dirs`` entry it names, resolved (:func:`recorded_split`). Folders typed relative to one
+parent (all ``data/...``) sort the same resolved, so those runs split as before.
 """
 
 from __future__ import annotations
@@ -67,10 +67,12 @@ def split_record(train: Sequence[IndexRow], val: Sequence[IndexRow]) -> Split:
 
 
 def recorded_split(info: dict, config_path: Path) -> Split:
-    """A run's recorded split, each key read as ``<its data_dirs entry>#<finger>``.
+    """A run's recorded split, each key read as ``<its data_dirs entry, resolved>#<finger>``.
 
     Args:
-        info: the run's ``config.json`` (``split``, ``data_dirs``).
+        info: the run's ``config.json`` (``split``, ``data_dirs``; relative entries, as runs
+            before the folders were resolved recorded them, resolve from the working folder,
+            as :func:`validation_rows` reads them).
         config_path: that file, for the messages.
 
     Raises:
@@ -88,7 +90,25 @@ def recorded_split(info: dict, config_path: Path) -> Split:
             '(split: {"train": [...], "val": [...]}, each a list of "<dataset folder>#<finger>"; '
             "data_dirs: the list of dataset folders)"
         )
-    return {side: sorted(_named_key(k, dirs, config_path) for k in split[side]) for side in SIDES}
+    keys = [k for side in SIDES for k in split[side]]
+    named = _named_folders([k.rpartition("#")[0] for k in keys], dirs)
+    for key in keys:
+        entries = named[key.rpartition("#")[0]]
+        if len(entries) != 1:
+            which = f"{len(entries)} ({', '.join(entries)})" if entries else "none"
+            raise ValueError(
+                f"{config_path}: the split's key {key!r} names {which} of the run's data_dirs "
+                f"({', '.join(dirs)}); expected each key to name exactly one of them "
+                "(<dataset folder>#<finger>, the folder as data_dirs records it or as it was "
+                "typed; one typed through a symlink or since renamed names none)"
+            )
+    return {
+        side: sorted(
+            f"{Path(named[f][0]).resolve()}#{n}"
+            for f, _, n in (k.rpartition("#") for k in split[side])
+        )
+        for side in SIDES
+    }
 
 
 def _is_strings(value: object, holding: str = "") -> bool:
@@ -96,22 +116,22 @@ def _is_strings(value: object, holding: str = "") -> bool:
     return isinstance(value, list) and all(isinstance(v, str) and holding in v for v in value)
 
 
-def _named_key(key: str, dirs: list[str], config_path: Path) -> str:
-    """``key`` with its folder replaced by the one ``data_dirs`` entry whose path ends with that
-    folder's parts (an absolute folder: the entry itself; a relative one as typed: its parts
-    after any leading ``..``)."""
-    folder, _, finger = key.rpartition("#")
-    parts = Path(os.path.normpath(folder)).parts
-    parts = parts[next((i for i, p in enumerate(parts) if p != ".."), len(parts)) :]
-    named = [d for d in dirs if not parts or Path(d).parts[-len(parts) :] == parts]
-    if len(named) != 1:
-        which = "none" if not named else f"{len(named)} ({', '.join(named)})"
-        raise ValueError(
-            f"{config_path}: the split's key {key!r} names {which} of the run's data_dirs "
-            f"({', '.join(dirs)}); expected each key to name exactly one of them "
-            "(<dataset folder>#<finger>, the folder as data_dirs records it or as it was typed)"
-        )
-    return f"{named[0]}#{finger}"
+def _named_folders(folders: list[str], dirs: list[str]) -> dict[str, list[str]]:
+    """Each key folder's ``data_dirs`` entries: those whose path ends with the folder's parts (an
+    absolute folder: the entry itself; a relative one as typed: its parts after any leading
+    ``..``). When one folder names none and one entry is named by no folder (an older run's
+    folder typed through a symlink or renamed since), the two are paired: a wrong pairing
+    splits otherwise than the data, which :func:`check_same_split` refuses."""
+    named: dict[str, list[str]] = {}
+    for folder in folders:
+        parts = Path(os.path.normpath(folder)).parts
+        parts = parts[next((i for i, p in enumerate(parts) if p != ".."), len(parts)) :]
+        named[folder] = [d for d in dirs if not parts or Path(d).parts[-len(parts) :] == parts]
+    unnamed = [f for f, entries in named.items() if not entries]
+    unused = [d for d in dirs if not any(d in entries for entries in named.values())]
+    if len(unnamed) == 1 and len(unused) == 1:
+        named[unnamed[0]] = unused
+    return named
 
 
 def check_same_split(recorded: Split, split: Split, where: str, fix: str) -> None:

@@ -48,7 +48,8 @@ STEP_OUTLIER_SHARE = 0.10
 STEP_OUTLIER_FLOOR_MM2 = 5.0
 #: The same floor for a curve in px (no pixel scale): 5 mm² at the example rig's 0.126 mm/px is
 #: 320 px on its frames, 400 px wide; frames of another width see the same membrane at another
-#: scale, so the floor scales with the frame's area (~13 400 px at 2592 px wide).
+#: pixel scale (mm/px inversely with the width), so the floor scales with the square of the
+#: width, (width / 400)² (~13 400 px at 2592 px wide, whatever the height).
 STEP_OUTLIER_FLOOR_PX = 320.0  # px, on frames STEP_OUTLIER_FLOOR_WIDTH_PX wide
 STEP_OUTLIER_FLOOR_WIDTH_PX = 400  # px
 
@@ -58,7 +59,7 @@ def step_outlier_floor(unit: str, width_px: int) -> float:
 
     Args:
         unit: the curve's area unit (:data:`~contactcal.infer.calibration.curve.MM2` or ``PX``).
-        width_px: the frames' width, px (scales the px floor with the frame's area).
+        width_px: the frames' width, px (scales the px floor by its square).
 
     Returns:
         :data:`STEP_OUTLIER_FLOOR_MM2` in mm², else :data:`STEP_OUTLIER_FLOOR_PX` scaled by
