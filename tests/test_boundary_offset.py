@@ -130,22 +130,24 @@ def test_a_run_reads_its_rig_config_once_also_with_mm_per_px(
     import argparse
 
     from contactcal.infer.pipeline import scale as scale_module
-    from contactcal.infer.pipeline.args import resolve_rig
+    from contactcal.infer.pipeline.args import read_rig, resolve_rig
     from contactcal.infer.pipeline.scale import PixelScale, RigConfigError
 
     rig = _rig(tmp_path / "rig.json", **{OFFSET_KEY: 0.2, MODEL_KEY: SHA})
     reads: list[Path] = []
     real = scale_module.read_rig_json
     monkeypatch.setattr(scale_module, "read_rig_json", lambda p: reads.append(p) or real(p))
-    scale, boundary = resolve_rig(argparse.Namespace(rig=rig, mm_per_px=None))
+    args = argparse.Namespace(rig=rig, mm_per_px=None)
+    scale, boundary = resolve_rig(args, read_rig(args))
     assert scale == PixelScale(0.126454185, 400) and boundary == BoundaryOffset(0.2, SHA, str(rig))
     assert reads == [rig]
     # --mm-per-px replaces the scale, not the offset; a broken rig config is an error, not ignored
-    scale, boundary = resolve_rig(argparse.Namespace(rig=rig, mm_per_px=0.05))
+    args = argparse.Namespace(rig=rig, mm_per_px=0.05)
+    scale, boundary = resolve_rig(args, read_rig(args))
     assert scale == PixelScale(0.05, None) and boundary is not None
     (tmp_path / "bad.json").write_text("[1, 2]")
     with pytest.raises(RigConfigError, match=r"bad\.json: expected a JSON object"):
-        resolve_rig(argparse.Namespace(rig=tmp_path / "bad.json", mm_per_px=0.05))
+        read_rig(argparse.Namespace(rig=tmp_path / "bad.json", mm_per_px=0.05))
 
 
 def _shipped_sha() -> str:

@@ -316,6 +316,29 @@ def test_a_second_run_into_one_out_says_which_calibration_it_replaced(
     assert json.loads((out / "calibration.json").read_text())["device_id"] == "display-07"
 
 
+def test_calibrate_reads_the_earlier_record_and_the_rig_json_once(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str], monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """The earlier calibration.json was read twice (device check, then the note) and the
+    rig.json beside the manifest twice with --mm-per-px (scale and offset, then the note): two
+    reads of one file can see two versions of it."""
+    s = copy_session(tmp_path)
+    out = tmp_path / "c"
+    argv = ["calibrate", str(s / "manifest.csv"), "--method", "classical", "--out", str(out)]
+    argv += ["--device-id", "display-07", "--mm-per-px", "0.2"]
+    assert main(argv) == 0
+    capsys.readouterr()
+    reads: list[Path] = []
+    real = Path.read_text
+    monkeypatch.setattr(Path, "read_text", lambda p, *a, **k: reads.append(p) or real(p, *a, **k))
+    assert main(argv) == 0
+    printed = capsys.readouterr().out
+    assert "note: replaced the calibration that" in printed  # from the one read
+    assert f"note: --mm-per-px 0.2 used in place of the scale of {s / 'rig.json'}" in printed
+    assert [p.name for p in reads].count("calibration.json") == 1
+    assert [p.name for p in reads].count("rig.json") == 1
+
+
 def test_a_sweep_far_above_20_kpa_is_read_with_a_warning(
     tmp_path: Path, capsys: pytest.CaptureFixture[str]
 ) -> None:
@@ -374,16 +397,16 @@ def test_a_replaced_record_without_a_device_id_is_said_so(tmp_path: Path) -> Non
     """The note read "device id None" for a record made without --device-id."""
     record = {"created": "2024-05-01T10:00:00+00:00", "device_id": None}
     (tmp_path / "calibration.json").write_text(json.dumps(record))
-    note = calibration_io.earlier_record_note(tmp_path)
+    note = calibration_io.earlier_record_note(tmp_path, calibration_io.held_record(tmp_path))
     assert note is not None and "None" not in note
     assert f"(created {record['created']}, no device id)" in note
 
 
 def test_a_foreign_calibration_csv_replaced_is_said_so(tmp_path: Path) -> None:
     """A calibration.csv without a calibration.json beside it was overwritten without a word."""
-    assert calibration_io.earlier_record_note(tmp_path) is None
+    assert calibration_io.earlier_record_note(tmp_path, None) is None
     (tmp_path / "calibration.csv").write_text("pressure,area\n1,2\n")
-    note = calibration_io.earlier_record_note(tmp_path)
+    note = calibration_io.earlier_record_note(tmp_path, None)
     assert note is not None
     want = f"note: replaced the calibration.csv that {tmp_path} held (no calibration"
     assert note.startswith(want)

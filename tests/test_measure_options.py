@@ -9,7 +9,7 @@ from pathlib import Path
 import pytest
 
 from contactcal.infer.cli import build_parser
-from contactcal.infer.pipeline.args import measure_options
+from contactcal.infer.pipeline.args import measure_options, read_rig
 from contactcal.infer.pipeline.options import MeasureOptions
 
 EXAMPLE = Path(__file__).resolve().parents[1] / "examples" / "session"
@@ -21,7 +21,7 @@ def _args(*argv: str) -> argparse.Namespace:
 
 def test_defaults_are_the_command_lines() -> None:
     args = _args("calibrate", str(EXAMPLE / "manifest.csv"), "--out", "x")
-    got = measure_options(args)  # no rig.json named or looked for
+    got = measure_options(args, read_rig(args))  # no rig.json named or looked for
     assert got == MeasureOptions()
 
 
@@ -43,7 +43,7 @@ def test_every_option_reaches_the_config(tmp_path: Path) -> None:
         "--model",
         "m.onnx",
     )
-    got = measure_options(args)
+    got = measure_options(args, read_rig(args))
     assert (got.threads, got.change_gate, got.bit_depth, got.outline) == (2, False, 12, True)
     assert got.scale is not None and got.scale.mm_per_px == pytest.approx(0.02)
     assert got.boundary is None and str(got.model) == "m.onnx"
@@ -57,7 +57,7 @@ def test_the_rig_json_beside_the_manifest_gives_scale_and_offset(tmp_path: Path)
         )
     )
     args = _args("evaluate", str(tmp_path / "manifest.csv"), "--labels", "l", "--out", "x")
-    got = measure_options(args, rig)
+    got = measure_options(args, read_rig(args, rig))
     assert got.scale is not None and got.scale.mm_per_px == pytest.approx(0.03)
     assert got.boundary is not None and got.boundary.mm == pytest.approx(0.1)
     assert (got.threads, got.outline) == (1, False)  # evaluate has neither option
@@ -84,7 +84,8 @@ def test_an_option_setting_aside_the_rig_json_beside_the_manifest_is_said(tmp_pa
             assert width is not None, "the frames' width is read only for --mm-per-px"
             return width
 
-        return rig_note(args, measure_options(args, beside), beside, width_px)
+        read = read_rig(args, beside)
+        return rig_note(args, measure_options(args, read), beside, read, width_px)
 
     other = _rig_json(tmp_path / "other.json", 0.06, 400)
     assert note("--rig", str(other)) == (

@@ -16,6 +16,7 @@ from contactcal.infer.pipeline.args import (
     measure_options,
     method_args,
     overlay_runs,
+    read_rig,
     run_inputs,
     scale_args,
 )
@@ -111,12 +112,17 @@ def _cmd_calibrate(args: argparse.Namespace) -> int:
     # any work (a video run's own: check_fresh_recording)
     replaced = check_reused_out(args.out, args.device_id, None if video else args.manifest)
     if video:  # --video / --camera: contactcal.infer.video.command
-        return calibrate_video(args, measure_options(args), provenance, replaced)
+        return calibrate_video(args, measure_options(args, read_rig(args)), provenance, replaced)
     beside = beside_manifest(args.manifest)
-    measure = measure_options(args, beside)
+    rig = read_rig(args, beside)
+    measure = measure_options(args, rig)
     tolerance = step_tolerance(args)  # the manifest read as the run reads it
     set_aside = rig_note(
-        args, measure, beside, lambda: reference_width(args.manifest, tolerance, args.bit_depth)
+        args,
+        measure,
+        beside,
+        rig,
+        lambda: reference_width(args.manifest, tolerance, args.bit_depth),
     )
     provenance = replace(provenance, rig_note=set_aside)  # recorded: extra.rig_note
     written: list[Path] = []

@@ -8,11 +8,10 @@ or leave a recording's ``frames/`` and preview beside a calibration made of othe
 
 from __future__ import annotations
 
-import json
 import os
 from pathlib import Path
 
-from contactcal.infer.calibration.record import earlier_record_note
+from contactcal.infer.calibration.record import HeldRecord, earlier_record_note, held_record
 from contactcal.infer.files.atomic import TEMP_NAME
 from contactcal.infer.video.preview_files import previews_in
 
@@ -29,48 +28,53 @@ def check_reused_out(out: Path, device_id: str | None, manifest: Path | None) ->
 
     Returns:
         The note :func:`~contactcal.infer.calibration.record.earlier_record_note` gives (None:
-        nothing replaced).
+        nothing replaced), from the ``calibration.json`` read once for both.
 
     Raises:
         ValueError: ``out`` holds another display's calibration, or (a manifest run) an earlier
             recording's frames or preview; one line naming it and what to do.
     """
-    check_same_device(out, device_id)
+    held = held_record(out)
+    check_same_device(held, device_id)
     if manifest is not None:
         check_no_recording(out, manifest)
-    return earlier_record_note(out)
+    return earlier_record_note(out, held)
 
 
-def _recorded_device(path: Path) -> str | None:
-    """The device id ``path`` (a ``calibration.json``) names; None: none, or not a record
-    (which a run replaces with a note, as before)."""
+def _recorded_device(held: HeldRecord) -> str | None:
+    """The device id a held ``calibration.json`` names; None: none, or not a record (which a
+    run replaces with a note, as before)."""
     try:
-        device = json.loads(path.read_text(encoding="utf-8")).get("device_id")
-    except (OSError, ValueError, AttributeError):
+        device = held.data.get("device_id")
+    except AttributeError:
         return None
     return None if device is None else str(device)
 
 
-def check_same_device(out: Path, device_id: str | None) -> None:
+def check_same_device(held: HeldRecord | None, device_id: str | None) -> None:
     """Refuse to replace a calibration that names another display than this run's.
 
     A record with a device id is replaced only by a run with that id (a re-calibration). A run
     without ``--device-id`` cannot say it calibrates the same display, so it is refused too:
     a typo in ``--out`` would otherwise lose that display's curve.
 
+    Args:
+        held: the ``--out`` folder's ``calibration.json`` as read before the run
+            (:func:`~contactcal.infer.calibration.record.held_record`; None: none).
+        device_id: this run's ``--device-id`` (None: not given).
+
     Raises:
         ValueError: the record's id differs from ``device_id`` or ``device_id`` is None.
     """
-    path = out / "calibration.json"
-    if not path.is_file():
+    if held is None:
         return
-    recorded = _recorded_device(path)
+    recorded = _recorded_device(held)
     if recorded is None or recorded == device_id:
         return
     this = "gives no --device-id" if device_id is None else f"is for --device-id {device_id!r}"
     again = f"--device-id {recorded!r}"
     raise ValueError(
-        f"{path}: holds the calibration of device id {recorded!r}, and this run {this}; "
+        f"{held.path}: holds the calibration of device id {recorded!r}, and this run {this}; "
         f"expected another --out for this display (to re-calibrate {recorded!r}, give {again}; "
         "to replace that record deliberately, remove it first)"
     )

@@ -21,6 +21,7 @@ import csv
 import io
 import json
 import os
+from dataclasses import dataclass
 from datetime import datetime, timezone
 from pathlib import Path
 from typing import Any
@@ -246,7 +247,29 @@ def write_calibration(
     return paths
 
 
-def earlier_record_note(out_dir: str | os.PathLike[str]) -> str | None:
+@dataclass(frozen=True)
+class HeldRecord:
+    """The ``calibration.json`` an output folder holds before a run, read once
+    (:func:`held_record`): the device check and the note on what the run replaces both see it."""
+
+    #: Its path.
+    path: Path
+    #: Its parsed JSON; None: unreadable or not JSON (a run replaces it with a note).
+    data: Any
+
+
+def held_record(out_dir: str | os.PathLike[str]) -> HeldRecord | None:
+    """The ``calibration.json`` ``out_dir`` holds, read once; None: no such file."""
+    path = Path(out_dir) / "calibration.json"
+    if not path.is_file():
+        return None
+    try:
+        return HeldRecord(path, json.loads(path.read_text(encoding="utf-8")))
+    except (OSError, ValueError):
+        return HeldRecord(path, None)
+
+
+def earlier_record_note(out_dir: str | os.PathLike[str], held: HeldRecord | None) -> str | None:
     """A line naming the calibration ``out_dir`` holds before a run writes its own (None: none).
 
     A run into the same ``--out`` replaces ``calibration.json``, ``.csv`` and ``curve.png``
@@ -255,28 +278,27 @@ def earlier_record_note(out_dir: str | os.PathLike[str]) -> str | None:
 
     Args:
         out_dir: the run's output folder, before the run.
+        held: its ``calibration.json`` as read before the run (:func:`held_record`).
 
     Returns:
         ``None`` without an earlier ``calibration.json``, ``.csv`` or ``curve.png``, else a
         one-line note naming the record's creation time and device id ("unreadable" when it is
         not a record), or, without a ``calibration.json``, the files replaced.
     """
-    path = Path(out_dir) / "calibration.json"
-    if not path.is_file():
-        held = [n for n in ("calibration.csv", "curve.png") if (Path(out_dir) / n).is_file()]
-        if not held:
+    if held is None:
+        held_files = [n for n in ("calibration.csv", "curve.png") if (Path(out_dir) / n).is_file()]
+        if not held_files:
             return None
         return (
-            f"note: replaced the {' and '.join(held)} that {out_dir} held (no calibration.json "
-            f"beside {'them' if len(held) > 1 else 'it'}: not a contactcal record); give each run "
-            "its own --out to keep both"
+            f"note: replaced the {' and '.join(held_files)} that {out_dir} held (no "
+            f"calibration.json beside {'them' if len(held_files) > 1 else 'it'}: not a "
+            "contactcal record); give each run its own --out to keep both"
         )
     try:
-        old = json.loads(path.read_text(encoding="utf-8"))
-        device = old.get("device_id")
+        device = held.data.get("device_id")
         named = "no device id" if device is None else f"device id {device!r}"
-        what = f"created {old['created']}, {named}"
-    except (OSError, ValueError, KeyError, TypeError, AttributeError):
+        what = f"created {held.data['created']}, {named}"
+    except (KeyError, TypeError, AttributeError):
         what = "unreadable as a record"
     return (
         f"note: replaced the calibration that {out_dir} held ({what}); give each run its own --out "

@@ -12,7 +12,7 @@ from contactcal.infer.pipeline.args import (
     check_change_gate,
     check_out_folder,
     measure_options,
-    rig_file,
+    read_rig,
     scale_args,
 )
 
@@ -59,14 +59,23 @@ def _cmd_evaluate(args: argparse.Namespace) -> int:
     check_change_gate(args)
     check_out_folder(args.out, "evaluate")
     default_rig = beside_manifest(args.manifest)
-    measure = measure_options(args, default_rig)
-    rig = rig_file(args, default_rig)  # the file measure_options read, protected from --out
+    rig = read_rig(args, default_rig)  # read once; the file protected from --out
+    measure = measure_options(args, rig)
     set_aside = rig_note(  # each frame scored at its own pressure: steps not pooled
-        args, measure, default_rig, lambda: reference_width(args.manifest, 0.0, args.bit_depth)
+        args,
+        measure,
+        default_rig,
+        rig,
+        lambda: reference_width(args.manifest, 0.0, args.bit_depth),
     )
     replaced = earlier_evaluation_note(args.out, args.manifest)
     rep = evaluate_session(
-        args.manifest, args.labels, args.out, args.method, measure, also_read=[rig] if rig else []
+        args.manifest,
+        args.labels,
+        args.out,
+        args.method,
+        measure,
+        also_read=[rig.path] if rig else [],
     )
     with printing_after([args.out], [set_aside, replaced]):
         print(rep.table)

@@ -5,7 +5,7 @@ from __future__ import annotations
 import argparse
 import os
 from pathlib import Path
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Any, NamedTuple
 
 from contactcal.infer.methods.registry import METHODS
 
@@ -131,35 +131,47 @@ def check_change_gate(args: argparse.Namespace) -> None:
         )
 
 
-def rig_file(args: argparse.Namespace, default_rig: Path | None = None) -> Path | None:
-    """The rig config a run reads: ``--rig``, else the ``rig.json`` at ``default_rig`` if it
-    exists; None: none."""
-    if args.rig is not None:
-        return args.rig
-    if default_rig is not None and default_rig.is_file():
-        return default_rig
-    return None
+class RigConfig(NamedTuple):
+    """The rig config a run reads (:func:`read_rig`), read once and passed on."""
+
+    #: The file: ``--rig``, else the ``rig.json`` beside the manifest.
+    path: Path
+    #: Its JSON object (:func:`~contactcal.infer.pipeline.scale.read_rig_json`).
+    data: dict[str, Any]
+
+
+def read_rig(args: argparse.Namespace, default_rig: Path | None = None) -> RigConfig | None:
+    """The rig config a run reads, read once: ``--rig``, else the ``rig.json`` at
+    ``default_rig`` if it exists; None: none.
+
+    Raises:
+        RigConfigError: that file missing, unreadable or not a rig config's JSON object.
+    """
+    from contactcal.infer.pipeline.scale import read_rig_json
+
+    path = args.rig
+    if path is None and default_rig is not None and default_rig.is_file():
+        path = default_rig
+    return None if path is None else RigConfig(path, read_rig_json(path))
 
 
 def resolve_rig(
-    args: argparse.Namespace, default_rig: Path | None = None
+    args: argparse.Namespace, rig: RigConfig | None
 ) -> tuple[PixelScale | None, BoundaryOffset | None]:
-    """The pixel scale and the boundary offset of a run, the rig config (:func:`rig_file`) read
-    once: the scale from ``--mm-per-px``, else from the rig config; the offset from the rig config,
-    also with ``--mm-per-px`` (the offset is in mm, so another source of the scale does not change
-    it, and dropping it silently would). None: not given."""
+    """The pixel scale and the boundary offset of a run: the scale from ``--mm-per-px``, else
+    from the rig config ``rig`` (:func:`read_rig`); the offset from the rig config, also with
+    ``--mm-per-px`` (the offset is in mm, so another source of the scale does not change it, and
+    dropping it silently would). None: not given."""
     from contactcal.infer.pipeline.boundary import rig_boundary
-    from contactcal.infer.pipeline.scale import PixelScale, read_rig_json, rig_scale
+    from contactcal.infer.pipeline.scale import PixelScale, rig_scale
 
-    rig = rig_file(args, default_rig)
-    data = None if rig is None else read_rig_json(rig)
-    boundary = None if data is None else rig_boundary(data, str(rig))
+    boundary = None if rig is None else rig_boundary(rig.data, str(rig.path))
     if args.mm_per_px is not None:
         try:
             return PixelScale(args.mm_per_px, None), boundary
         except ValueError as exc:
             raise ValueError(f"--mm-per-px {args.mm_per_px:g}: {exc}") from None
-    return (None if data is None else rig_scale(data, rig)), boundary
+    return (None if rig is None else rig_scale(rig.data, rig.path)), boundary
 
 
 #: The line a run without a pixel scale prints (its areas, curve and inverse are in px);
@@ -194,15 +206,15 @@ def check_out_folder(out: Path, command: str, files: tuple[str, ...] = ()) -> No
         check_destination(out / name)
 
 
-def measure_options(args: argparse.Namespace, default_rig: Path | None = None) -> MeasureOptions:
+def measure_options(args: argparse.Namespace, rig: RigConfig | None) -> MeasureOptions:
     """The run's :class:`~contactcal.infer.pipeline.options.MeasureOptions` from its command
-    line: ``--model``, the scale and boundary offset (:func:`resolve_rig`; ``default_rig``: the
-    ``rig.json`` read when no option names one),
+    line: ``--model``, the scale and boundary offset (:func:`resolve_rig`; ``rig``: the rig
+    config the run read, :func:`read_rig`),
     ``--bit-depth``, ``--no-change-gate``, ``--threads`` and ``--overlay`` (outlines)."""
     from contactcal.infer.pipeline.options import MeasureOptions
 
     check_bit_depth(args.bit_depth)
-    scale, boundary = resolve_rig(args, default_rig)
+    scale, boundary = resolve_rig(args, rig)
     return MeasureOptions(
         model=args.model,
         scale=scale,

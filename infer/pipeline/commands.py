@@ -15,6 +15,7 @@ from contactcal.infer.pipeline.args import (
     measure_options,
     method_args,
     overlay_runs,
+    read_rig,
     run_inputs,
     scale_args,
 )
@@ -70,7 +71,7 @@ def _cmd_measure(args: argparse.Namespace) -> int:
     replaced = None if to_stdout else earlier_results_note(args.out)
     with run_outputs([*args.images, *run_inputs(args)]) as outs:
         json_path = None if to_stdout else outs.stage(args.out)  # refused here, before work
-        options = measure_options(args)
+        options = measure_options(args, read_rig(args))
         method = options.method(args.method)
         measured = options.measure(args.images, method, args.reference)
         measured, warnings = note_self_reference(measured, args.reference)
@@ -124,7 +125,7 @@ def earlier_results_note(out: Path) -> str | None:
 
 def _cmd_demo(args: argparse.Namespace) -> int:
     from contactcal.infer.calibration.calibrate import SessionOptions
-    from contactcal.infer.calibration.record import earlier_record_note
+    from contactcal.infer.calibration.record import earlier_record_note, held_record
     from contactcal.infer.files.stdout import printing_after
     from contactcal.infer.methods.registry import METHODS
     from contactcal.infer.pipeline.demo import run_demo
@@ -132,7 +133,7 @@ def _cmd_demo(args: argparse.Namespace) -> int:
     options = SessionOptions(step_tolerance_kpa=step_tolerance(args))
     check_bit_depth(args.bit_depth)
     check_out_folder(args.out, "demo")
-    replaced = [earlier_record_note(args.out / method) for method in METHODS]
+    replaced = [earlier_record_note(d, held_record(d)) for d in (args.out / m for m in METHODS)]
     summary = run_demo(args.out, args.manifest, args.argv, options, args.bit_depth)
     with printing_after([args.out], replaced):
         print(summary)

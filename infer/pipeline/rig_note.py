@@ -1,6 +1,7 @@
 """The note a run prints when ``--rig`` or ``--mm-per-px`` sets aside the ``rig.json`` beside
 its manifest (:func:`~contactcal.infer.pipeline.args.resolve_rig` reads the option and says
-nothing): ``--rig`` leaves that file unread, ``--mm-per-px`` replaces its scale."""
+nothing): ``--rig`` leaves that file unread, ``--mm-per-px`` replaces its scale (that file is
+the rig config the run read, passed on, not read again)."""
 
 from __future__ import annotations
 
@@ -11,13 +12,18 @@ from pathlib import Path
 from typing import TYPE_CHECKING
 
 if TYPE_CHECKING:
+    from contactcal.infer.pipeline.args import RigConfig
     from contactcal.infer.pipeline.boundary import BoundaryOffset
     from contactcal.infer.pipeline.options import MeasureOptions
     from contactcal.infer.pipeline.scale import PixelScale
 
 
 def rig_note(
-    args: argparse.Namespace, options: MeasureOptions, beside: Path, width_px: Callable[[], int]
+    args: argparse.Namespace,
+    options: MeasureOptions,
+    beside: Path,
+    read: RigConfig | None,
+    width_px: Callable[[], int],
 ) -> str | None:
     """The note on a ``rig.json`` beside the manifest that ``--rig`` or ``--mm-per-px`` set aside:
     ``--rig`` leaves it unread, ``--mm-per-px`` replaces its scale (its boundary offset still
@@ -28,6 +34,8 @@ def rig_note(
         options: the run's resolved scale and boundary offset
             (:func:`~contactcal.infer.pipeline.args.measure_options`).
         beside: the ``rig.json`` beside the manifest; one not valid is said, not refused.
+        read: the rig config the run read (:func:`~contactcal.infer.pipeline.args.read_rig`):
+            with ``--mm-per-px``, ``beside`` as read (None: there was none).
         width_px: the frames' width, px; called only to compare ``--mm-per-px`` with its scale.
 
     Returns:
@@ -39,12 +47,12 @@ def rig_note(
     from contactcal.infer.pipeline.scale import read_rig_json, rig_scale
 
     rig, mm = args.rig, args.mm_per_px
-    if (rig is None and mm is None) or not beside.is_file():
+    if rig is None and (mm is None or read is None):
         return None
-    if rig is not None and rig.resolve() == beside.resolve():
+    if rig is not None and (not beside.is_file() or rig.resolve() == beside.resolve()):
         return None
-    try:
-        data = read_rig_json(beside)
+    try:  # --mm-per-px: beside is the rig config the run read, passed on; --rig: not read yet
+        data = read_rig_json(beside) if read is None or rig is not None else read.data
         scale = rig_scale(data, beside) if data.keys() & {"mm_per_px", "image_width_px"} else None
         offset, valid = rig_boundary(data, str(beside)), True
     except ValueError:  # a rig config error: the file is set aside, so it is not refused
