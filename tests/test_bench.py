@@ -656,7 +656,23 @@ def test_a_broken_crosscheck_set_fails_before_any_work(
     cv2.imwrite(str(rows[0].mask), mask)
     with pytest.raises(ValueError, match=f"{rows[0].mask}: 70x50 px but its frame"):
         run_bench(data, tmp_path / "out", None, TINY, [other])
+    cv2.imwrite(str(rows[0].mask), np.zeros(load_image(rows[0].frame).shape, np.uint8))
+    _damage_pixels(rows[4].frame)  # its header, CRCs and IEND intact: found only by decoding
+    with pytest.raises(ValueError, match=f"{rows[4].frame}: corrupt image data"):
+        run_bench(data, tmp_path / "out", None, TINY, [other])
     assert not (tmp_path / "out").exists()
+
+
+def _damage_pixels(png: Path) -> None:
+    """Zero 16 bytes in the middle of a PNG's first IDAT chunk and restate its CRC."""
+    import zlib
+
+    b = bytearray(png.read_bytes())
+    at = b.index(b"IDAT") - 4
+    n = int.from_bytes(b[at : at + 4], "big")
+    b[at + 8 + n // 2 : at + 24 + n // 2] = bytes(16)
+    b[at + 8 + n : at + 12 + n] = zlib.crc32(b[at + 4 : at + 8 + n]).to_bytes(4, "big")
+    png.write_bytes(bytes(b))
 
 
 def test_a_frame_of_another_size_than_its_reference_is_named(

@@ -1,5 +1,4 @@
-"""The PNG ``sBIT`` chunk (significant bits per sample), which Pillow and OpenCV do not expose, and
-the image size from the ``IHDR`` chunk (no pixel decoded).
+"""The PNG ``sBIT`` chunk (significant bits per sample), which Pillow and OpenCV do not expose.
 
 A 16-bit PNG written by a 10- or 12-bit camera states its true depth in ``sBIT`` (PNG 1.2,
 section 4.2.6.1). The chunk precedes ``PLTE`` and ``IDAT``, so only the file's first chunks are
@@ -41,19 +40,3 @@ def png_significant_bits(data: bytes) -> int | None:
             return None
         pos += 12 + length
     return None
-
-
-def png_size(data: bytes) -> tuple[int, int] | None:
-    """``(height, width)`` in pixels from a PNG's ``IHDR`` chunk, which the format puts first.
-
-    Args:
-        data: the file's bytes (its first 24 suffice).
-
-    Returns:
-        The size, or None when the data is not a PNG starting with its ``IHDR`` chunk.
-    """
-    ihdr = len(_SIGNATURE) + 4  # the chunk type, after the signature and the chunk length
-    if not data.startswith(_SIGNATURE) or data[ihdr : ihdr + 4] != b"IHDR" or len(data) < 24:
-        return None
-    width, height = struct.unpack(">II", data[ihdr + 4 : ihdr + 12])
-    return height, width
