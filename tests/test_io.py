@@ -157,6 +157,17 @@ def test_bit_depth_is_refused_for_8bit_files(tmp_path: Path, bits: int) -> None:
     assert load_image(dark).max() == 50
 
 
+@pytest.mark.parametrize("sbit", [6, 7])
+def test_an_8bit_png_is_full_range_whatever_its_sbit_chunk(tmp_path: Path, sbit: int) -> None:
+    """An sBIT chunk of 6 bits brightened a dark 8-bit frame 4-fold (7 bits: 2-fold), a brighter
+    one not; PNG scales the source's bits to the full 8, so the chunk changes nothing. A
+    --bit-depth equal to the chunk's got past the refusal of the option for 8-bit files."""
+    dark = _with_sbit(_write(tmp_path / "dark8.png", np.full((30, 40), 50, np.uint8)), sbit)
+    assert load_image(dark).max() == 50
+    with pytest.raises(ImageError, match=rf"dark8\.png: --bit-depth {sbit} .*8-bit samples"):
+        load_image(dark, bit_depth=sbit)
+
+
 def test_float_tiff_range(tmp_path: Path) -> None:
     ramp = np.tile(np.linspace(0.0, 1.0, 64, dtype=np.float32), (20, 1))
     out = load_image(_write(tmp_path / "unit.tif", ramp))

@@ -6,10 +6,11 @@ ITU-R BT.601 luma (``cv2.cvtColor(..., COLOR_BGR2GRAY)``), alpha is dropped, flo
 taken as ``[0, 1]`` intensities (values outside are an error).
 
 Bit depth is never guessed silently. 8-bit samples are full range (``--bit-depth`` is refused
-for them). 16-bit samples holding N-bit data (10- or 12-bit cameras) are scaled by
-``255 / (2**N - 1)``; N comes from the PNG ``sBIT`` chunk or from the caller (``--bit-depth``).
-Without either, a 16-bit file is full range (255/65535) only when its maximum exceeds
-:data:`LOW_BITS_MAX`; otherwise it is an error.
+for them, and a PNG ``sBIT`` chunk stating fewer bits is the source's depth, which PNG scales
+to the full 8 bits: it changes nothing). 16-bit samples holding N-bit data (10- or 12-bit
+cameras) are scaled by ``255 / (2**N - 1)``; N comes from the PNG ``sBIT`` chunk or from the
+caller (``--bit-depth``). Without either, a 16-bit file is full range (255/65535) only when its
+maximum exceeds :data:`LOW_BITS_MAX`; otherwise it is an error.
 """
 
 from __future__ import annotations
@@ -128,18 +129,20 @@ def _stated_depth(p: Path, data: bytes, bit_depth: int | None) -> tuple[int | No
     return bit_depth, "--bit-depth"
 
 
-def _scale_depth(p: Path, img: np.ndarray, depth: int | None, source: str) -> np.ndarray:
-    """Integer samples holding ``depth``-bit data → uint8; full-range samples pass unchanged."""
+def _scale_depth(p: Path, img: np.ndarray, data: bytes, bit_depth: int | None) -> np.ndarray:
+    """Integer samples holding N-bit data (:func:`_stated_depth`) → uint8; full-range samples,
+    8-bit ones always, pass unchanged."""
     if img.dtype not in (np.uint8, np.uint16):
         return img  # float (intensities in [0, 1]) or a dtype to_gray_u8 reports
     bits = 8 * img.dtype.itemsize
-    if bits == 8 and depth is not None and source == "--bit-depth":
+    if bits == 8 and bit_depth is not None:
         raise ImageError(
-            f"{p}: --bit-depth {depth} states the depth of 16-bit files, and this file holds "
+            f"{p}: --bit-depth {bit_depth} states the depth of 16-bit files, and this file holds "
             "8-bit samples (full range); drop the option, or export every frame as 16-bit"
         )
-    if depth is None and bits == 8:
-        return img  # 8-bit samples are full range (no scan of the frame for its maximum)
+    if bits == 8:  # full range, also under an sBIT chunk (no scan of the frame for its maximum)
+        return img
+    depth, source = _stated_depth(p, data, bit_depth)
     colour = img[..., :3] if img.ndim == 3 and img.shape[2] == 4 else img  # alpha is dropped
     top = int(colour.max())
     if depth is None:
@@ -149,10 +152,6 @@ def _scale_depth(p: Path, img: np.ndarray, depth: int | None, source: str) -> np
             f"{p}: 16-bit samples with maximum {top} (<= {LOW_BITS_MAX}) and no sBIT chunk; "
             "the bit depth cannot be told: pass --bit-depth N (10 or 12 for such cameras, "
             "16 for a dark 16-bit frame)"
-        )
-    if depth > bits:
-        raise ImageError(
-            f"{p}: {source} says {depth}-bit data but the file holds {bits}-bit samples"
         )
     full = (1 << depth) - 1
     if top > full and source == "--bit-depth":
@@ -209,7 +208,7 @@ def load_image(
         raise ImageError(f"{p}: not a decodable image (corrupt or unsupported content)")
     k = reduce if jpeg else 1  # the JPEG was decoded at 1/k
     check_frame_shape(str(p), img.shape[0] * k, img.shape[1] * k)
-    img = _scale_depth(p, img, *_stated_depth(p, data, bit_depth))
+    img = _scale_depth(p, img, data, bit_depth)
     gray = to_gray_u8(img, name=str(p), bgr=True)
     return gray if jpeg else reduce_area(gray, reduce)
 
