@@ -13,10 +13,11 @@ import os
 from pathlib import Path
 from typing import Any
 
+from contactcal.infer.errors import few
 from contactcal.infer.files.atomic import TEMP_NAME
 from contactcal.train.checkpoint import config_diff, load_checkpoint
 from contactcal.train.config import TrainConfig, saved_train_config
-from contactcal.train.split import Split, check_same_split, few, recorded_split
+from contactcal.train.split import Split, check_same_split, recorded_split
 
 
 def read_run_info(run_dir: str | os.PathLike[str]) -> dict[str, Any]:
