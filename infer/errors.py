@@ -1,8 +1,10 @@
-"""Errors shared by the command-line tools, and the check that names a missing extra."""
+"""Errors shared by the command-line tools, the check that names a missing extra, and the
+listing of a few names in a message."""
 
 from __future__ import annotations
 
 import importlib.util
+from collections.abc import Sequence
 
 
 class RunError(Exception):
@@ -31,3 +33,16 @@ def require_extra(command: str, extra: str, modules: tuple[str, ...]) -> None:
             f"`contactcal {command}` needs the {extra!r} extra (missing module(s): "
             f"{', '.join(missing)}); install it with: pip install 'contactcal[{extra}]'"
         )
+
+
+def few(names: Sequence[str], limit: int = 3, sep: str = ", ") -> str:
+    """Up to ``limit`` names joined by ``sep``, then how many more (``"none"`` for none).
+
+    With ``", "`` it reads ``a, b, c and 2 more``; with ``"; "`` (names that hold commas)
+    ``a; b; c; and 2 more``.
+    """
+    if not names:
+        return "none"
+    rest = len(names) - limit
+    more = f"{sep.rstrip().rstrip(',')} and {rest} more" if rest > 0 else ""
+    return sep.join(names[:limit]) + more

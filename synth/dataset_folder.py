@@ -14,6 +14,7 @@ from dataclasses import asdict
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
+from contactcal.infer.errors import few
 from contactcal.infer.files.atomic import TEMP_NAME, write_json
 from contactcal.infer.files.jsonable import jsonable
 from contactcal.synth.layout import INDEX_COLUMNS
@@ -103,8 +104,7 @@ def config_changes(old: dict[str, Any], new: dict[str, Any]) -> str:
     was, now = _flat(old), _flat(new)
     keys = sorted(k for k in was.keys() | now.keys() if was.get(k, _NONE) != now.get(k, _NONE))
     shown = [f"{k}: {_shown(was.get(k, _NONE))} → {_shown(now.get(k, _NONE))}" for k in keys]
-    more = len(shown) - MAX_CHANGES
-    return "; ".join(shown[:MAX_CHANGES]) + (f"; and {more} more" if more > 0 else "")
+    return few(shown, MAX_CHANGES, "; ")
 
 
 def check_config_matches(root: Path, config: DatasetConfig) -> None:
@@ -189,9 +189,8 @@ def check_out_folder(root: Path) -> None:
         if not (TEMP_NAME.match(e.name) and e.name.startswith(".config.json."))
     )
     if other:
-        more = f" and {len(other) - 3} more" if len(other) > 3 else ""
         raise ValueError(
-            f"--out {root}: holds other files ({', '.join(other[:3])}{more}) and no config.json; "
+            f"--out {root}: holds other files ({few(other)}) and no config.json; "
             "expected a new or empty folder, or a synth dataset to resume; render into a new --out"
         )
 

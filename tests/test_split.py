@@ -191,6 +191,7 @@ def test_data_rendered_otherwise_is_refused_by_export_and_resume(
     (a / "config.json").write_text(json.dumps({"render": {"spp": 4}}))
     with pytest.raises(ValueError, match=r"config\.json: the run's dataset folders .* rendered "):
         load_run(run)
+    (run / "val_bins.csv").unlink()  # killed after its last checkpoint: --resume would finish it
     with pytest.raises(ValueError, match=r"--resume with data rendered otherwise"):
         train([a, b], run, cfg, resume=True, progress=False)
     info = json.loads((run / "config.json").read_text())

@@ -258,10 +258,14 @@ def test_train_outputs(tmp_path: Path) -> None:
     assert summary["val"]["val_iou"] is not None
     with pytest.raises(ValueError, match="already holds a run"):
         train([d], tmp_path / "run", cfg, progress=False)
+    done = train([d], tmp_path / "run", cfg, resume=True, progress=False)
+    assert done["finished"] and done["epochs_run"] == 0 and done["best_epoch"] >= 1
+    (tmp_path / "run" / "val_bins.csv").unlink()  # killed after its last epoch's checkpoint
     with pytest.raises(ValueError, match="different config"):
         train([d], tmp_path / "run", tiny_config(seed=3), resume=True, progress=False)
     again = train([d], tmp_path / "run", tiny_config(augment=AugmentConfig(), device="auto"), True)
-    assert again["epochs_run"] == 0  # finished run; device/threads may change on resume
+    assert again["epochs_run"] == 0  # device/threads may change on resume
+    assert (tmp_path / "run" / "val_bins.csv").read_text() == bins
 
 
 @pytest.mark.slow

@@ -1,6 +1,8 @@
 """What ``contactcal train`` does with an ``--out`` that exists: a new run goes only into a new or
 empty folder, ``--resume`` continues only a run that holds ``last.pt``; any other folder (a user's
-files, a finished run whose last.pt was deleted) is refused before any work, nothing changed."""
+files, a finished run whose last.pt was deleted) is refused before any work, nothing changed. The
+best.pt alone of a run killed in its first epoch takes a new run; a finished run is left as it
+is by --resume."""
 
 from __future__ import annotations
 
@@ -61,3 +63,69 @@ def test_train_never_writes_over_a_folder_it_would_not_continue(
     (empty / ".last.pt.999999999.x.tmp").mkdir(parents=True)
     assert main(["train", "--data", str(d), "--out", str(empty), *TINY]) == 0
     assert (empty / "last.pt").is_file() and (empty / "config.json").is_file()
+
+
+def test_a_run_killed_between_best_and_last_is_started_again(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str], monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """Killed after its first best.pt, before its first last.pt, a run leaves best.pt alone:
+    --resume says there is nothing to resume and to start again, which removes that best.pt."""
+    from contactcal.train import loop
+
+    d = write_dataset(tmp_path / "d", fingers=3)
+    run = tmp_path / "run"
+    save = loop.save_checkpoint
+
+    def killed_at_last(path: Path, payload: dict) -> None:
+        if Path(path).name == "last.pt":
+            raise KeyboardInterrupt
+        save(path, payload)
+
+    monkeypatch.setattr(loop, "save_checkpoint", killed_at_last)
+    assert main(["train", "--data", str(d), "--out", str(run), *TINY]) == 130
+    monkeypatch.undo()
+    assert sorted(p.name for p in run.iterdir()) == ["best.pt"]
+    capsys.readouterr()
+    before = _snapshot(run)
+    assert main(["train", "--data", str(d), "--out", str(run), *TINY, "--resume"]) == 2
+    err = capsys.readouterr().err
+    one_line_naming(err, run)
+    assert "holds only best.pt, left by a run killed in its first epoch" in err
+    assert "start the run again without --resume" in err and _snapshot(run) == before
+    assert main(["train", "--data", str(d), "--out", str(run), *TINY]) == 0
+    assert f"note: {run / 'best.pt'}: removed, left by a run killed" in capsys.readouterr().err
+    assert {"last.pt", "best.pt", "val_bins.csv"} <= {p.name for p in run.iterdir()}
+    # a best.pt that no run of contactcal wrote in its first epoch stays refused
+    other = tmp_path / "other"
+    other.mkdir()
+    (other / "best.pt").write_bytes(b"a user's file")
+    assert main(["train", "--data", str(d), "--out", str(other), *TINY]) == 2
+    assert "holds best.pt, which a new run would mix" in capsys.readouterr().err
+    assert (other / "best.pt").read_bytes() == b"a user's file"
+
+
+def test_resume_leaves_a_finished_run_as_it_is(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """A finished run (val_bins.csv written) is not resumed: said so, every file unchanged. A
+    run killed after its last last.pt, before the files that follow, is completed."""
+    d = write_dataset(tmp_path / "d", fingers=3)
+    run = tmp_path / "run"
+    argv = ["train", "--data", str(d), "--out", str(run), *TINY]
+    assert main(argv) == 0
+    capsys.readouterr()
+    before = _snapshot(run)
+    stats = {p.name: (p.stat().st_ino, p.stat().st_mtime_ns) for p in run.iterdir()}
+    assert main([*argv, "--resume"]) == 0
+    said = capsys.readouterr().out
+    one_line_naming(said, run)
+    assert "the run is finished (best epoch 1; it holds val_bins.csv" in said
+    assert "nothing to --resume, its files left as they are" in said and _snapshot(run) == before
+    assert {p.name: (p.stat().st_ino, p.stat().st_mtime_ns) for p in run.iterdir()} == stats
+    # killed right after its last epoch's last.pt (a 1-epoch run: config.json not yet written)
+    for name in ("config.json", "metrics.csv", "curves.png", "val_bins.csv"):
+        (run / name).unlink()
+    assert main([*argv, "--resume"]) == 0
+    after = _snapshot(run)
+    assert set(after) == set(before) and after["metrics.csv"] == before["metrics.csv"]
+    assert after["val_bins.csv"] == before["val_bins.csv"]

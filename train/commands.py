@@ -285,6 +285,13 @@ def _cmd_train(args: argparse.Namespace) -> int:
     summary = train(
         args.data, args.out, build_config(args), resume=args.resume, progress=not args.quiet
     )
+    if summary.get("finished"):
+        print(
+            f"{summary['out_dir']}: the run is finished (best epoch {summary['best_epoch']}; it "
+            "holds val_bins.csv, written after its last epoch): nothing to --resume, its files "
+            "left as they are"
+        )
+        return 0
     val = summary["val"]
     iou = val.get("val_iou")
     print(

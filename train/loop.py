@@ -42,7 +42,12 @@ from contactcal.train.ema import WeightAverage
 from contactcal.train.metrics import evaluate, segmentation_loss, summarise
 from contactcal.train.model import UNet, count_parameters
 from contactcal.train.report import METRIC_COLUMNS, plot_curves, write_csv
-from contactcal.train.run_folder import check_run_folder, resume_checkpoint
+from contactcal.train.run_folder import (
+    check_run_folder,
+    finished_summary,
+    remove_leftovers,
+    resume_checkpoint,
+)
 from contactcal.train.split import Split, split_by_finger, split_record
 
 
@@ -110,7 +115,7 @@ def _split(cfg: TrainConfig, dirs: list[Path]) -> tuple[list[IndexRow], list[Ind
 
 def _prepare(dirs: list[Path], out: Path, cfg: TrainConfig, resume: bool, progress: bool) -> Run:
     """Step 1: data, split, model, optimiser, schedule and generators (restored on resume)."""
-    check_run_folder(out, resume)
+    leftovers = check_run_folder(out, resume)
     train_rows, val_rows = _split(cfg, dirs)  # validates the folders first
     digest, split = dataset_digest(dirs), split_record(train_rows, val_rows)
     device = resolve_device(cfg.device)
@@ -133,6 +138,7 @@ def _prepare(dirs: list[Path], out: Path, cfg: TrainConfig, resume: bool, progre
     augment = Augmenter(
         cfg.augment, cfg.preprocess, seed=cfg.seed + 1, reference_dropout=cfg.reference_dropout
     ).to(device)
+    remove_leftovers(out, leftovers)  # every check passed: the run starts
     run = Run(cfg, out, digest, device, train_set, val_set, model, opt, sched, shuffle, augment)
     if cfg.ema_decay > 0.0:
         run.average = WeightAverage(model, cfg.ema_decay)
@@ -204,7 +210,13 @@ def _save_epoch(run: Run, epoch: int, row: dict[str, Any]) -> None:
         "best_epoch": run.best_epoch,
     }
     save_checkpoint(run.out / "last.pt", {**meta, "model": weights, **state})
-    if epoch == run.start:  # a run killed before its first epoch ends leaves no config.json
+    # a run killed before its first epoch ends leaves no config.json
+    _write_records(run, config=epoch == run.start)
+
+
+def _write_records(run: Run, config: bool) -> None:
+    """``config.json`` (when ``config``), metrics.csv and curves.png, from the run's history."""
+    if config:
         write_json(run.out / "config.json", run.info)
     write_csv(run.out / "metrics.csv", run.history, METRIC_COLUMNS)
     plot_curves(run.out / "curves.png", run.history, run.best_epoch)
@@ -259,25 +271,32 @@ def train(
 
     Args:
         data_dirs: dataset folders (``index.csv`` layout).
-        out_dir: run folder, new or empty (or the run's, with ``resume``); receives
+        out_dir: run folder, new or empty (or the run's, with ``resume``; or holding only the
+            ``best.pt`` of a run killed in its first epoch, which is removed); receives
             ``config.json``, ``last.pt``, ``best.pt``, ``metrics.csv``, ``curves.png`` and
             ``val_bins.csv``.
         config: run settings (None: the defaults); with ``resume`` it must equal the run's
             saved config.
         resume: continue from ``out_dir/last.pt`` (model, optimizer, scheduler, epoch, RNGs)
-            with the run's data and split.
+            with the run's data and split; a finished run (one holding ``val_bins.csv``) is left
+            as it is: nothing is read or written.
         progress: tqdm bars.
 
     Returns:
         Summary: ``best_epoch``, ``best_score`` (val IoU, or -train loss without validation),
-        ``parameters``, ``epochs_run``, ``out_dir``, and the final ``val`` summary.
+        ``parameters``, ``epochs_run``, ``out_dir``, and the final ``val`` summary; for a
+        finished run resumed, :func:`~contactcal.train.run_folder.finished_summary`'s.
 
     Raises:
         ValueError: bad dataset, config, or resume request, or an ``out_dir`` that is not new,
             empty or (with ``resume``) a run holding ``last.pt``.
     """
+    if resume and (done := finished_summary(Path(out_dir))) is not None:
+        return done
     cfg = (config or TrainConfig()).resolved()
     run = _prepare([Path(d) for d in data_dirs], Path(out_dir), cfg, resume, progress)
+    if run.start == cfg.epochs:  # killed after its last last.pt: complete what follows it
+        _write_records(run, config=True)
     _run_epochs(run, progress)
     return _finish(run)
 

@@ -25,6 +25,7 @@ from pathlib import Path
 import numpy as np
 
 from contactcal.infer.bench.dataset import IndexRow, read_datasets
+from contactcal.infer.errors import few
 
 #: A recorded split: ``{"train": [...], "val": [...]}``, each side's sorted finger keys.
 Split = dict[str, list[str]]
@@ -155,12 +156,6 @@ def check_same_split(recorded: Split, split: Split, where: str, fix: str) -> Non
                 f"{where}: its {name} fingers differ from those config.json records (recorded "
                 f"only: {few(only_recorded)}; recomputed only: {few(only_now)}); {fix}"
             )
-
-
-def few(names: list[str]) -> str:
-    """Up to three names, then how many more (``"none"`` for none)."""
-    more = f" and {len(names) - 3} more" if len(names) > 3 else ""
-    return f"{', '.join(names[:3])}{more}" if names else "none"
 
 
 def validation_rows(

@@ -11,6 +11,7 @@ from pathlib import Path
 from typing import Any
 
 from contactcal.infer.calibration.hysteresis import MATCH_TOLERANCE_KPA
+from contactcal.infer.errors import few
 from contactcal.infer.files.digest import sha256_file
 
 #: Longest accepted ``--device-id``, characters.
@@ -130,14 +131,16 @@ def identical_frames(
 
 def identical_frames_warning(groups: list[dict[str, Any]]) -> str:
     """The printed warning for :func:`identical_frames`'s groups (at least one)."""
-    shown = "; ".join(
-        f"{len(g['files'])} frames ({g['files'][0]} … {g['files'][-1]}) at "
-        f"{', '.join(f'{p:g}' for p in sorted(set(g['pressures_kpa'])))} kPa"
-        for g in groups[:3]
+    shown = few(
+        [
+            f"{len(g['files'])} frames ({g['files'][0]} … {g['files'][-1]}) at "
+            f"{', '.join(f'{p:g}' for p in sorted(set(g['pressures_kpa'])))} kPa"
+            for g in groups
+        ],
+        sep="; ",
     )
-    more = f"; and {len(groups) - 3} more groups" if len(groups) > 3 else ""
     return (
-        f"warning: byte-identical frames at different pressures: {shown}{more} (the record's "
+        f"warning: byte-identical frames at different pressures: {shown} (the record's "
         "extra.identical_frames): a frozen camera or duplicated files? Their areas cannot show "
         "a change with pressure; check the frames and recalibrate"
     )

@@ -17,6 +17,7 @@ import numpy as np
 from contactcal.infer.calibration.curve import MM2
 from contactcal.infer.calibration.phases import PHASES
 from contactcal.infer.calibration.points import CalibrationPoint
+from contactcal.infer.errors import few
 
 
 def pool(
@@ -211,13 +212,12 @@ def frames_off_their_step(steps: Sequence[Step], floor: float) -> list[OffStep]:
 def off_step_warning(off: Sequence[OffStep], unit: str, floor: float, listed: int) -> str:
     """The printed warning for :func:`frames_off_their_step`'s frames (at least one, areas and
     ``floor`` in ``unit``), naming the first ``listed``."""
-    shown = "; ".join(_off_step_line(o, unit) for o in off[:listed])
-    more = f"; and {len(off) - listed} more" if len(off) > listed else ""
+    shown = few([_off_step_line(o, unit) for o in off], listed, "; ")
     those = "that frame" if len(off) == 1 else f"those {len(off)} frames"
     share = f"{100 * STEP_OUTLIER_SHARE:g} %"
     least = f"{floor:g} {unit}" if unit == MM2 else f"{floor:.0f} {unit}"
     return (
-        f"warning: {shown}{more}; look at {those} (a slipped finger, an unsettled pressure or a "
+        f"warning: {shown}; look at {those} (a slipped finger, an unsettled pressure or a "
         f"mislabelled file): beyond {share} of the step's median, {least} and the frame's own "
         "stated interval (the record's extra.frames_off_their_step)"
     )

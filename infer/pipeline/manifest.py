@@ -41,6 +41,7 @@ from contactcal.infer.calibration.phases import (
     parse_phase,
     phases_from_order,
 )
+from contactcal.infer.errors import few
 from contactcal.infer.pipeline.manifest_rows import (
     GAUGE_ZERO_NOISE_KPA,
     HEADER,
@@ -266,15 +267,15 @@ def _check_files(where: str, frames: list[Frame], base: Path) -> None:
     """Reject missing image files and one image on two rows."""
     missing = [f for f in sorted(frames, key=lambda f: f.row) if not f.file.is_file()]
     if missing:
-        listed = "; ".join(
-            f"row {f.row}: {f.file}{' (a folder)' if f.file.is_dir() else ''}"
-            for f in missing[:_MAX_LISTED]
+        listed = few(
+            [f"row {f.row}: {f.file}{' (a folder)' if f.file.is_dir() else ''}" for f in missing],
+            _MAX_LISTED,
+            "; ",
         )
-        more = f"; and {len(missing) - _MAX_LISTED} more" if len(missing) > _MAX_LISTED else ""
         windows = any("\\" in str(f.file) for f in missing) and os.sep != "\\"
         hint = " (written with '\\' as on Windows? use '/' between folders)" if windows else ""
         raise ManifestError(
-            f"{where}: {len(missing)} image file(s) not found: {listed}{more}; relative paths "
+            f"{where}: {len(missing)} image file(s) not found: {listed}; relative paths "
             f"are resolved against the manifest's folder {base}{hint}"
         )
     _check_distinct_files(where, frames)
