@@ -20,10 +20,10 @@ from contactcal.train.quantize import quantize_model
 def test_int8_variant_keeps_the_spec_and_the_decisions(tmp_path: Path) -> None:
     data = _example_dataset(tmp_path / "data")  # rendered frames, as calibration should use
     out = tmp_path / "int8.onnx"
-    check = quantize_model(DEFAULT_MODEL, out, [data], frames=6)
+    check = quantize_model(DEFAULT_MODEL, out, [data], frames=3)
     assert OnnxSegmenter(out).spec == OnnxSegmenter(DEFAULT_MODEL).spec  # same metadata
     assert out.stat().st_size < 0.6 * Path(DEFAULT_MODEL).stat().st_size  # weights in int8
-    assert check["frames"] == 6 and check["contact_agreement"] == 1.0
+    assert check["frames"] == 3 and check["check_frames"] == 3 and check["contact_agreement"] == 1.0
     ratio = check["median_area_ratio"]
     assert ratio is not None and 0.95 <= ratio <= 1.05
     assert not any(p.name.endswith(".tmp") for p in tmp_path.iterdir())
@@ -51,7 +51,7 @@ def test_refuses_an_int8_model_and_writes_nothing(
     argv = ["quantize", str(DEFAULT_MODEL), "--out", str(q), "--data", str(data), "--frames", "2"]
     assert main(argv) == 0
     out, err = capsys.readouterr()
-    assert err == "" and out.startswith(f"wrote {q}: on 2 calibration frames")
+    assert err == "" and out.startswith(f"wrote {q}: calibrated on 2 frames; on 2 others")
     assert not [r.getMessage() for r in caplog.records]  # onnxruntime's advice held back
     with pytest.raises(ValueError, match="already quantized"):
         quantize_model(q, tmp_path / "qq.onnx", [data], frames=2)
@@ -88,11 +88,11 @@ def test_an_int8_model_that_departs_from_the_float_is_not_written(
     out.write_bytes(b"an earlier INT8 model")
     argv = ["quantize", str(DEFAULT_MODEL), "--out", str(out), "--data", str(data)]
     checks = {
-        "% of 2 calibration frames": {"frames": 2.0, "contact_agreement": 0.5},
-        "0.900× the float model's": {"frames": 2.0, "median_area_ratio": 0.9},
+        "% of 2 frames not used to calibrate it": {"check_frames": 2.0, "contact_agreement": 0.5},
+        "0.900× the float model's": {"check_frames": 2.0, "median_area_ratio": 0.9},
     }
     for expected, bad in checks.items():
-        fake = {"frames": 2.0, "contact_agreement": 1.0, "median_area_ratio": 1.0, **bad}
+        fake = {"check_frames": 2.0, "contact_agreement": 1.0, "median_area_ratio": 1.0, **bad}
         monkeypatch.setattr(quantize, "_agreement", lambda *a, fake=fake: fake)
         assert main([*argv, "--frames", "2"]) == 1
         err = capsys.readouterr().err.strip().splitlines()
@@ -107,3 +107,35 @@ def test_an_int8_model_that_departs_from_the_float_is_not_written(
     assert len(err) == 1 and "fails its check (model metadata: no 'preprocess' key)" in err[0]
     assert out.read_bytes() == b"an earlier INT8 model"
     assert sorted(p.name for p in tmp_path.iterdir()) == ["data", "int8.onnx"]
+
+
+def test_the_agreement_is_checked_on_frames_not_used_to_calibrate(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """Agreement measured on the calibration frames themselves would be in-sample: the check
+    segments the frames the calibration reader was not given (every other one drawn)."""
+    data = _example_dataset(tmp_path / "data")
+    drawn, calibrated, checked = [], [], []
+    frames, reader, agreement = quantize.calibration_frames, quantize._Reader, quantize._agreement
+
+    def draw(*args: object) -> list:
+        drawn[:] = frames(*args)
+        return drawn
+
+    def read(name: str, inputs: list) -> quantize._Reader:
+        calibrated.extend(inputs)
+        return reader(name, inputs)
+
+    def check(a: OnnxSegmenter, b: OnnxSegmenter, pairs: list) -> dict:
+        checked.extend(g for g, _ in pairs)
+        return agreement(a, b, pairs)
+
+    monkeypatch.setattr(quantize, "calibration_frames", draw)
+    monkeypatch.setattr(quantize, "_Reader", read)
+    monkeypatch.setattr(quantize, "_agreement", check)
+    result = quantize_model(DEFAULT_MODEL, tmp_path / "q.onnx", [data], frames=3)
+    assert result["frames"] == 3 and result["check_frames"] == 3 and len(drawn) == 6
+    assert [id(g) for g in checked] == [id(g) for g, _ in drawn[1::2]]
+    assert len(calibrated) == 3
+    with pytest.raises(ValueError, match=r"expected at least 2 \(one to calibrate"):
+        quantize_model(DEFAULT_MODEL, tmp_path / "q2.onnx", [data], frames=0)

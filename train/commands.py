@@ -111,7 +111,12 @@ def _add_quantize_parser(sub: Any) -> None:
         metavar="DIR",
         help="calibration datasets (validation renders; never the benchmark or cross-check sets)",
     )
-    q.add_argument("--frames", type=int, default=64, help="calibration frames (default 64)")
+    q.add_argument(
+        "--frames",
+        type=int,
+        default=64,
+        help="calibration frames (default 64); as many others check the INT8 model",
+    )
     q.set_defaults(func=_cmd_quantize)
 
 
@@ -349,8 +354,8 @@ def _cmd_quantize(args: argparse.Namespace) -> int:
     ratio = check["median_area_ratio"]
     ratio_text = "no frame where both see contact" if ratio is None else f"{ratio:.4f}"
     print(
-        f"wrote {args.out}: on {check['frames']:.0f} calibration frames the INT8 model makes the "
-        f"float model's contact decision in {100 * check['contact_agreement']:.1f} %, median "
-        f"area ratio {ratio_text}"
+        f"wrote {args.out}: calibrated on {check['frames']:.0f} frames; on "
+        f"{check['check_frames']:.0f} others the INT8 model makes the float model's contact "
+        f"decision in {100 * check['contact_agreement']:.1f} %, median area ratio {ratio_text}"
     )
     return 0

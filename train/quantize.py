@@ -5,7 +5,9 @@ frames of the given datasets, so the activation ranges are those deployment will
 caller must pass data that is neither a benchmark nor a cross-check set (validation renders).
 The metadata is copied unchanged from the float model (the strict spec of
 ``contactcal.infer.methods.unet.spec`` reads both alike), then the file is checked: it loads,
-reads as a spec, and its decisions are compared with the float model's on the calibration frames.
+reads as a spec, and its decisions are compared with the float model's on as many further
+frames, interleaved with the calibration frames and never used to calibrate (an agreement measured
+on the calibration frames themselves would be in-sample).
 """
 
 from __future__ import annotations
@@ -34,7 +36,8 @@ def calibration_frames(
     preprocess: PreprocessConfig, data: Sequence[str | os.PathLike[str]], frames: int
 ) -> list[tuple[np.ndarray, SessionReference]]:
     """Up to ``frames`` ``(frame (H, W) uint8, session reference)`` pairs, spread evenly over
-    the frames of all sessions (first and last included)."""
+    the frames of all sessions (first and last included); :func:`quantize_model` calibrates on
+    every other one and checks on the rest."""
     groups = sessions_of(read_datasets([Path(d) for d in data]))
     pairs = [r for rows in groups.values() for r in rows]
     picks = [pairs[i] for i in spread(len(pairs), frames)]
@@ -69,16 +72,18 @@ def quantize_model(
         model: float ONNX model exported by ``contactcal export``.
         out: destination (never ``model`` itself).
         data: dataset folders for calibration (validation renders, not benchmark data).
-        frames: calibration frames.
+        frames: calibration frames; as many further frames, interleaved with them over the
+            data, check the INT8 model (fewer of each when the data holds fewer than twice that).
 
     Returns:
-        ``{"frames", "contact_agreement", "median_area_ratio"}``: on the calibration frames, the
-        share of frames where both models make the same contact decision, and the median of
-        INT8 area / float area over the frames both call contact (None if there are none).
+        ``{"frames", "check_frames", "contact_agreement", "median_area_ratio"}``: the number of
+        calibration frames and, on the check frames (never used to calibrate), their number,
+        the share where both models make the same contact decision, and the median of INT8
+        area / float area over those both call contact (None if there are none).
 
     Raises:
-        ValueError: ``out`` is the input, ``model`` is already quantized, or no calibration
-            frames.
+        ValueError: ``out`` is the input, ``model`` is already quantized, or fewer than two
+            frames in ``data`` (one to calibrate, one to check).
     """
     from onnx import load, save
     from onnxruntime.quantization import QuantFormat, QuantType, quantize_static
@@ -93,10 +98,14 @@ def quantize_model(
             "expected the float model that `contactcal export` wrote"
         )
     spec = float_seg.spec
-    pairs = calibration_frames(spec.preprocess, data, frames)
-    if not pairs:
-        raise ValueError(f"no calibration frames in {', '.join(map(str, data))}")
-    inputs = [prepare(g, r, spec.preprocess, spec.channels).x[None] for g, r in pairs]
+    pairs = calibration_frames(spec.preprocess, data, 2 * frames)
+    calibrate, held = pairs[0::2], pairs[1::2]
+    if not held:
+        raise ValueError(
+            f"{len(pairs)} frame(s) in {', '.join(map(str, data))}; expected at least 2 (one to "
+            "calibrate the INT8 model, one to check it on)"
+        )
+    inputs = [prepare(g, r, spec.preprocess, spec.channels).x[None] for g, r in calibrate]
     with tempfile.TemporaryDirectory() as tmp:
         q = Path(tmp) / "q.onnx"
         with _quiet_root_warnings():
@@ -115,7 +124,10 @@ def quantize_model(
         with atomic_path(out, protect=[model]) as tmp_out:
             save(qm, str(tmp_out))
             try:  # before it replaces anything: it loads and reads as a spec; agreement measured
-                check = _agreement(float_seg, OnnxSegmenter(tmp_out, threads=1), pairs)
+                check = {
+                    "frames": float(len(calibrate)),
+                    **_agreement(float_seg, OnnxSegmenter(tmp_out, threads=1), held),
+                }
             except ValueError as exc:
                 msg = " ".join(str(exc).split())
                 raise RunError(f"{out}: the INT8 model fails its check ({msg})") from exc
@@ -123,7 +135,7 @@ def quantize_model(
             return check
 
 
-#: Least share of calibration frames on which the INT8 model must make the float model's contact
+#: Least share of check frames on which the INT8 model must make the float model's contact
 #: decision. Lower lets a quantization that flips decisions through; higher refuses INT8 models
 #: whose few flips are frames near the onset, where the float model itself is unsure.
 MIN_CONTACT_AGREEMENT = 0.9
@@ -140,7 +152,7 @@ def _check_agreement(out: str | os.PathLike[str], check: dict[str, float | None]
         check: :func:`_agreement`'s result.
     """
     agree, ratio = check["contact_agreement"], check["median_area_ratio"]
-    n = f"{check['frames']:.0f} calibration frames"
+    n = f"{check['check_frames']:.0f} frames not used to calibrate it"
     if agree is not None and agree < MIN_CONTACT_AGREEMENT:
         raise RunError(
             f"{out}: not written: the INT8 model makes the float model's contact decision on "
@@ -182,7 +194,7 @@ def _agreement(
         if sa.contact and sb.contact:
             ratios.append(sb.area_px / sa.area_px)
     return {
-        "frames": float(len(pairs)),
+        "check_frames": float(len(pairs)),
         "contact_agreement": same / len(pairs),
         "median_area_ratio": float(np.median(ratios)) if ratios else None,
     }
