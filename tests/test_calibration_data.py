@@ -19,7 +19,7 @@ from contactcal.infer.methods.unet.spec import ModelError, read_spec
 onnx = pytest.importorskip("onnx")
 
 from contactcal.train.change_gate import gate_model  # noqa: E402
-from contactcal.train.data import dataset_digest  # noqa: E402
+from contactcal.train.digest import dataset_digest  # noqa: E402
 from contactcal.train.interval import main as interval_main  # noqa: E402
 from contactcal.train.interval import recalibrate_model  # noqa: E402
 

@@ -26,7 +26,7 @@ from contactcal.infer.methods.unet.spec import (  # noqa: E402
     read_spec,
 )
 from contactcal.train.commands import OPSETS  # noqa: E402
-from contactcal.train.data import dataset_digest  # noqa: E402
+from contactcal.train.digest import dataset_digest  # noqa: E402
 from contactcal.train.export import PARITY_ATOL, PARITY_RTOL, export_onnx, load_run, self_check  # noqa: E402
 from contactcal.train.loop import train  # noqa: E402
 

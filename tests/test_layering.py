@@ -74,3 +74,25 @@ def test_infer_loads_no_heavy_module_at_run_time() -> None:
     )
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
     assert out.stdout.strip() == "[]", f"heavy modules imported by contactcal.infer: {out.stdout}"
+
+
+#: train modules that load no heavy module at import: the restating tools (`python -m
+#: contactcal.train.interval`, `.change_gate`, `.floor`: onnx only when they run) and the CLI's
+#: subcommands.
+LIGHT_TRAIN = (
+    "contactcal.train.interval",
+    "contactcal.train.change_gate",
+    "contactcal.train.floor",
+    "contactcal.train.commands",
+)
+
+
+def test_restating_tools_load_no_heavy_module_at_import() -> None:
+    code = (
+        "import sys, importlib\n"
+        f"for m in {LIGHT_TRAIN!r}:\n"
+        "    importlib.import_module(m)\n"
+        f"print([h for h in {HEAVY!r} if h in sys.modules])"
+    )
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
+    assert out.stdout.strip() == "[]", f"heavy modules imported by {LIGHT_TRAIN}: {out.stdout}"

@@ -6,7 +6,7 @@ frame is read, :func:`calibration_data` refuses:
 
 * a folder given twice (the same resolved path): its frames would count twice;
 * the model's training data, as far as the model records it. Its metadata's ``data_digest`` is
-  :func:`~contactcal.train.data.dataset_digest` of its training folders' ``index.csv`` files,
+  :func:`~contactcal.train.digest.dataset_digest` of its training folders' ``index.csv`` files,
   concatenated in training order (a run's ``config.json`` ``data_digest``, copied by
   ``contactcal export``; the folder names are not recorded). A calibration folder, or a run of
   consecutive calibration folders as given, with that digest is refused.
@@ -32,7 +32,7 @@ from typing import Any
 
 from contactcal.infer.bench.dataset import read_index
 from contactcal.infer.methods.unet.spec import CALIBRATION_DATA_KEY
-from contactcal.train.data import dataset_digest
+from contactcal.train.digest import dataset_digest
 from contactcal.train.restate import load_proto, metadata_of
 
 

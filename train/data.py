@@ -12,11 +12,8 @@ by frame) is :mod:`contactcal.train.split`'s.
 
 from __future__ import annotations
 
-import hashlib
-import os
 from collections.abc import Sequence
 from dataclasses import dataclass
-from pathlib import Path
 
 import numpy as np
 import torch
@@ -46,28 +43,6 @@ class CachedSet:
 
     def __len__(self) -> int:
         return int(self.x.shape[0])
-
-
-def dataset_digest(data_dirs: Sequence[str | os.PathLike[str]]) -> str:
-    """sha256 (hex) of the concatenated index.csv files, in the given order."""
-    h = hashlib.sha256()
-    for d in data_dirs:
-        h.update((Path(d) / "index.csv").read_bytes())
-    return h.hexdigest()
-
-
-def render_digest(data_dirs: Sequence[str | os.PathLike[str]]) -> str:
-    """sha256 (hex) of the folders' ``config.json`` files (how each set was rendered: size, spp,
-    seeds, Mitsuba variant), in the given order; a folder without one (a set written by another
-    generator) counts as a fixed marker. :func:`dataset_digest` covers the frames' rows only, and
-    a re-render at another spp or variant writes the same index.csv.
-    """
-    h = hashlib.sha256()
-    for d in data_dirs:
-        path = Path(d) / "config.json"
-        h.update(path.read_bytes() if path.is_file() else b"(no config.json)")
-        h.update(b"\0")
-    return h.hexdigest()
 
 
 def build_cache(

@@ -47,7 +47,7 @@ from contactcal.infer.files.atomic import atomic_open
 from contactcal.infer.methods.unet.spec import ModelSpec, read_spec
 from contactcal.train.checkpoint import load_checkpoint
 from contactcal.train.config import TrainConfig, saved_train_config
-from contactcal.train.data import dataset_digest, render_digest
+from contactcal.train.digest import dataset_digest, render_digest
 from contactcal.train.export_check import ExportCheckError, check_decisions
 from contactcal.train.interval import calibrate_run
 from contactcal.train.model import UNet
@@ -88,9 +88,9 @@ def check_data_dirs(
         dirs: the config's ``data_dirs`` (absolute since runs record them resolved; a run
             written before reads its relative ones from the current folder).
         config_path: the run's ``config.json``, for the message.
-        digest: the config's ``data_digest`` (:func:`~contactcal.train.data.dataset_digest`
+        digest: the config's ``data_digest`` (:func:`~contactcal.train.digest.dataset_digest`
             of the folders at training time); None or absent: not compared.
-        render: the config's ``render_digest`` (:func:`~contactcal.train.data.render_digest`:
+        render: the config's ``render_digest`` (:func:`~contactcal.train.digest.render_digest`:
             how the folders were rendered); None or absent (runs before it): not compared.
 
     Raises:

@@ -37,7 +37,8 @@ from contactcal.train.checkpoint import (
     set_rng_state,
 )
 from contactcal.train.config import TrainConfig, resolve_device
-from contactcal.train.data import CachedSet, build_cache, dataset_digest, render_digest
+from contactcal.train.data import CachedSet, build_cache
+from contactcal.train.digest import dataset_digest, render_digest
 from contactcal.train.ema import WeightAverage
 from contactcal.train.metrics import evaluate, segmentation_loss, summarise
 from contactcal.train.model import UNet, count_parameters

@@ -140,8 +140,8 @@ def resume_checkpoint(
     Args:
         out: the run folder.
         cfg: this call's config (device and threads may differ from the run's).
-        digests: this call's :func:`~contactcal.train.data.dataset_digest` and
-            :func:`~contactcal.train.data.render_digest` (the latter compared with the run's
+        digests: this call's :func:`~contactcal.train.digest.dataset_digest` and
+            :func:`~contactcal.train.digest.render_digest` (the latter compared with the run's
             ``config.json`` where it records one: runs before it did not).
         split: this call's split (:func:`~contactcal.train.split.split_record`).
 
