@@ -77,13 +77,14 @@ def test_infer_loads_no_heavy_module_at_run_time() -> None:
 
 
 #: train modules that load no heavy module at import: the restating tools (`python -m
-#: contactcal.train.interval`, `.change_gate`, `.floor`: onnx only when they run) and the CLI's
-#: subcommands.
+#: contactcal.train.interval`, `.change_gate`, `.floor`: onnx only when they run), the CLI's
+#: subcommands and the run folder's check (`train` refuses an --out before loading torch).
 LIGHT_TRAIN = (
     "contactcal.train.interval",
     "contactcal.train.change_gate",
     "contactcal.train.floor",
     "contactcal.train.commands",
+    "contactcal.train.run_folder",
 )
 
 

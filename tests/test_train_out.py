@@ -7,6 +7,8 @@ is by --resume."""
 from __future__ import annotations
 
 import json
+import subprocess
+import sys
 from pathlib import Path
 
 import pytest
@@ -63,6 +65,26 @@ def test_train_never_writes_over_a_folder_it_would_not_continue(
     (empty / ".last.pt.999999999.x.tmp").mkdir(parents=True)
     assert main(["train", "--data", str(d), "--out", str(empty), *TINY]) == 0
     assert (empty / "last.pt").is_file() and (empty / "config.json").is_file()
+
+
+@pytest.mark.parametrize("resume", [False, True])
+def test_train_refuses_an_out_before_it_loads_torch(tmp_path: Path, resume: bool) -> None:
+    """The refusal is the argument check's: torch (seconds to import) is not loaded for it."""
+    d = write_dataset(tmp_path / "d", fingers=3)
+    mine = tmp_path / "mine"
+    mine.mkdir()
+    (mine / "notes.txt").write_text("mine")
+    argv = ["train", "--data", str(d), "--out", str(mine), *TINY, *(["--resume"] * resume)]
+    code = (
+        "import sys\n"
+        "from contactcal.infer.cli import main\n"
+        f"status = main({argv!r})\n"
+        "print(status, 'torch' in sys.modules)"
+    )
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
+    assert out.stdout.split() == ["2", "False"], out
+    one_line_naming(out.stderr, mine)
+    assert [p.name for p in mine.iterdir()] == ["notes.txt"]
 
 
 def test_a_run_killed_between_best_and_last_is_started_again(

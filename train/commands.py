@@ -285,6 +285,9 @@ def _add_reference_args(t: argparse.ArgumentParser) -> None:
 def _cmd_train(args: argparse.Namespace) -> int:
     require_extra("train", "train", TRAIN_MODULES)
     _check_dirs(list(args.data), args.out)
+    from contactcal.train.run_folder import check_run_folder
+
+    check_run_folder(args.out, args.resume)  # before torch is imported; train() checks it again
     from contactcal.train.loop import train
 
     summary = train(

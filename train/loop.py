@@ -43,12 +43,8 @@ from contactcal.train.ema import WeightAverage
 from contactcal.train.metrics import evaluate, segmentation_loss, summarise
 from contactcal.train.model import UNet, count_parameters
 from contactcal.train.report import METRIC_COLUMNS, plot_curves, write_csv
-from contactcal.train.run_folder import (
-    check_run_folder,
-    finished_summary,
-    remove_leftovers,
-    resume_checkpoint,
-)
+from contactcal.train.resume import finished_summary, resume_checkpoint
+from contactcal.train.run_folder import check_run_folder, remove_leftovers
 from contactcal.train.split import Split, split_by_finger, split_record
 
 
@@ -286,7 +282,7 @@ def train(
     Returns:
         Summary: ``best_epoch``, ``best_score`` (val IoU, or -train loss without validation),
         ``parameters``, ``epochs_run``, ``out_dir``, and the final ``val`` summary; for a
-        finished run resumed, :func:`~contactcal.train.run_folder.finished_summary`'s.
+        finished run resumed, :func:`~contactcal.train.resume.finished_summary`'s.
 
     Raises:
         ValueError: bad dataset, config, or resume request, or an ``out_dir`` that is not new,

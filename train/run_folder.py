@@ -1,10 +1,11 @@
-"""A run folder: its ``config.json``, what ``train`` may write there, what ``--resume`` continues.
+"""A run folder: its ``config.json`` and what ``train`` may write there.
 
 ``train`` writes a new run only into a new or empty folder (or over the ``best.pt`` alone that a
 run killed in its first epoch leaves), and continues (``--resume``) only a run that holds
-``last.pt``: never over files it did not write (:func:`check_run_folder`); a finished run, one
-that holds ``val_bins.csv`` too, it leaves as it is (:func:`finished_summary`). A resumed run
-must have the run's config, data and split (:func:`resume_checkpoint`).
+``last.pt``: never over files it did not write (:func:`check_run_folder`). What ``--resume`` then
+continues is :mod:`contactcal.train.resume`'s. No torch at import (a ``best.pt`` is read only to
+tell a run killed in its first epoch): ``contactcal train`` refuses a folder before it loads the
+training stack.
 """
 
 from __future__ import annotations
@@ -17,9 +18,6 @@ from typing import Any
 
 from contactcal.infer.errors import few
 from contactcal.infer.files.atomic import TEMP_NAME
-from contactcal.train.checkpoint import config_diff, load_checkpoint
-from contactcal.train.config import TrainConfig, saved_train_config
-from contactcal.train.split import Split, check_same_split, recorded_split
 
 
 def read_run_info(run_dir: str | os.PathLike[str]) -> dict[str, Any]:
@@ -90,30 +88,13 @@ def check_run_folder(out: Path, resume: bool) -> list[str]:
     return held
 
 
-def finished_summary(out: Path) -> dict[str, Any] | None:
-    """What ``train --resume`` returns for a finished run (one holding ``last.pt`` and
-    ``val_bins.csv``, written after its last epoch), which it leaves as it is; None for any other.
-
-    Returns:
-        ``out_dir``, ``finished`` (True), ``epochs_run`` (0), ``best_epoch`` and ``best_score``.
-    """
-    if not ((out / "last.pt").is_file() and (out / "val_bins.csv").is_file()):
-        return None
-    ckpt = load_checkpoint(out / "last.pt")
-    return {
-        "out_dir": str(out),
-        "finished": True,
-        "epochs_run": 0,
-        "best_epoch": int(ckpt["best_epoch"]),
-        "best_score": float(ckpt["best_score"]),
-    }
-
-
 def killed_in_first_epoch(out: Path, held: list[str]) -> bool:
     """Whether ``held`` (the names in ``out``) is what a run killed in its first epoch leaves:
     ``best.pt`` alone (written just before the first ``last.pt``), a checkpoint of epoch 0."""
     if held != ["best.pt"]:
         return False
+    from contactcal.train.checkpoint import load_checkpoint  # torch: only for this best.pt
+
     try:
         ckpt = load_checkpoint(out / "best.pt")
     except ValueError:
@@ -130,50 +111,3 @@ def remove_leftovers(out: Path, names: list[str]) -> None:
             "first last.pt); this run starts afresh",
             file=sys.stderr,
         )
-
-
-def resume_checkpoint(
-    out: Path, cfg: TrainConfig, digests: tuple[str, str], split: Split
-) -> dict[str, Any]:
-    """``out/last.pt``, to continue with this call's config, data and split (the run's).
-
-    Args:
-        out: the run folder.
-        cfg: this call's config (device and threads may differ from the run's).
-        digests: this call's :func:`~contactcal.train.digest.dataset_digest` and
-            :func:`~contactcal.train.digest.render_digest` (the latter compared with the run's
-            ``config.json`` where it records one: runs before it did not).
-        split: this call's split (:func:`~contactcal.train.split.split_record`).
-
-    Raises:
-        ValueError: another config, data or split, or a checkpoint that cannot resume exactly.
-    """
-    ckpt = load_checkpoint(out / "last.pt")
-    saved = saved_train_config(ckpt["config"], str(out / "last.pt"))
-    diff = [k for k in config_diff(saved, cfg) if k not in ("device", "num_threads")]
-    if diff:
-        raise ValueError(f"{out}: --resume with a different config ({', '.join(diff)})")
-    if ckpt["data_digest"] != digests[0]:
-        raise ValueError(f"{out}: --resume with different data (index.csv digest changed)")
-    if "augment_rng" not in ckpt:
-        raise ValueError(
-            f"{out / 'last.pt'}: written by an older contactcal (no augmentation generator "
-            "state), cannot be resumed exactly; start a new run"
-        )
-    if (out / "config.json").is_file():  # absent only if killed before its first config.json
-        info = read_run_info(out)
-        if info.get("render_digest", digests[1]) != digests[1]:
-            raise ValueError(
-                f"{out}: --resume with data rendered otherwise (the folders' config.json digest "
-                "differs from the run's render_digest: another size, spp, seed or variant); "
-                "expected the run's own renders: put them back, or start a new run"
-            )
-        check_same_split(
-            recorded_split(info, out / "config.json"),
-            split,
-            f"{out}: the split of this --resume's --data",
-            f"expected the run's own dataset folders: pass --data {' '.join(info['data_dirs'])} "
-            "(any spelling; a run whose split an older contactcal recorded on other spellings "
-            "cannot be resumed exactly: start a new run)",
-        )
-    return ckpt

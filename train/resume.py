@@ -1,0 +1,82 @@
+"""What ``train --resume`` continues: a finished run it leaves as it is
+(:func:`finished_summary`), an unfinished one with the run's config, data and split
+(:func:`resume_checkpoint`). Which folders ``train`` writes into at all is
+:func:`contactcal.train.run_folder.check_run_folder`'s (no torch: the command line checks it
+before the training stack is imported).
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import Any
+
+from contactcal.train.checkpoint import config_diff, load_checkpoint
+from contactcal.train.config import TrainConfig, saved_train_config
+from contactcal.train.run_folder import read_run_info
+from contactcal.train.split import Split, check_same_split, recorded_split
+
+
+def finished_summary(out: Path) -> dict[str, Any] | None:
+    """What ``train --resume`` returns for a finished run (one holding ``last.pt`` and
+    ``val_bins.csv``, written after its last epoch), which it leaves as it is; None for any other.
+
+    Returns:
+        ``out_dir``, ``finished`` (True), ``epochs_run`` (0), ``best_epoch`` and ``best_score``.
+    """
+    if not ((out / "last.pt").is_file() and (out / "val_bins.csv").is_file()):
+        return None
+    ckpt = load_checkpoint(out / "last.pt")
+    return {
+        "out_dir": str(out),
+        "finished": True,
+        "epochs_run": 0,
+        "best_epoch": int(ckpt["best_epoch"]),
+        "best_score": float(ckpt["best_score"]),
+    }
+
+
+def resume_checkpoint(
+    out: Path, cfg: TrainConfig, digests: tuple[str, str], split: Split
+) -> dict[str, Any]:
+    """``out/last.pt``, to continue with this call's config, data and split (the run's).
+
+    Args:
+        out: the run folder.
+        cfg: this call's config (device and threads may differ from the run's).
+        digests: this call's :func:`~contactcal.train.digest.dataset_digest` and
+            :func:`~contactcal.train.digest.render_digest` (the latter compared with the run's
+            ``config.json`` where it records one: runs before it did not).
+        split: this call's split (:func:`~contactcal.train.split.split_record`).
+
+    Raises:
+        ValueError: another config, data or split, or a checkpoint that cannot resume exactly.
+    """
+    ckpt = load_checkpoint(out / "last.pt")
+    saved = saved_train_config(ckpt["config"], str(out / "last.pt"))
+    diff = [k for k in config_diff(saved, cfg) if k not in ("device", "num_threads")]
+    if diff:
+        raise ValueError(f"{out}: --resume with a different config ({', '.join(diff)})")
+    if ckpt["data_digest"] != digests[0]:
+        raise ValueError(f"{out}: --resume with different data (index.csv digest changed)")
+    if "augment_rng" not in ckpt:
+        raise ValueError(
+            f"{out / 'last.pt'}: written by an older contactcal (no augmentation generator "
+            "state), cannot be resumed exactly; start a new run"
+        )
+    if (out / "config.json").is_file():  # absent only if killed before its first config.json
+        info = read_run_info(out)
+        if info.get("render_digest", digests[1]) != digests[1]:
+            raise ValueError(
+                f"{out}: --resume with data rendered otherwise (the folders' config.json digest "
+                "differs from the run's render_digest: another size, spp, seed or variant); "
+                "expected the run's own renders: put them back, or start a new run"
+            )
+        check_same_split(
+            recorded_split(info, out / "config.json"),
+            split,
+            f"{out}: the split of this --resume's --data",
+            f"expected the run's own dataset folders: pass --data {' '.join(info['data_dirs'])} "
+            "(any spelling; a run whose split an older contactcal recorded on other spellings "
+            "cannot be resumed exactly: start a new run)",
+        )
+    return ckpt
