@@ -1,5 +1,5 @@
-"""Errors shared by the command-line tools, the check that names a missing extra, and the
-listing of a few names in a message."""
+"""Errors shared by the command-line tools, the check that names a missing extra, an error that
+names its option, and the listing of a few names in a message."""
 
 from __future__ import annotations
 
@@ -33,6 +33,15 @@ def require_extra(command: str, extra: str, modules: tuple[str, ...]) -> None:
             f"`contactcal {command}` needs the {extra!r} extra (missing module(s): "
             f"{', '.join(missing)}); install it with: pip install 'contactcal[{extra}]'"
         )
+
+
+def option_error(option: str, value: object, exc: Exception) -> ValueError:
+    """``exc`` as an error that names the option it is about: ``OPTION VALUE: message``; a
+    message that starts with the value itself (a path check's ``PATH: ...``) does not repeat it.
+
+    Example: ``raise option_error("--out", out, exc) from None``.
+    """
+    return ValueError(f"{option} {value}: {str(exc).removeprefix(f'{value}: ')}")
 
 
 def few(names: Sequence[str], limit: int = 3, sep: str = ", ") -> str:

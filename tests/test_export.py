@@ -146,10 +146,14 @@ def test_cli_export_refuses_bad_options_before_the_work(
     link = tmp_path / "link.onnx"
     link.symlink_to(target)
     run = tmp_path / "no_run"  # never read: the options are refused first
+    folder = tmp_path / "folder.onnx"
+    folder.mkdir()
     for argv, says in (
         (["--out", str(tmp_path / "m.onnx"), "--opset", "99"], "--opset must be"),
-        (["--out", str(link)], "symbolic link"),
-        (["--out", str(tmp_path / "m.txt")], "ending in .onnx"),
+        (["--out", str(link)], f"--out {link}: is a symbolic link"),
+        (["--out", str(tmp_path / "m.txt")], f"--out {tmp_path / 'm.txt'}: expected an output"),
+        (["--out", str(folder)], f"--out {folder}: exists and is not a regular file"),
+        (["--out", str(target / "m.onnx")], f"--out {target / 'm.onnx'}: {target}: is not a"),
     ):
         assert main(["export", str(run), *argv]) == 2
         err = capsys.readouterr().err.strip().splitlines()

@@ -27,7 +27,7 @@ def test_floor_is_restated_and_read_back(tmp_path: Path) -> None:
         for p in (DEFAULT_MODEL, out)
     ]
     assert weights[0] == weights[1]
-    with pytest.raises(ValueError, match="must not be the input"):
+    with pytest.raises(ValueError, match="is an input of this run"):
         floor_model(out, 5.0, out)
     assert (
         main([str(DEFAULT_MODEL), "--percentile", "99.5", "--out", str(tmp_path / "x.onnx")]) == 2
@@ -73,6 +73,20 @@ def test_floor_names_the_option_it_refuses(
     err = capsys.readouterr().err
     assert err.startswith("error: --percentile 99.5: norm_floor_percentile must be in [0, ")
     assert err.count("\n") == 1 and not out.exists()
+    folder = tmp_path / "folder.onnx"
+    folder.mkdir()
+    (tmp_path / "x.txt").write_text("a file")
+    model = tmp_path / "m.onnx"
+    model.write_bytes(DEFAULT_MODEL.read_bytes())
+    for bad, says in (
+        (tmp_path / "x.txt", "expected an output file name ending in .onnx"),
+        (folder, "exists and is not a regular file"),
+        (tmp_path / "x.txt" / "x.onnx", f"{tmp_path / 'x.txt'}: is not a folder"),
+        (model, "is an input of this run"),
+    ):
+        assert main([str(model), "--percentile", "1", "--out", str(bad)]) == 2
+        err = capsys.readouterr().err
+        assert err.startswith(f"error: --out {bad}: {says}") and err.count("\n") == 1, err
 
 
 def test_floor_refuses_a_file_that_is_not_a_model(

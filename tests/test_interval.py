@@ -208,5 +208,5 @@ def test_recalibrate_changes_only_the_interval(tmp_path: Path) -> None:
         assert json.loads(after["interval"]) == {**summary["interval"], "data": summary["data"]}
         assert OnnxSegmenter(out).spec.interval is not None
     assert "region" not in meta and after["region"] == "largest"  # the legacy path ran last
-    with pytest.raises(ValueError, match="must not be the input"):
+    with pytest.raises(ValueError, match="is an input of this run"):
         recalibrate_model(out, [data], out)

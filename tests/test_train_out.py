@@ -52,13 +52,14 @@ def test_train_never_writes_over_a_folder_it_would_not_continue(
         (done, ["--resume"], f"{resume} holds best.pt, config.json, curves.png and 2 more)"),
         (tmp_path / "new", ["--resume"], f"{resume} does not exist)"),
         (tmp_path / "file", [], "not a folder; expected a run folder"),
+        (tmp_path / "file" / "run", [], f"{tmp_path / 'file'}: is not a folder; cannot write"),
     ]
     before = _snapshot(tmp_path)
     for out, extra, said in cases:
         assert main(["train", "--data", str(d), "--out", str(out), *TINY, *extra]) == 2, said
         err = capsys.readouterr().err
         one_line_naming(err, out)
-        assert said in err, (said, err)
+        assert err.startswith(f"contactcal: error: --out {out}: ") and said in err, (said, err)
     assert _snapshot(tmp_path) == before and not (tmp_path / "new").exists()
     # an empty folder (a killed write's staged temporary aside) takes a new run
     empty = tmp_path / "empty"

@@ -10,7 +10,7 @@ import argparse
 from pathlib import Path
 from typing import Any
 
-from contactcal.infer.errors import require_extra
+from contactcal.infer.errors import option_error, require_extra
 from contactcal.infer.pipeline.args import check_cpu_count
 
 #: ONNX opsets ``export`` accepts: tested at both ends (``tests/test_export.py``); at opset 10 the
@@ -139,7 +139,7 @@ def _check_dirs(dirs: list[Path], out: Path | None = None) -> None:
             out.resolve().is_relative_to(d.resolve()) or d.resolve().is_relative_to(out.resolve())
         ):
             raise ValueError(
-                f"{out}: the run folder overlaps the dataset folder {d} (it would write its "
+                f"--out {out}: the run folder overlaps the dataset folder {d} (it would write its "
                 "config.json and checkpoints among the data); expected another --out, e.g. "
                 "runs/r1"
             )
@@ -287,7 +287,10 @@ def _cmd_train(args: argparse.Namespace) -> int:
     _check_dirs(list(args.data), args.out)
     from contactcal.train.run_folder import check_run_folder
 
-    check_run_folder(args.out, args.resume)  # before torch is imported; train() checks it again
+    try:  # before torch is imported; train() checks it again
+        check_run_folder(args.out, args.resume)
+    except ValueError as exc:
+        raise option_error("--out", args.out, exc) from None
     from contactcal.train.loop import train
 
     summary = train(
@@ -309,24 +312,13 @@ def _cmd_train(args: argparse.Namespace) -> int:
     return 0
 
 
-def _check_model_out(out: Path, protect: list[Path]) -> None:
-    """Refuse an output model path before any work: not ``.onnx``, an input, a link, a device.
-
-    Raises:
-        ValueError: naming the path and what was expected.
-    """
-    from contactcal.infer.files.atomic import check_destination
-
-    if out.suffix.lower() != ".onnx":
-        raise ValueError(f"{out}: expected an output file name ending in .onnx")
-    check_destination(out, protect)
-
-
 def _cmd_export(args: argparse.Namespace) -> int:
     require_extra("export", "train", TRAIN_MODULES)
     if args.opset not in OPSETS:
         raise ValueError(f"--opset must be {OPSETS[0]}-{OPSETS[-1]}, got {args.opset}")
-    _check_model_out(args.out, [args.run_dir / "best.pt", args.run_dir / "config.json"])
+    from contactcal.train.restate import check_model_out
+
+    check_model_out(args.out, [args.run_dir / "best.pt", args.run_dir / "config.json"])
     from contactcal.infer.errors import RunError
     from contactcal.train.export import export_onnx
     from contactcal.train.export_check import ExportCheckError
@@ -350,7 +342,9 @@ def _cmd_quantize(args: argparse.Namespace) -> int:
     _check_dirs(list(args.data))
     if args.frames < 1:
         raise ValueError(f"--frames must be >= 1, got {args.frames}")
-    _check_model_out(args.out, [args.model])
+    from contactcal.train.restate import check_model_out
+
+    check_model_out(args.out, [args.model])
     from contactcal.train.quantize import quantize_model
 
     check = quantize_model(args.model, args.out, args.data, args.frames)

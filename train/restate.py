@@ -18,7 +18,8 @@ from collections.abc import Callable, Collection, Mapping
 from pathlib import Path
 from typing import Any
 
-from contactcal.infer.files.atomic import atomic_open
+from contactcal.infer.errors import option_error
+from contactcal.infer.files.atomic import atomic_open, check_destination
 from contactcal.infer.methods.unet.spec import ModelSpec, read_spec
 
 #: Each calibrated metadata entry: what it is, and the tool that calibrates it; in the order to
@@ -52,17 +53,30 @@ def stale(entries: Collection[str], out: Path) -> str | None:
     )
 
 
-def check_paths(model: str | os.PathLike[str], out: str | os.PathLike[str]) -> tuple[Path, Path]:
-    """``(model, out)`` as paths, or an error: ``out`` must end in ``.onnx`` and not be ``model``.
+def check_model_out(out: Path, protect: Collection[Path]) -> None:
+    """Refuse an output model (``--out``) before any work: not ``.onnx``, one of the inputs
+    ``protect`` (any spelling or hard link), a link, a folder or device, or under a file.
 
     Raises:
-        ValueError: bad output name, or the output is the input (inputs are never overwritten).
+        ValueError: ``--out OUT: ...``, naming what was expected.
+    """
+    if out.suffix.lower() != ".onnx":
+        raise ValueError(f"--out {out}: expected an output file name ending in .onnx")
+    try:
+        check_destination(out, protect)
+    except ValueError as exc:
+        raise option_error("--out", out, exc) from None
+
+
+def check_paths(model: str | os.PathLike[str], out: str | os.PathLike[str]) -> tuple[Path, Path]:
+    """``(model, out)`` as paths, or an error: ``out`` must pass :func:`check_model_out`, which
+    refuses ``model`` itself (inputs are never overwritten).
+
+    Raises:
+        ValueError: bad output name or destination, or the output is the input.
     """
     src, dst = Path(model), Path(out)
-    if dst.suffix.lower() != ".onnx":
-        raise ValueError(f"{dst}: expected an output file name ending in .onnx")
-    if dst.exists() and dst.resolve() == src.resolve():
-        raise ValueError(f"{dst}: the output must not be the input model {src}")
+    check_model_out(dst, [src])
     return src, dst
 
 

@@ -17,7 +17,7 @@ from pathlib import Path
 from typing import Any
 
 from contactcal.infer.errors import few
-from contactcal.infer.files.atomic import TEMP_NAME
+from contactcal.infer.files.atomic import TEMP_NAME, check_receiving_folder
 
 
 def read_run_info(run_dir: str | os.PathLike[str]) -> dict[str, Any]:
@@ -43,9 +43,11 @@ def read_run_info(run_dir: str | os.PathLike[str]) -> dict[str, Any]:
 
 
 def check_run_folder(out: Path, resume: bool) -> list[str]:
-    """Refuse an ``out`` that ``train`` would write over: a new run needs a new or empty folder
-    (staged temporaries of a killed write aside) or one holding only what a run killed in its
-    first epoch leaves (:func:`killed_in_first_epoch`), ``resume`` a run that holds ``last.pt``.
+    """Refuse an ``out`` that ``train`` would write over, or could not write into (under a file
+    or a link: :func:`~contactcal.infer.files.atomic.check_receiving_folder`): a new run needs a
+    new or empty folder (staged temporaries of a killed write aside) or one holding only what a
+    run killed in its first epoch leaves (:func:`killed_in_first_epoch`), ``resume`` a run that
+    holds ``last.pt``.
 
     Returns:
         The leftovers a new run is to remove before it starts (``["best.pt"]`` or none).
@@ -55,8 +57,9 @@ def check_run_folder(out: Path, resume: bool) -> list[str]:
     """
     if resume and (out / "last.pt").is_file():
         return []
+    check_receiving_folder(out)  # e.g. under a file: refused now, not after the first epoch
     if out.exists() and not out.is_dir():
-        raise ValueError(f"{out}: not a folder; expected a run folder (--out), e.g. runs/r1")
+        raise ValueError(f"{out}: not a folder; expected a run folder, e.g. runs/r1")
     held = (
         sorted(e.name for e in os.scandir(out) if not TEMP_NAME.match(e.name))
         if out.exists()
