@@ -60,6 +60,7 @@ SYNTH_MODULES = ("mitsuba", "drjit")
 
 def _cmd_synth(args: argparse.Namespace) -> int:
     require_extra("synth", "synth", SYNTH_MODULES)
+    from contactcal.infer.files.stdout import printing_after
     from contactcal.synth.dataset import DatasetConfig, build_dataset, parse_shard
     from contactcal.synth.layout import parse_pressures, parse_size
     from contactcal.synth.session import RenderConfig
@@ -81,10 +82,13 @@ def _cmd_synth(args: argparse.Namespace) -> int:
         args.out, config, args.workers, shard, progress=not args.quiet, run_args=_args(args)
     )
     made, fingers = stats["frames_rendered"], stats["fingers"]
-    print(f"synth: {made} frame(s) rendered, {fingers} finger(s) → {args.out}")
-    if not stats["run_record_written"]:
-        record = f"run_shard{shard[0]}of{shard[1]}.json"
-        print(f"synth: every frame was there; {record} kept (the record of the run that rendered)")
+    with printing_after([args.out]):
+        print(f"synth: {made} frame(s) rendered, {fingers} finger(s) → {args.out}")
+        if not stats["run_record_written"]:
+            record = f"run_shard{shard[0]}of{shard[1]}.json"
+            print(
+                f"synth: every frame was there; {record} kept (the record of the run that rendered)"
+            )
     return 0
 
 
@@ -118,6 +122,7 @@ def _cmd_fidelity(args: argparse.Namespace) -> int:
 
     from contactcal.infer.files.atomic import run_outputs, write_json, write_text
     from contactcal.infer.files.replaced import replaced_note
+    from contactcal.infer.files.stdout import printing_after
     from contactcal.infer.image.write import write_image
     from contactcal.synth.fidelity_report import (
         PAPER_BINS,
@@ -161,8 +166,10 @@ def _cmd_fidelity(args: argparse.Namespace) -> int:
             strip = cv2.resize(strip, None, fx=f, fy=f, interpolation=cv2.INTER_AREA)
         jpeg = (cv2.IMWRITE_JPEG_QUALITY, 85)
         write_image(out.stage(args.out / jpg_name), strip, jpeg)
-    print(summary_markdown(summary), end="")
-    print(f"fidelity: ROI found within tolerance in {summary['roi_ok']}/{args.sessions} sessions")
-    if replaced is not None:
-        print(replaced)
+    with printing_after([args.out], [replaced]):
+        print(summary_markdown(summary), end="")
+        ok = f"{summary['roi_ok']}/{args.sessions}"
+        print(f"fidelity: ROI found within tolerance in {ok} sessions")
+        if replaced is not None:
+            print(replaced)
     return 0

@@ -291,24 +291,27 @@ def _cmd_train(args: argparse.Namespace) -> int:
         check_run_folder(args.out, args.resume)
     except ValueError as exc:
         raise option_error("--out", args.out, exc) from None
+    from contactcal.infer.files.stdout import printing_after
     from contactcal.train.loop import train
 
     summary = train(
         args.data, args.out, build_config(args), resume=args.resume, progress=not args.quiet
     )
-    if summary.get("finished"):
-        print(
+    if summary.get("finished"):  # nothing written: a failed stdout says only that
+        written = []
+        line = (
             f"{summary['out_dir']}: the run is finished (best epoch {summary['best_epoch']}; it "
             "holds val_bins.csv, written after its last epoch): nothing to --resume, its files "
             "left as they are"
         )
-        return 0
-    val = summary["val"]
-    iou = val.get("val_iou")
-    print(
-        f"{summary['out_dir']}: best epoch {summary['best_epoch']}, "
-        f"val IoU {'-' if iou is None else f'{iou:.3f}'}, {summary['parameters']} parameters"
-    )
+    else:
+        written, iou = [args.out], summary["val"].get("val_iou")
+        line = (
+            f"{summary['out_dir']}: best epoch {summary['best_epoch']}, "
+            f"val IoU {'-' if iou is None else f'{iou:.3f}'}, {summary['parameters']} parameters"
+        )
+    with printing_after(written):
+        print(line)
     return 0
 
 
@@ -320,6 +323,7 @@ def _cmd_export(args: argparse.Namespace) -> int:
 
     check_model_out(args.out, [args.run_dir / "best.pt", args.run_dir / "config.json"])
     from contactcal.infer.errors import RunError
+    from contactcal.infer.files.stdout import printing_after
     from contactcal.train.export import export_onnx
     from contactcal.train.export_check import ExportCheckError
 
@@ -333,7 +337,8 @@ def _cmd_export(args: argparse.Namespace) -> int:
         path = export_onnx(args.run_dir, args.out, opset=args.opset, min_contact_area_px=min_area)
     except ExportCheckError as exc:  # the export's own checks (checker, parity, decisions, ...)
         raise RunError(f"export: {' '.join(str(exc).split())}; nothing was written") from exc
-    print(f"wrote {path}")
+    with printing_after([path]):
+        print(f"wrote {path}")
     return 0
 
 
@@ -345,14 +350,16 @@ def _cmd_quantize(args: argparse.Namespace) -> int:
     from contactcal.train.restate import check_model_out
 
     check_model_out(args.out, [args.model])
+    from contactcal.infer.files.stdout import printing_after
     from contactcal.train.quantize import quantize_model
 
     check = quantize_model(args.model, args.out, args.data, args.frames)
     ratio = check["median_area_ratio"]
     ratio_text = "no frame where both see contact" if ratio is None else f"{ratio:.4f}"
-    print(
-        f"wrote {args.out}: calibrated on {check['frames']:.0f} frames; on "
-        f"{check['check_frames']:.0f} others the INT8 model makes the float model's contact "
-        f"decision in {100 * check['contact_agreement']:.1f} %, median area ratio {ratio_text}"
-    )
+    with printing_after([args.out]):
+        print(
+            f"wrote {args.out}: calibrated on {check['frames']:.0f} frames; on "
+            f"{check['check_frames']:.0f} others the INT8 model makes the float model's contact "
+            f"decision in {100 * check['contact_agreement']:.1f} %, median area ratio {ratio_text}"
+        )
     return 0

@@ -136,19 +136,26 @@ def restating_parser(prog: str, description: str) -> argparse.ArgumentParser:
 
 def run_restating(restate: Callable[[], dict[str, Any]], out: Path) -> int:
     """Run a restating tool: print its summary (standard JSON) and 0, or one error line and 2
-    (nothing written); a summary's ``stale`` (:func:`stale`) is also a warning line on stderr.
+    (nothing written; or, where standard output failed after ``out`` was written, saying so and
+    repeating the warning); a summary's ``stale`` (:func:`stale`) is also a warning line on
+    stderr.
 
     Args:
         restate: writes ``out`` and returns the summary (raises ``ValueError`` / ``OSError``).
         out: the file it writes, for the last line.
     """
+    from contactcal.infer.files.stdout import named_stdout, printing_after
+
     try:
-        summary = restate()
+        with named_stdout():  # a closed pipe: one line, as the CLI's (no traceback)
+            summary = restate()
+            warning = f"warning: {out}: {summary['stale']}" if summary.get("stale") else None
+            with printing_after([out], [warning]):
+                print(json.dumps(summary, indent=1, allow_nan=False))
+                print(f"wrote {out}")
     except (ValueError, OSError) as exc:
         print(f"error: {exc}", file=sys.stderr)
         return 2
-    print(json.dumps(summary, indent=1, allow_nan=False))
-    print(f"wrote {out}")
-    if summary.get("stale"):
-        print(f"warning: {out}: {summary['stale']}", file=sys.stderr)
+    if warning is not None:
+        print(warning, file=sys.stderr)
     return 0

@@ -26,6 +26,7 @@ def add_parsers(sub: argparse._SubParsersAction) -> None:
 
 
 def _cmd_procedural(args: argparse.Namespace) -> int:
+    from contactcal.infer.files.stdout import printing_after
     from contactcal.infer.pipeline.args import check_out_folder
     from contactcal.synth.layout import parse_pressures, parse_size
     from contactcal.synth.procedural.config import GeneratorConfig
@@ -42,8 +43,9 @@ def _cmd_procedural(args: argparse.Namespace) -> int:
         hard_fraction=args.hard_fraction,
     )
     stats = build_dataset(args.out, config)
-    print(
-        f"procedural: {stats['frames']} frames, {stats['fingers']} fingers in "
-        f"{stats['seconds']:.1f} s ({stats['frames_per_s']:.1f} frames/s) → {args.out}"
-    )
+    with printing_after([args.out]):
+        print(
+            f"procedural: {stats['frames']} frames, {stats['fingers']} fingers in "
+            f"{stats['seconds']:.1f} s ({stats['frames_per_s']:.1f} frames/s) → {args.out}"
+        )
     return 0
