@@ -86,7 +86,7 @@ def test_calibrate_records_gated_frames_above_contact(
     tmp_path: Path, monkeypatch: pytest.MonkeyPatch
 ) -> None:
     from contactcal.infer.calibration import calibrate as calibrate_module
-    from contactcal.infer.image.read import load_image
+    from contactcal.infer.image.read import ImageFile
     from contactcal.infer.methods import registry
     from contactcal.infer.methods.base import UNCHANGED_NOTE, AreaResult, Started
 
@@ -100,8 +100,10 @@ def test_calibrate_records_gated_frames_above_contact(
         name = "unet"
         NO_REFERENCE = "no reference"
 
-        def start(self, files: list[Path], reference: Path | None, bit_depth: int | None = None):
-            return Started(1, None if reference is None else load_image(reference))
+        def start(
+            self, files: list[Path], reference: ImageFile | None, bit_depth: int | None = None
+        ):
+            return Started(1, None if reference is None else reference.decode())
 
         def set_reference(self, reference: np.ndarray | None, reduction: int = 1) -> None:
             return None

@@ -68,7 +68,7 @@ def test_interrupt_is_one_line_and_leaves_nothing(
     def stop(*args: object, **kwargs: object) -> None:
         raise KeyboardInterrupt
 
-    monkeypatch.setattr(measure, "load_image", stop)
+    monkeypatch.setattr(measure.ImageFile, "read", stop)
     out = tmp_path / "cal"
     assert main(["calibrate", MANIFEST, "--method", "classical", "--out", str(out)]) == 130
     assert "interrupted" in _one_error(capsys)
@@ -219,7 +219,7 @@ def test_sigterm_is_handled_as_ctrl_c(
     def term(*args: object, **kwargs: object) -> None:
         signal.raise_signal(signal.SIGTERM)
 
-    monkeypatch.setattr(measure, "load_image", term)
+    monkeypatch.setattr(measure.ImageFile, "read", term)
     out = tmp_path / "cal"
     before = signal.getsignal(signal.SIGTERM)
     code = main(["calibrate", MANIFEST, "--method", "classical", "--out", str(out)])

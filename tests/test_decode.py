@@ -12,7 +12,7 @@ import pytest
 from contactcal.infer.image import read
 from contactcal.infer.image.gray import ImageError, reduce_area
 from contactcal.infer.image.jpeg import jpeg_size
-from contactcal.infer.image.read import load_image
+from contactcal.infer.image.read import ImageFile, load_image
 from contactcal.infer.methods.base import Started
 from contactcal.infer.methods.classical import ClassicalMethod
 from contactcal.infer.methods.unet.method import UnetMethod
@@ -120,7 +120,7 @@ def test_exif_orientation_is_ignored_at_every_reduction(tmp_path: Path) -> None:
 def test_reduced_decoding_agrees_with_full(tmp_path: Path) -> None:
     ref, frame = _upscaled(tmp_path, 0, (1600, 1200)), _upscaled(tmp_path, 12, (1600, 1200))
     unet = UnetMethod()
-    started = unet.start([frame], ref)
+    started = unet.start([frame], ImageFile.read(ref))
     assert started.reduction == 4  # crop ≈ 1050 px: 1/4 keeps >= 192 px, 1/8 would not
     # the reference as decoded at 1/4, returned so that the pipeline needs no second decode
     assert np.array_equal(started.reference, load_image(ref, reduce=4))
@@ -139,7 +139,7 @@ def test_reduced_decoding_agrees_with_full(tmp_path: Path) -> None:
         (ClassicalMethod, (2592, 1944), 1),
     ],
 )
-def test_the_frame_check_decodes_no_reference(
+def test_the_frame_check_and_its_measurement_decode_no_reference(
     tmp_path: Path,
     monkeypatch: pytest.MonkeyPatch,
     method: type,
@@ -155,8 +155,9 @@ def test_the_frame_check_decodes_no_reference(
         return strict(buf, flag, name)
 
     monkeypatch.setattr(read, "decode_strict", counted)
-    (m,) = measure_files([frame], method(), ref)
-    assert m.result.contact and (m.width, m.height) == size
+    # the reference measured as a frame too: its decode for the method is the one measured
+    zero, m = measure_files([ref, frame], method(), ref)
+    assert m.result.contact and (m.width, m.height) == (zero.width, zero.height) == size
     assert decoded.count(frame.name) == 1, decoded
     assert decoded.count(ref.name) == reference_decodes, decoded
 
@@ -180,7 +181,7 @@ def test_reduction_not_used_when_unsafe(tmp_path: Path) -> None:
     png = _upscaled(tmp_path, 12, (1600, 1200), ".png")
     assert unet.start([png], None).reduction == 1
     ref = _upscaled(tmp_path, 0, (1600, 1200))
-    started = ClassicalMethod().start([_upscaled(tmp_path, 5, (1600, 1200))], ref)
+    started = ClassicalMethod().start([_upscaled(tmp_path, 5, (1600, 1200))], ImageFile.read(ref))
     assert started.reduction == 1 and np.array_equal(started.reference, load_image(ref))
     assert np.isfinite(measure_files([odd], unet)[0].result.area_px)
 
@@ -198,7 +199,7 @@ def test_reduce_area_averages_blocks() -> None:
 def test_decoded_frames_are_shrunk_like_a_reduced_decode(tmp_path: Path) -> None:
     ref, frame = _upscaled(tmp_path, 0, (1600, 1200)), _upscaled(tmp_path, 12, (1600, 1200))
     unet = UnetMethod()
-    k = unet.start([frame], ref).reduction
+    k = unet.start([frame], ImageFile.read(ref)).reduction
     fast = measure_files([frame], unet, ref)[0].result
     unet.set_reference(load_image(ref))  # decoded at full size: the method shrinks it itself
     assert unet.shrink == k and unet.reference.gray.shape == (1200 // k, 1600 // k)
@@ -247,7 +248,8 @@ def test_corrupt_jpeg_in_a_reduced_session(tmp_path: Path) -> None:
     ref, frame = _upscaled(tmp_path, 0, (1600, 1200)), _upscaled(tmp_path, 12, (1600, 1200))
     cut = _cut_in_half(tmp_path, frame)
     unet = UnetMethod()
-    assert unet.start([cut], ref).reduction == 4  # the U-Net decodes this session at 1/4
+    # the U-Net decodes this session at 1/4
+    assert unet.start([cut], ImageFile.read(ref)).reduction == 4
     with pytest.raises(ImageError, match="Corrupt JPEG data"):
         measure_files([frame, cut], unet, ref)
 

@@ -21,7 +21,7 @@ torch = pytest.importorskip("torch")
 
 from contactcal.infer.bench.dataset import REQUIRED_COLUMNS, IndexRow, read_index, sessions_of  # noqa: E402
 from contactcal.infer.image.gray import ImageError  # noqa: E402
-from contactcal.infer.image.read import load_image  # noqa: E402
+from contactcal.infer.image.read import ImageFile, load_image  # noqa: E402
 from contactcal.infer.methods.unet.method import UnetMethod  # noqa: E402
 from contactcal.infer.methods.unet.prepare import prepare, session_reference  # noqa: E402
 from contactcal.infer.methods.unet.ring import locate_ring  # noqa: E402
@@ -94,7 +94,7 @@ def _deployed(unet: UnetMethod, rows: list[IndexRow], reference: Path | None):
         with pytest.raises(ImageError, match="shows no window ring"):
             measure_files([r.frame for r in rows], unet, reference)
         seen.clear()
-        unet.start([r.frame for r in rows], reference)
+        unet.start([r.frame for r in rows], ImageFile.read(reference))
         areas = [unet.measure(load_image(r.frame)).area_px for r in rows]
         return np.stack(seen), areas
     measured = measure_files([r.frame for r in rows], unet, reference)

@@ -23,7 +23,7 @@ from contactcal.infer.calibration.rings import (
     shrinking_steps,
 )
 from contactcal.infer.errors import RunError
-from contactcal.infer.image.read import load_image
+from contactcal.infer.image.read import ImageFile
 from contactcal.infer.methods import registry
 from contactcal.infer.methods.base import AreaResult, Started
 
@@ -201,9 +201,9 @@ class _Scripted:
         self.areas = list(areas)
 
     def start(
-        self, files: Sequence[Path], reference: Path | None, bit_depth: int | None = None
+        self, files: Sequence[Path], reference: ImageFile | None, bit_depth: int | None = None
     ) -> Started:
-        return Started(1, None if reference is None else load_image(reference))
+        return Started(1, None if reference is None else reference.decode())
 
     def set_reference(self, reference: np.ndarray | None, reduction: int = 1) -> None:
         return None

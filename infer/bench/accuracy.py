@@ -24,7 +24,7 @@ from contactcal.infer.bench.scoring import (
     outline_iou,
     session_revised,
 )
-from contactcal.infer.image.read import load_image
+from contactcal.infer.image.read import ImageFile, load_image
 from contactcal.infer.methods.base import Method
 from contactcal.infer.methods.registry import METHODS, make_method
 
@@ -43,7 +43,8 @@ def score_session(
         methods that report a probability-mass (sub-pixel) area, and one ``"<name> (session
         rule)"`` frame per frame for methods that state an interval (:func:`session_ruled`).
     """
-    k = method.start([r.frame for r in rows], rows[0].frame if use_reference else None).reduction
+    reference = ImageFile.read(rows[0].frame) if use_reference else None
+    k = method.start([r.frame for r in rows], reference).reduction
     out: list[ScoredFrame] = []
     for i, r in enumerate(rows):
         gray = load_image(r.frame, reduce=k)

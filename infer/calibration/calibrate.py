@@ -156,7 +156,7 @@ def calibrate_session(
     check_sweep_unit(manifest, session.frames)
     frames, files = session.frames, [f.file for f in session.frames]
     method = measure.method(method_name)
-    measured = measure.measure(files, method, frames[0].file)
+    measured = measure.measure(files, method, frames[0].file, digest=True)
     points = _points(manifest, frames, measured, measure.scale)
     where = Path(manifest_as if manifest_as is not None else manifest)  # not a staging path
     results, checks = session_points(where, points, options.session_rule, method.name)
@@ -169,7 +169,9 @@ def calibrate_session(
     provenance = replace(
         provenance if provenance is not None else Provenance(),
         method_config=method.describe(),
-        inputs=input_digests(manifest, files, recorded),
+        inputs=input_digests(
+            manifest, session.sha256, [(m.file, m.sha256) for m in measured], recorded
+        ),
     )
     same = identical_frames(provenance.inputs, [f.pressure_kpa for f in frames])
     listed = os.path.relpath(frames[0].file, manifest.parent)  # as the manifest names it

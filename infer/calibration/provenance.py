@@ -12,7 +12,6 @@ from typing import Any
 
 from contactcal.infer.calibration.hysteresis import MATCH_TOLERANCE_KPA
 from contactcal.infer.errors import few
-from contactcal.infer.files.digest import sha256_file
 
 #: Longest accepted ``--device-id``, characters.
 DEVICE_ID_MAX = 100
@@ -63,23 +62,26 @@ def check_device_id(device_id: str | None) -> str | None:
 
 
 def input_digests(
-    manifest: Path, files: Sequence[Path], recorded: Path | None = None
+    manifest: Path,
+    manifest_sha256: str,
+    frames: Sequence[tuple[Path, str]],
+    recorded: Path | None = None,
 ) -> dict[str, Any]:
-    """sha256 of the manifest and of each frame (frame names relative to the manifest's folder).
+    """The record of the manifest and each frame with the sha256 of the content the run read
+    (frame names relative to the manifest's folder): digests of the bytes parsed and measured,
+    never of the files read again (which may have been replaced in between).
 
-    ``recorded`` is the manifest's path in the record (None: ``manifest`` itself).
-
-    Raises:
-        OSError: an unreadable file.
+    Args:
+        manifest: the manifest read.
+        manifest_sha256: the sha256 of the manifest's content as parsed
+            (:attr:`~contactcal.infer.pipeline.manifest.Session.sha256`).
+        frames: each frame's path and the sha256 of its content as measured
+            (:attr:`~contactcal.infer.pipeline.measure.Measured.sha256`).
+        recorded: the manifest's path in the record (None: ``manifest`` itself).
     """
     return {
-        "manifest": {
-            "file": str((recorded or manifest).resolve()),
-            "sha256": sha256_file(manifest),
-        },
-        "frames": [
-            {"file": os.path.relpath(f, manifest.parent), "sha256": sha256_file(f)} for f in files
-        ],
+        "manifest": {"file": str((recorded or manifest).resolve()), "sha256": manifest_sha256},
+        "frames": [{"file": os.path.relpath(f, manifest.parent), "sha256": h} for f, h in frames],
     }
 
 

@@ -27,11 +27,15 @@ than pooled unchecked.
 from __future__ import annotations
 
 import re
-from collections.abc import Sequence
+from collections.abc import Mapping, Sequence
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 from contactcal.infer.calibration.provenance import input_digests as frame_digests
+from contactcal.infer.image.gray import ImageError
+
+if TYPE_CHECKING:
+    from contactcal.infer.pipeline.measure import Measured
 
 _HEX64 = re.compile(r"[0-9a-f]{64}")
 #: Contact labels (pressure, label area in px) two evaluations must share to be one session's:
@@ -42,27 +46,48 @@ SHARED_LABELS = 3
 SHARED_FRACTION = 0.5
 
 
-def input_digests(manifest: Path, reference: Path, labelled: Sequence[Path]) -> dict[str, Any]:
-    """The ``inputs`` of ``evaluation.json``: sha256 of the manifest, reference and labelled frames.
+def input_digests(
+    manifest: Path, manifest_sha256: str, measured: Mapping[str, Sequence[Measured]]
+) -> dict[str, Any]:
+    """The ``inputs`` of ``evaluation.json``: sha256 of the manifest, reference and labelled
+    frames, each of the content parsed or measured (not of the files read again).
 
     The digests are ``calibration.json``'s
     (:func:`~contactcal.infer.calibration.provenance.input_digests`), the reference frame apart.
 
     Args:
         manifest: the session manifest (its path is recorded resolved).
-        reference: the session's reference frame (the manifest's lowest-pressure frame).
-        labelled: the labelled frames, in the order scored.
+        manifest_sha256: the sha256 of its content as parsed.
+        measured: each method's measurements of the labelled frames, in the order scored,
+            against the session's reference frame (at least one method, one frame).
 
     Returns:
         ``{"manifest": {"file", "sha256"}, "reference": {"file", "sha256"}, "frames": [{"file",
         "sha256"}, ...]}``; frame names are relative to the manifest's folder.
 
     Raises:
-        OSError: an unreadable file.
+        ImageError: a frame (or the reference) whose content one method read differs from the
+            content another read: replaced while the run read it (the record would vouch for
+            one of them only).
     """
-    digests = frame_digests(manifest, [reference, *labelled])
-    first, *frames = digests["frames"]
-    return {"manifest": digests["manifest"], "reference": first, "frames": frames}
+    read = {name: _read(run) for name, run in measured.items()}
+    (first, entries), *others = read.items()
+    for name, theirs in others:
+        for (path, mine), (_, other) in zip(entries, theirs, strict=True):
+            if mine != other:
+                raise ImageError(
+                    f"{path}: its content changed while the run read it (sha256 {mine[:12]}… "
+                    f"measured by {first}, {other[:12]}… by {name}); evaluate again once the "
+                    "session's files are final"
+                )
+    digests = frame_digests(manifest, manifest_sha256, entries)
+    reference, *frames = digests["frames"]
+    return {"manifest": digests["manifest"], "reference": reference, "frames": frames}
+
+
+def _read(run: Sequence[Measured]) -> list[tuple[Path | None, str | None]]:
+    """The reference's and each frame's path, and the sha256 of the content one method read."""
+    return [(run[0].reference, run[0].reference_sha256), *((m.file, m.sha256) for m in run)]
 
 
 def _entry_ok(value: object) -> bool:

@@ -34,7 +34,7 @@ from contactcal.infer.methods.registry import METHODS
 from contactcal.infer.pipeline.manifest import (
     Frame,
     check_sweep_unit,
-    read_manifest,
+    read_session,
     sweep_top_warning,
 )
 from contactcal.infer.pipeline.measure import Measured
@@ -83,7 +83,8 @@ def _measure(
         described[name] = method.describe()
         boundary, note = current_offset(measure.boundary, described[name].get("model_sha256"))
         stale = stale or note
-        out[name] = replace(measure, boundary=boundary).measure(files, method, frames[0].file)
+        run = replace(measure, boundary=boundary)
+        out[name] = run.measure(files, method, frames[0].file, digest=True)
     return out, described, stale
 
 
@@ -108,16 +109,17 @@ def _score(
     masks: list[LabelMask],
     names: list[str],
     measure: MeasureOptions,
-) -> tuple[list[ScoredFrame], dict[str, Any] | None]:
+) -> tuple[list[ScoredFrame], dict[str, Any] | None, dict[str, list[Measured]]]:
     """The labelled frames measured by each method and scored against their labels' masks;
-    the U-Net's boundary offset record (None without a U-Net run)."""
+    the U-Net's boundary offset record (None without a U-Net run); each method's
+    measurements."""
     measured, described, stale = _measure(names, frames, [f.file for f in labelled], measure)
     areas = [float(mask.area_px) for mask in masks]
     source = None if measure.boundary is None else measure.boundary.source
     offset = unet_offset(measured.get("unet", []), areas, measure.scale, described, stale, source)
     pressures = [f.pressure_kpa for f in labelled]
     scored = score_frames(str(manifest), pressures, masks, measured, measure.scale)
-    return scored, offset
+    return scored, offset, measured
 
 
 def _table(
@@ -200,7 +202,8 @@ def evaluate_session(
     measure = measure if measure is not None else MeasureOptions()
     _check_request(method, labels, out)
     names = list(METHODS) if method == "both" else [method]
-    frames = read_manifest(manifest, 0.0)  # each frame scored at its own pressure
+    session = read_session(manifest, 0.0)  # each frame scored at its own pressure
+    frames = session.frames
     check_sweep_unit(manifest, frames)  # bar or MPa read as kPa, as calibrate refuses them
     high = sweep_top_warning(max(f.pressure_kpa for f in frames), "evaluate")
     base = manifest.resolve().parent
@@ -212,12 +215,12 @@ def evaluate_session(
     with run_outputs(protect, join=outputs) as outs:
         paths = {"png": out / "evaluation.png", "json": out / "evaluation.json"}
         staged = {k: outs.stage(p) for k, p in paths.items()}  # refused here, before work
-        scored, offset = _score(manifest, frames, labelled, masks, names, measure)
+        scored, offset, measured = _score(manifest, frames, labelled, masks, names, measure)
         onset, bins = onset_summary(scored), bin_table(scored, OPEN_BINS)
         record = {
             "manifest": str(manifest.resolve()),
             "labels": str(labels.resolve()),
-            "inputs": input_digests(manifest, frames[0].file, [f.file for f in labelled]),
+            "inputs": input_digests(manifest, session.sha256, measured),
             "methods": names,
             "model": None if measure.model is None else os.fspath(measure.model),
             "change_gate": "on" if measure.change_gate else "off (--no-change-gate)",

@@ -21,3 +21,11 @@ def sha256_file(path: str | os.PathLike[str]) -> str:
         while chunk := fh.read(_CHUNK):
             h.update(chunk)
     return h.hexdigest()
+
+
+def sha256_bytes(data: bytes) -> str:
+    """The sha256 of bytes already read, lower-case hex (64 characters): the digest of the very
+    content a run decoded (a file read again could have changed in between)."""
+    import hashlib
+
+    return hashlib.sha256(data).hexdigest()

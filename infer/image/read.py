@@ -16,11 +16,13 @@ maximum exceeds :data:`LOW_BITS_MAX`; otherwise it is an error.
 from __future__ import annotations
 
 import os
+from dataclasses import dataclass, field
 from pathlib import Path
 
 import cv2
 import numpy as np
 
+from contactcal.infer.files.digest import sha256_bytes
 from contactcal.infer.image.complete import jpeg_end, png_end
 from contactcal.infer.image.decode import decode_strict
 from contactcal.infer.image.frame import LOW_BITS_MAX, check_frame_shape
@@ -185,32 +187,57 @@ def load_image(
         ImageError: the file is missing, unreadable, empty, truncated, corrupt, not an image,
             not frame-shaped, or of an unknown or contradictory bit depth.
     """
-    if reduce not in (1, 2, 4, 8):
-        raise ValueError(f"reduce must be 1, 2, 4 or 8, got {reduce}")
-    if bit_depth is not None and not 1 <= bit_depth <= MAX_BIT_DEPTH:
-        raise ValueError(f"bit depth must be 1-{MAX_BIT_DEPTH} bits per sample, got {bit_depth}")
-    p = Path(path)
-    data = read_file_bytes(p)
-    buf = np.frombuffer(data, dtype=np.uint8)
-    jpeg = p.suffix.lower() in (".jpg", ".jpeg")
-    if jpeg:
-        # IMREAD_UNCHANGED ignores an EXIF orientation; the reduced flags would apply it, so a
-        # tagged frame would turn at 1/k and not at full size: they ignore it too.
-        flag = {
-            2: cv2.IMREAD_REDUCED_GRAYSCALE_2 | cv2.IMREAD_IGNORE_ORIENTATION,
-            4: cv2.IMREAD_REDUCED_GRAYSCALE_4 | cv2.IMREAD_IGNORE_ORIENTATION,
-            8: cv2.IMREAD_REDUCED_GRAYSCALE_8 | cv2.IMREAD_IGNORE_ORIENTATION,
-        }.get(reduce, cv2.IMREAD_UNCHANGED)
-    else:
-        flag = cv2.IMREAD_UNCHANGED
-    img = decode_strict(buf, flag, str(p))
-    if img is None or img.size == 0:
-        raise ImageError(f"{p}: not a decodable image (corrupt or unsupported content)")
-    k = reduce if jpeg else 1  # the JPEG was decoded at 1/k
-    check_frame_shape(str(p), img.shape[0] * k, img.shape[1] * k)
-    img = _scale_depth(p, img, data, bit_depth)
-    gray = to_gray_u8(img, name=str(p), bgr=True)
-    return gray if jpeg else reduce_area(gray, reduce)
+    return ImageFile.read(path).decode(reduce, bit_depth)
+
+
+@dataclass(frozen=True)
+class ImageFile:
+    """An image file's content, read once: its decodes and its digest all come from these bytes,
+    so that a record's sha256 is that of the content measured (the file read again may have
+    been replaced in between)."""
+
+    path: Path
+    data: bytes = field(repr=False)
+
+    @classmethod
+    def read(cls, path: str | os.PathLike[str]) -> ImageFile:
+        """Read a frame file (:func:`read_file_bytes`; raises ImageError as it does)."""
+        p = Path(path)
+        return cls(p, read_file_bytes(p))
+
+    def sha256(self) -> str:
+        """The content's sha256, lower-case hex (hashed on each call: ~1 ms per MB)."""
+        return sha256_bytes(self.data)
+
+    def decode(self, reduce: int = 1, bit_depth: int | None = None) -> np.ndarray:
+        """The content in the canonical form, as :func:`load_image` documents it."""
+        if reduce not in (1, 2, 4, 8):
+            raise ValueError(f"reduce must be 1, 2, 4 or 8, got {reduce}")
+        if bit_depth is not None and not 1 <= bit_depth <= MAX_BIT_DEPTH:
+            raise ValueError(
+                f"bit depth must be 1-{MAX_BIT_DEPTH} bits per sample, got {bit_depth}"
+            )
+        p, data = self.path, self.data
+        buf = np.frombuffer(data, dtype=np.uint8)
+        jpeg = p.suffix.lower() in (".jpg", ".jpeg")
+        if jpeg:
+            # IMREAD_UNCHANGED ignores an EXIF orientation; the reduced flags would apply it, so
+            # a tagged frame would turn at 1/k and not at full size: they ignore it too.
+            flag = {
+                2: cv2.IMREAD_REDUCED_GRAYSCALE_2 | cv2.IMREAD_IGNORE_ORIENTATION,
+                4: cv2.IMREAD_REDUCED_GRAYSCALE_4 | cv2.IMREAD_IGNORE_ORIENTATION,
+                8: cv2.IMREAD_REDUCED_GRAYSCALE_8 | cv2.IMREAD_IGNORE_ORIENTATION,
+            }.get(reduce, cv2.IMREAD_UNCHANGED)
+        else:
+            flag = cv2.IMREAD_UNCHANGED
+        img = decode_strict(buf, flag, str(p))
+        if img is None or img.size == 0:
+            raise ImageError(f"{p}: not a decodable image (corrupt or unsupported content)")
+        k = reduce if jpeg else 1  # the JPEG was decoded at 1/k
+        check_frame_shape(str(p), img.shape[0] * k, img.shape[1] * k)
+        img = _scale_depth(p, img, data, bit_depth)
+        gray = to_gray_u8(img, name=str(p), bgr=True)
+        return gray if jpeg else reduce_area(gray, reduce)
 
 
 def frame_size(path: str | os.PathLike[str], bit_depth: int | None = None) -> tuple[int, int]:

@@ -1,13 +1,13 @@
 """What every contact-area method provides, so the pipeline and the benchmark treat them alike.
 
-A method is started once per session (it reads the session's zero-pressure frame and says at
-which JPEG decode reduction the frames are to be loaded), then measures frames. Areas and
-outlines are always in pixels of the input FILE, whatever reduction the method chose.
+A method is started once per session (it decodes the session's zero-pressure frame, as its caller
+read it, and says at which JPEG decode reduction the frames are to be loaded), then measures
+frames. Areas and outlines are always in pixels of the input FILE, whatever reduction the method
+chose.
 """
 
 from __future__ import annotations
 
-import os
 from collections.abc import Sequence
 from dataclasses import dataclass, field, replace
 from pathlib import Path
@@ -15,7 +15,7 @@ from typing import Any, Protocol
 
 import numpy as np
 
-from contactcal.infer.image.read import load_image
+from contactcal.infer.image.read import ImageFile
 
 #: The start of a frame's note when a method's change gate found its region unchanged from the
 #: reference frame (the U-Net's ``min_change``); ``calibrate`` looks for it to name the gate.
@@ -77,15 +77,16 @@ class Method(Protocol):
     name: str
 
     def start(
-        self, files: Sequence[Path], reference: Path | None, bit_depth: int | None = None
+        self, files: Sequence[Path], reference: ImageFile | None, bit_depth: int | None = None
     ) -> Started:
-        """Begin a session of image files: read the reference, choose the decode reduction k.
+        """Begin a session of image files: decode the reference, choose the decode reduction k.
 
         The frames are then to be loaded with ``load_image(path, reduce=k, bit_depth=...)``;
         k > 1 only when every file (frames and reference) has one size whose sides divide by
         k, so a frame decoded at 1/k is exactly k times smaller per side.
         ``bit_depth`` is the significant bits of 16-bit files (None: from the file). The
-        reference decoded at 1/k is returned with k, so that nothing decodes it again.
+        reference is decoded from the content the caller read (whose digest it records), and
+        returned decoded at 1/k with k, so that nothing decodes it again.
         """
 
     def set_reference(self, reference: np.ndarray | None, reduction: int = 1) -> None:
@@ -103,7 +104,7 @@ class Method(Protocol):
 
 
 def load_reference(
-    path: str | os.PathLike[str] | None, reduction: int = 1, bit_depth: int | None = None
+    reference: ImageFile | None, reduction: int = 1, bit_depth: int | None = None
 ) -> np.ndarray | None:
     """The session's reference frame decoded at 1/reduction, or None."""
-    return None if path is None else load_image(path, reduce=reduction, bit_depth=bit_depth)
+    return None if reference is None else reference.decode(reduction, bit_depth)

@@ -97,10 +97,11 @@ _MAX_LISTED = 5
 
 @dataclass(frozen=True)
 class Session:
-    """A read manifest: its frames and how their phases were determined."""
+    """A read manifest: its frames, how their phases were determined, its content's digest."""
 
     frames: list[Frame]  # sorted by phase (loading first), pressure, row; [0] is the reference
     phase_source: str  # phases.FROM_COLUMN, FROM_ORDER or SINGLE_PASS
+    sha256: str  # of the manifest's content as read once and parsed (the record's digest)
     pooled: Pooled | None = None  # steps pooled from differing readings (readings.py); None: none
     at_rest: AtRest | None = None  # steps read below 0 kPa, given as 0; None: none
     #: rows that broke an otherwise rising (then falling) order, read as one pass (a typo?):
@@ -169,7 +170,7 @@ def read_session(
     """
     mpath = Path(path)
     where = str(mpath)
-    rows = read_rows(mpath)
+    rows, sha256 = read_rows(mpath)
     if not rows:
         raise ManifestError(
             f"{where}: the manifest is empty; expected a header line '{HEADER}' "
@@ -203,7 +204,7 @@ def read_session(
     hint = "" if pooled is None else f" ({merged}: --step-tolerance-kpa)"
     frames = _number_steps(where, frames, hint)
     _check_files(where, frames, mpath.resolve().parent)
-    return Session(frames, source, pooled, at_rest, out_of_order)
+    return Session(frames, source, sha256, pooled, at_rest, out_of_order)
 
 
 #: At most this many rows, and this share of the rows, may break the order for them to be named

@@ -7,12 +7,14 @@ The format and what :func:`~contactcal.infer.pipeline.manifest.read_session` mak
 from __future__ import annotations
 
 import csv
+import io
 import math
 import os
 from dataclasses import dataclass
 from pathlib import Path
 
 from contactcal.infer.calibration.phases import LOADING, PHASES, parse_phase
+from contactcal.infer.files.digest import sha256_bytes
 
 REQUIRED_COLUMNS: tuple[str, ...] = ("file", "pressure_kpa")
 PHASE_COLUMN = "phase"
@@ -60,15 +62,13 @@ class Frame:
     extras: tuple[tuple[str, str | float | None], ...] = ()
 
 
-def read_rows(mpath: Path) -> list[tuple[int, list[str]]]:
-    """Non-blank CSV rows as ``(line number, cells)``."""
+def read_rows(mpath: Path) -> tuple[list[tuple[int, list[str]]], str]:
+    """Non-blank CSV rows as ``(line number, cells)``, and the sha256 of the content parsed
+    (read once: a record's digest is that of the rows the run used)."""
     try:
-        with open(mpath, encoding="utf-8-sig", newline="") as fh:
-            reader = csv.reader(fh)
-            rows = []
-            for cells in reader:
-                if any(c.strip() for c in cells):
-                    rows.append((reader.line_num, cells))
+        data = mpath.read_bytes()
+        reader = csv.reader(io.StringIO(data.decode("utf-8-sig"), newline=""))
+        rows = [(reader.line_num, cells) for cells in reader if any(c.strip() for c in cells)]
     except FileNotFoundError:
         raise ManifestError(
             f"{mpath}: manifest not found; expected a CSV file '{HEADER}' listing the "
@@ -90,7 +90,7 @@ def read_rows(mpath: Path) -> list[tuple[int, list[str]]]:
         ) from None
     except csv.Error as exc:
         raise ManifestError(f"{mpath}: malformed CSV ({exc}); expected '{HEADER}' rows") from None
-    return rows
+    return rows, sha256_bytes(data)
 
 
 def check_header(where: str, line_no: int, header: list[str]) -> list[str]:

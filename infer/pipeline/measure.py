@@ -18,7 +18,7 @@ import cv2
 import numpy as np
 
 from contactcal.infer.image.gray import ImageError
-from contactcal.infer.image.read import load_image
+from contactcal.infer.image.read import ImageFile
 from contactcal.infer.methods.base import UNCHANGED_NOTE, AreaResult, Method
 from contactcal.infer.methods.unet.config import PreprocessConfig
 from contactcal.infer.methods.unet.ring import RingFit, locate_ring
@@ -60,6 +60,10 @@ class Measured:
     area_mm2: float | None
     reference: Path | None = None  # the session's reference frame (None: measured without one)
     boundary_offset_mm: float | None = None  # the rig's boundary offset applied (None: none)
+    #: sha256 of the file's content as decoded and measured (None: not asked for)
+    sha256: str | None = None
+    #: sha256 of the reference's content it was measured against (None: none, or not asked for)
+    reference_sha256: str | None = None
 
     def to_json(self, method: str) -> dict[str, Any]:
         """The CLI contract's per-image object (``area_interval_px``: ``[lower, upper]`` input
@@ -87,6 +91,8 @@ class _Reference:
     path: Path
     size: tuple[int, int]  # (width, height) of the file, px
     ring: RingFit  # at the check's working size (found=False: position not checked)
+    image: np.ndarray  # the method's decode of it at 1/k: measured as is where it is a frame
+    sha256: str | None  # of the content read once, that the method decoded (None: not asked)
 
 
 def _file_size(img: np.ndarray, k: int) -> tuple[int, int]:
@@ -143,20 +149,35 @@ def _check_frame(ref: _Reference, path: Path, img: np.ndarray, size: tuple[int, 
 
 
 def _start(
-    method: Method, images: list[Path], reference: Path | None, bit_depth: int | None
+    method: Method, images: list[Path], reference: Path | None, bit_depth: int | None, digest: bool
 ) -> tuple[int, _Reference | None]:
     """Start the method; the decode reduction k and the reference the frames must match (the
-    method's own decode of it at 1/k: the frame check decodes nothing more)."""
-    started = method.start(images, reference, bit_depth)
+    method's own decode of it at 1/k, of its content read here once: the frame check and its
+    measurement as a frame decode nothing more)."""
+    content = None if reference is None else ImageFile.read(reference)
+    started = method.start(images, content, bit_depth)
     k, img = started.reduction, started.reference
-    if reference is None:
+    if content is None:
         return k, None
     if img is None:  # a method breaking the protocol, not bad input
         raise TypeError(
             f"{method.name}: start() returned no reference image for {reference}; expected "
             "the reference decoded at 1/k (Started.reference)"
         )
-    return k, _Reference(reference, _file_size(img, k), _coarse_ring(img))
+    size = _file_size(img, k)
+    sha = content.sha256() if digest else None
+    return k, _Reference(content.path, size, _coarse_ring(img), img, sha)
+
+
+def _decoded(
+    path: Path, k: int, bit_depth: int | None, ref: _Reference | None, digest: bool
+) -> tuple[np.ndarray, str | None]:
+    """A frame decoded at 1/k and, with ``digest``, the sha256 of the content decoded (the
+    reference's own decode where the frame is the reference: read and decoded once)."""
+    if ref is not None and path == ref.path:
+        return ref.image, ref.sha256
+    content = ImageFile.read(path)
+    return content.decode(k, bit_depth), content.sha256() if digest else None
 
 
 def offset_for(
@@ -196,6 +217,7 @@ def measure_files(
     progress: bool = False,
     bit_depth: int | None = None,
     boundary: BoundaryOffset | None = None,
+    digest: bool = False,
 ) -> list[Measured]:
     """Measure each image file with ``method``.
 
@@ -214,6 +236,8 @@ def measure_files(
         boundary: the rig's boundary offset; applied to the areas of the model it was measured
             for (:func:`offset_for`, :func:`~contactcal.infer.pipeline.boundary.apply_offset`),
             not to another method's.
+        digest: take each file's sha256 (:attr:`Measured.sha256`, ``reference_sha256``) from
+            the content read and measured, for a record of the inputs (~1 ms per MB).
 
     Returns:
         One :class:`Measured` per file, in order.
@@ -225,7 +249,8 @@ def measure_files(
     """
     active = offset_for(method, boundary, scale)
     images = [Path(f) for f in files]
-    k, ref = _start(method, images, None if reference is None else Path(reference), bit_depth)
+    reference = None if reference is None else Path(reference)
+    k, ref = _start(method, images, reference, bit_depth, digest)
     out: list[Measured] = []
     it: Any = images
     if progress:
@@ -233,7 +258,7 @@ def measure_files(
 
         it = tqdm(images, desc=f"measure ({method.name})", unit="frame", leave=False)
     for path in it:
-        img = load_image(path, reduce=k, bit_depth=bit_depth)
+        img, sha = _decoded(path, k, bit_depth, ref, digest)
         w, h = _file_size(img, k)
         note = method.NO_REFERENCE if ref is None else _check_frame(ref, path, img, (w, h))
         res = method.measure(img)  # in the file's pixels
@@ -243,7 +268,8 @@ def measure_files(
             res = replace(res, note=f"{res.note}; {note}" if res.note else note)
         mm2 = None if scale is None else scale.area_mm2(res.area_px, w)
         applied = None if active is None else active.mm
-        out.append(Measured(path, w, h, res, mm2, None if ref is None else ref.path, applied))
+        against = (None, None) if ref is None else (ref.path, ref.sha256)
+        out.append(Measured(path, w, h, res, mm2, against[0], applied, sha, against[1]))
     return out
 
 

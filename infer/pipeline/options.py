@@ -65,9 +65,11 @@ class MeasureOptions:
         files: Sequence[str | os.PathLike[str]],
         method: Method,
         reference: str | os.PathLike[str] | None,
+        digest: bool = False,
     ) -> list[Measured]:
         """``files`` measured with ``method`` against ``reference``, with this run's scale, bit
-        depth and boundary offset (:func:`~contactcal.infer.pipeline.measure.measure_files`)."""
+        depth and boundary offset (:func:`~contactcal.infer.pipeline.measure.measure_files`;
+        ``digest``: with the sha256 of each file's content measured, for a record)."""
         from contactcal.infer.pipeline.measure import measure_files
 
         return measure_files(
@@ -77,4 +79,5 @@ class MeasureOptions:
             self.scale,
             bit_depth=self.bit_depth,
             boundary=self.boundary,
+            digest=digest,
         )

@@ -21,7 +21,7 @@ from contactcal.infer.files.digest import sha256_file
 from contactcal.infer.image.frame import as_frame
 from contactcal.infer.image.gray import reduce_area
 from contactcal.infer.image.jpeg import jpeg_size
-from contactcal.infer.image.read import load_image
+from contactcal.infer.image.read import ImageFile
 from contactcal.infer.methods.base import UNCHANGED_NOTE, AreaResult, Started, load_reference
 from contactcal.infer.methods.unet.postprocess import Segmentation, mask_in_input
 from contactcal.infer.methods.unet.prepare import session_reference
@@ -89,16 +89,17 @@ class UnetMethod:
         self.shrink: int | None = None  # the method shrinks them further (None: not decided)
 
     def start(
-        self, files: Sequence[Path], reference: Path | None, bit_depth: int | None = None
+        self, files: Sequence[Path], reference: ImageFile | None, bit_depth: int | None = None
     ) -> Started:
         """Choose the decode reduction from the ring's size, then prepare the reference.
 
         A reduction k > 1 is used only when every file is a JPEG of one size divisible by k (so
         areas scale back exactly by k²) and the ring crop stays >= the network input at 1/k
         (:func:`fitting_reduction`). The ring is searched on the 1/8 decode; at k = 8 that
-        search is the session's, and that decode is the reference returned.
+        search is the session's, and that decode is the reference returned (at k < 8 the
+        reference's content, read once, is decoded again at 1/k).
         """
-        paths = [*files, *([reference] if reference is not None else [])]
+        paths = [*files, *([reference.path] if reference is not None else [])]
         jpegs = bool(paths) and all(p.suffix.lower() in (".jpg", ".jpeg") for p in paths)
         sizes = {jpeg_size(p) for p in paths} if jpegs else set()
         if len(sizes) != 1:  # not all JPEG, or JPEGs of several sizes: decode fully
@@ -106,8 +107,8 @@ class UnetMethod:
             self.set_reference(ref)
             return Started(1, ref)
         (h, w), cfg = sizes.pop(), self.segmenter.spec.preprocess
-        # paths[-1] is the reference when there is one.
-        coarse = session_reference(load_image(paths[-1], reduce=8, bit_depth=bit_depth), cfg)
+        first = reference if reference is not None else ImageFile.read(paths[-1])
+        coarse = session_reference(first.decode(8, bit_depth), cfg)
         k = 1
         if coarse.box is not None:  # the ring was found
             k = fitting_reduction(coarse.box.side * 8, (h, w), cfg)
