@@ -10,7 +10,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from contactcal.infer.calibration.load import load_curve
+from contactcal.infer.calibration.load import UnassessedCurveWarning, load_curve
 from contactcal.infer.calibration.phases import FROM_COLUMN, FROM_ORDER
 from contactcal.infer.calibration.points import CalibrationPoint
 from contactcal.infer.calibration.steps import group_steps
@@ -65,7 +65,8 @@ def test_rig_session_with_repeats_and_unloading(tmp_path: Path, phase_column: bo
     assert all(pt["area_interval_mm2"] is not None for pt in pts)  # the U-Net states one
     with open(tmp_path / "out" / "calibration.csv", newline="", encoding="utf-8") as fh:
         assert len(list(csv.DictReader(fh))) == len(steps)
-    down = load_curve(tmp_path / "out" / "calibration.json", phase="unloading")
+    with pytest.warns(UnassessedCurveWarning, match="unloading curve tells pressures apart"):
+        down = load_curve(tmp_path / "out" / "calibration.json", phase="unloading")  # few steps
     assert down.band is not None and down.has_contact
     p, lo, hi, _ = load_curve(tmp_path / "out" / "calibration.json").pressure_interval_for_area(50)
     assert lo <= p <= hi
