@@ -20,7 +20,7 @@ import numpy as np
 from contactcal.infer.evaluate.labels import Label, LabelError, LabelMask
 from contactcal.infer.image.read import load_image
 from contactcal.infer.methods.unet.ring import locate_ring
-from contactcal.infer.pipeline.measure import RING_RADIUS_TOLERANCE
+from contactcal.infer.pipeline.frame_check import RING_RADIUS_TOLERANCE
 
 
 @dataclass(frozen=True)

@@ -7,38 +7,24 @@ the pixel scale, and the check that every frame matches the session's reference 
 from __future__ import annotations
 
 import filecmp
-import math
 import os
 from collections.abc import Sequence
 from dataclasses import dataclass, replace
 from pathlib import Path
 from typing import Any
 
-import cv2
 import numpy as np
 
-from contactcal.infer.image.gray import ImageError
 from contactcal.infer.image.read import ImageFile
 from contactcal.infer.methods.base import UNCHANGED_NOTE, AreaResult, Method
-from contactcal.infer.methods.unet.config import PreprocessConfig
-from contactcal.infer.methods.unet.ring import RingFit, locate_ring
 from contactcal.infer.pipeline.boundary import BoundaryOffset, BoundaryOffsetError, apply_offset
+from contactcal.infer.pipeline.frame_check import (
+    FrameReference,
+    check_frame,
+    coarse_ring,
+    file_size,
+)
 from contactcal.infer.pipeline.scale import PixelScale
-
-#: A frame's ring centre may lie this far from the reference's, as a fraction of the reference
-#: ring's radius. Frames of one session agree within 0.5 % (example session, also under noise,
-#: blur and 0.3-2.5× exposure); a bumped rig or another crop moves it further.
-RING_CENTRE_TOLERANCE = 0.05
-#: A frame's ring radius may differ from the reference's by this fraction. The fit on a frame in
-#: contact is ~3 % larger than on the 0 kPa reference (the inflated membrane's glow joins the
-#: ring's outline), so 5 % would leave too little margin; another zoom or scale differs more.
-RING_RADIUS_TOLERANCE = 0.10
-#: Longest side (px) the ring check works at (an integer-factor area reduction of the decoded
-#: frame). Its cost per 2592×1944 frame, ~1.7 ms fully decoded (the classical path, ~40 ms a
-#: frame) and ~0.25 ms at the U-Net's 1/8 decode (~15 ms a frame), is small enough to check
-#: every frame rather than a sample; the fit is still within 0.3 % of the radius.
-RING_CHECK_PX = 160
-
 
 #: Appended to the note of a frame the change gate called unchanged that is the reference frame
 #: itself (``measure --reference X X``; ``{how}``: "path" or "bytes").
@@ -84,73 +70,9 @@ class Measured:
         }
 
 
-@dataclass(frozen=True)
-class _Reference:
-    """What every frame of a session is checked against."""
-
-    path: Path
-    size: tuple[int, int]  # (width, height) of the file, px
-    ring: RingFit  # at the check's working size (found=False: position not checked)
-    image: np.ndarray  # the method's decode of it at 1/k: measured as is where it is a frame
-    sha256: str | None  # of the content read once, that the method decoded (None: not asked)
-
-
-def _file_size(img: np.ndarray, k: int) -> tuple[int, int]:
-    """``(width, height)`` of the file decoded at 1/k into ``img``: exactly k times its size,
-    since a method chooses k > 1 only when every file's sides divide by k (:meth:`Method.start`,
-    which read every file's header to choose it)."""
-    return img.shape[1] * k, img.shape[0] * k
-
-
-def _coarse_ring(img: np.ndarray) -> RingFit:
-    """The ring of ``img`` reduced by an integer factor to <= :data:`RING_CHECK_PX` (cheap)."""
-    f = math.ceil(max(img.shape) / RING_CHECK_PX)
-    if f > 1:
-        img = cv2.resize(img, None, fx=1.0 / f, fy=1.0 / f, interpolation=cv2.INTER_AREA)
-    return locate_ring(img, PreprocessConfig(ring_work_px=max(img.shape)))
-
-
-def _check_frame(ref: _Reference, path: Path, img: np.ndarray, size: tuple[int, int]) -> str:
-    """Raise unless the frame matches the reference (size and ring; a reference without a ring
-    while the frame has one is a dark reference); return a note when unchecked, else ""."""
-    what = ""
-    if size != ref.size:
-        what = f"{size[0]}×{size[1]} px, the reference {ref.size[0]}×{ref.size[1]} px"
-    elif not ref.ring.found:
-        if _coarse_ring(img).found:  # the rig was lit, its reference frame was not
-            raise ImageError(
-                f"{ref.path}: the reference frame shows no window ring while {path.name} does "
-                "(a dark reference: lights off, lens cap?); expected the session's 0 kPa frame "
-                "of the lit rig, framed as its other frames"
-            )
-        return f"ring position not checked: no ring found in the reference {ref.path.name}"
-    else:
-        ring = _coarse_ring(img)
-        if not ring.found:
-            return "ring position not checked: no ring found in this frame"
-        moved = math.hypot(ring.cx - ref.ring.cx, ring.cy - ref.ring.cy) / ref.ring.radius
-        grown = abs(ring.radius / ref.ring.radius - 1.0)
-        if moved > RING_CENTRE_TOLERANCE:
-            what = (
-                f"its ring centre is {moved:.0%} of the ring radius away from the reference's "
-                f"(tolerance {RING_CENTRE_TOLERANCE:.0%})"
-            )
-        elif grown > RING_RADIUS_TOLERANCE:
-            what = (
-                f"its ring radius differs from the reference's by {grown:.0%} "
-                f"(tolerance {RING_RADIUS_TOLERANCE:.0%})"
-            )
-    if what:
-        raise ImageError(
-            f"{path}: does not match the reference frame {ref.path}: {what}; a session's "
-            "frames and its reference must come from one camera set-up, same size and framing"
-        )
-    return ""
-
-
 def _start(
     method: Method, images: list[Path], reference: Path | None, bit_depth: int | None, digest: bool
-) -> tuple[int, _Reference | None]:
+) -> tuple[int, FrameReference | None]:
     """Start the method; the decode reduction k and the reference the frames must match (the
     method's own decode of it at 1/k, of its content read here once: the frame check and its
     measurement as a frame decode nothing more)."""
@@ -164,13 +86,13 @@ def _start(
             f"{method.name}: start() returned no reference image for {reference}; expected "
             "the reference decoded at 1/k (Started.reference)"
         )
-    size = _file_size(img, k)
+    size = file_size(img, k)
     sha = content.sha256() if digest else None
-    return k, _Reference(content.path, size, _coarse_ring(img), img, sha)
+    return k, FrameReference(content.path, size, coarse_ring(img), img, sha)
 
 
 def _decoded(
-    path: Path, k: int, bit_depth: int | None, ref: _Reference | None, digest: bool
+    path: Path, k: int, bit_depth: int | None, ref: FrameReference | None, digest: bool
 ) -> tuple[np.ndarray, str | None]:
     """A frame decoded at 1/k and, with ``digest``, the sha256 of the content decoded (the
     reference's own decode where the frame is the reference: read and decoded once)."""
@@ -222,7 +144,8 @@ def measure_files(
     """Measure each image file with ``method``.
 
     Every frame must match the reference: the same size, and (when the reference's ring is
-    found) the ring within :data:`RING_CENTRE_TOLERANCE` and :data:`RING_RADIUS_TOLERANCE`.
+    found) the ring within :data:`~contactcal.infer.pipeline.frame_check.RING_CENTRE_TOLERANCE` and
+    :data:`~contactcal.infer.pipeline.frame_check.RING_RADIUS_TOLERANCE`.
     Every frame is checked (the check costs a few % of a frame's measurement); an unchecked
     position is said in the result's note.
 
@@ -259,8 +182,8 @@ def measure_files(
         it = tqdm(images, desc=f"measure ({method.name})", unit="frame", leave=False)
     for path in it:
         img, sha = _decoded(path, k, bit_depth, ref, digest)
-        w, h = _file_size(img, k)
-        note = method.NO_REFERENCE if ref is None else _check_frame(ref, path, img, (w, h))
+        w, h = file_size(img, k)
+        note = method.NO_REFERENCE if ref is None else check_frame(ref, path, img, (w, h))
         res = method.measure(img)  # in the file's pixels
         if active is not None and scale is not None:
             res = apply_offset(res, active.mm / scale.at_width(w), active.mm)
