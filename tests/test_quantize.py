@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import shutil
 from pathlib import Path
 
 import pytest
@@ -137,5 +138,11 @@ def test_the_agreement_is_checked_on_frames_not_used_to_calibrate(
     assert result["frames"] == 3 and result["check_frames"] == 3 and len(drawn) == 6
     assert [id(g) for g in checked] == [id(g) for g, _ in drawn[1::2]]
     assert len(calibrated) == 3
-    with pytest.raises(ValueError, match=r"expected at least 2 \(one to calibrate"):
+    with pytest.raises(ValueError, match=r"frames must be >= 1"):
         quantize_model(DEFAULT_MODEL, tmp_path / "q2.onnx", [data], frames=0)
+    one = tmp_path / "one"
+    shutil.copytree(data, one)
+    rows = (one / "index.csv").read_text().splitlines()
+    (one / "index.csv").write_text("\n".join(rows[:2]) + "\n")  # the header and one frame
+    with pytest.raises(ValueError, match=r"1 frame\(s\) in .*expected at least 2 \(one to"):
+        quantize_model(DEFAULT_MODEL, tmp_path / "q2.onnx", [one], frames=3)

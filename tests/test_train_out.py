@@ -88,11 +88,12 @@ def test_train_refuses_an_out_before_it_loads_torch(tmp_path: Path, resume: bool
     assert [p.name for p in mine.iterdir()] == ["notes.txt"]
 
 
-def test_a_run_killed_between_best_and_last_is_started_again(
+def test_a_lone_best_pt_is_refused_both_ways_and_kept(
     tmp_path: Path, capsys: pytest.CaptureFixture[str], monkeypatch: pytest.MonkeyPatch
 ) -> None:
-    """Killed after its first best.pt, before its first last.pt, a run leaves best.pt alone:
-    --resume says there is nothing to resume and to start again, which removes that best.pt."""
+    """Killed after its first best.pt, before its first last.pt, a run leaves best.pt alone; so
+    does someone keeping a finished run's checkpoint. Neither --resume nor a new run touches it
+    (a new run once removed it, a kept checkpoint too): both say how to go on."""
     from contactcal.train import loop
 
     d = write_dataset(tmp_path / "d", fingers=3)
@@ -110,21 +111,13 @@ def test_a_run_killed_between_best_and_last_is_started_again(
     assert sorted(p.name for p in run.iterdir()) == ["best.pt"]
     capsys.readouterr()
     before = _snapshot(run)
-    assert main(["train", "--data", str(d), "--out", str(run), *TINY, "--resume"]) == 2
-    err = capsys.readouterr().err
-    one_line_naming(err, run)
-    assert "holds only best.pt, left by a run killed in its first epoch" in err
-    assert "start the run again without --resume" in err and _snapshot(run) == before
-    assert main(["train", "--data", str(d), "--out", str(run), *TINY]) == 0
-    assert f"note: {run / 'best.pt'}: removed, left by a run killed" in capsys.readouterr().err
-    assert {"last.pt", "best.pt", "val_bins.csv"} <= {p.name for p in run.iterdir()}
-    # a best.pt that no run of contactcal wrote in its first epoch stays refused
-    other = tmp_path / "other"
-    other.mkdir()
-    (other / "best.pt").write_bytes(b"a user's file")
-    assert main(["train", "--data", str(d), "--out", str(other), *TINY]) == 2
-    assert "holds best.pt, which a new run would mix" in capsys.readouterr().err
-    assert (other / "best.pt").read_bytes() == b"a user's file"
+    for resume in (["--resume"], []):
+        assert main(["train", "--data", str(d), "--out", str(run), *TINY, *resume]) == 2
+        err = capsys.readouterr().err
+        one_line_naming(err, run)
+        assert "holds only best.pt, with no last.pt to --resume" in err
+        assert f"remove {run / 'best.pt'} and start the run again" in err
+        assert _snapshot(run) == before
 
 
 def test_resume_leaves_a_finished_run_as_it_is(
@@ -145,6 +138,10 @@ def test_resume_leaves_a_finished_run_as_it_is(
     assert "the run is finished (best epoch 1; it holds val_bins.csv" in said
     assert "nothing to --resume, its files left as they are" in said and _snapshot(run) == before
     assert {p.name: (p.stat().st_ino, p.stat().st_mtime_ns) for p in run.iterdir()} == stats
+    # finished or not, --resume with another config is refused (it cannot extend a run)
+    assert main([*argv, "--resume", "--epochs", "3"]) == 2
+    assert "--resume with a different config (epochs)" in capsys.readouterr().err
+    assert _snapshot(run) == before
     # killed right after its last epoch's last.pt (a 1-epoch run: config.json not yet written)
     for name in ("config.json", "metrics.csv", "curves.png", "val_bins.csv"):
         (run / name).unlink()
@@ -152,3 +149,23 @@ def test_resume_leaves_a_finished_run_as_it_is(
     after = _snapshot(run)
     assert set(after) == set(before) and after["metrics.csv"] == before["metrics.csv"]
     assert after["val_bins.csv"] == before["val_bins.csv"]
+
+
+def test_an_out_reached_through_a_linked_folder_is_a_folder_like_any(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """An empty run folder inside a linked folder is written into (the files go into the run
+    folder, not through a link); an --out that is itself a link is refused before any work."""
+    d = write_dataset(tmp_path / "d", fingers=3)
+    (tmp_path / "real" / "r").mkdir(parents=True)
+    try:
+        (tmp_path / "lnk").symlink_to(tmp_path / "real", target_is_directory=True)
+    except OSError:
+        pytest.skip("no symbolic links here")
+    assert main(["train", "--data", str(d), "--out", str(tmp_path / "lnk" / "r"), *TINY]) == 0
+    assert (tmp_path / "real" / "r" / "last.pt").is_file()
+    capsys.readouterr()
+    assert main(["train", "--data", str(d), "--out", str(tmp_path / "lnk"), *TINY]) == 2
+    err = capsys.readouterr().err
+    assert err.startswith(f"contactcal: error: --out {tmp_path / 'lnk'}: ") and "link" in err
+    assert sorted(p.name for p in (tmp_path / "real").iterdir()) == ["r"]

@@ -44,7 +44,7 @@ from contactcal.train.metrics import evaluate, segmentation_loss, summarise
 from contactcal.train.model import UNet, count_parameters
 from contactcal.train.report import METRIC_COLUMNS, plot_curves, write_csv
 from contactcal.train.resume import finished_summary, resume_checkpoint
-from contactcal.train.run_folder import check_run_folder, remove_leftovers
+from contactcal.train.run_folder import check_run_folder
 from contactcal.train.split import Split, split_by_finger, split_record
 
 
@@ -110,16 +110,24 @@ def _split(cfg: TrainConfig, dirs: list[Path]) -> tuple[list[IndexRow], list[Ind
     return train_rows, val_rows
 
 
+def _data(
+    cfg: TrainConfig, dirs: list[Path]
+) -> tuple[list[IndexRow], list[IndexRow], tuple[str, str], Split]:
+    """The run's frames split by finger, the data's digests (``dataset_digest``,
+    ``render_digest``) and the split as recorded, all that ``--resume`` checks against the run."""
+    train_rows, val_rows = _split(cfg, dirs)  # validates the folders first
+    digests = (dataset_digest(dirs), render_digest(dirs))
+    return train_rows, val_rows, digests, split_record(train_rows, val_rows)
+
+
 def _prepare(dirs: list[Path], out: Path, cfg: TrainConfig, resume: bool, progress: bool) -> Run:
     """Step 1: data, split, model, optimiser, schedule and generators (restored on resume)."""
-    leftovers = check_run_folder(out, resume)
-    train_rows, val_rows = _split(cfg, dirs)  # validates the folders first
-    digest, split = dataset_digest(dirs), split_record(train_rows, val_rows)
+    check_run_folder(out, resume)
+    train_rows, val_rows, digests, split = _data(cfg, dirs)
     device = resolve_device(cfg.device)
     if cfg.num_threads > 0:
         torch.set_num_threads(cfg.num_threads)
-    render = render_digest(dirs)
-    ckpt = resume_checkpoint(out, cfg, (digest, render), split) if resume else None
+    ckpt = resume_checkpoint(out, cfg, digests, split) if resume else None
     torch.manual_seed(cfg.seed)  # weight init
     model = UNet(cfg.model).to(device)
     c = cfg.model.in_channels
@@ -135,8 +143,7 @@ def _prepare(dirs: list[Path], out: Path, cfg: TrainConfig, resume: bool, progre
     augment = Augmenter(
         cfg.augment, cfg.preprocess, seed=cfg.seed + 1, reference_dropout=cfg.reference_dropout
     ).to(device)
-    remove_leftovers(out, leftovers)  # every check passed: the run starts
-    run = Run(cfg, out, digest, device, train_set, val_set, model, opt, sched, shuffle, augment)
+    run = Run(cfg, out, digests[0], device, train_set, val_set, model, opt, sched, shuffle, augment)
     if cfg.ema_decay > 0.0:
         run.average = WeightAverage(model, cfg.ema_decay)
     if ckpt is not None:
@@ -150,7 +157,7 @@ def _prepare(dirs: list[Path], out: Path, cfg: TrainConfig, resume: bool, progre
         set_rng_state(ckpt["rng"])
         run.start, run.history = int(ckpt["epoch"]) + 1, list(ckpt["history"])
         run.best, run.best_epoch = float(ckpt["best_score"]), int(ckpt["best_epoch"])
-    run.info = _run_info(cfg, dirs, (digest, render), split, device)  # written with last.pt
+    run.info = _run_info(cfg, dirs, digests, split, device)  # written with last.pt
     return run
 
 
@@ -268,15 +275,14 @@ def train(
 
     Args:
         data_dirs: dataset folders (``index.csv`` layout).
-        out_dir: run folder, new or empty (or the run's, with ``resume``; or holding only the
-            ``best.pt`` of a run killed in its first epoch, which is removed); receives
+        out_dir: run folder, new or empty (or the run's, with ``resume``); receives
             ``config.json``, ``last.pt``, ``best.pt``, ``metrics.csv``, ``curves.png`` and
             ``val_bins.csv``.
         config: run settings (None: the defaults); with ``resume`` it must equal the run's
             saved config.
         resume: continue from ``out_dir/last.pt`` (model, optimizer, scheduler, epoch, RNGs)
-            with the run's data and split; a finished run (one holding ``val_bins.csv``) is left
-            as it is: nothing is read or written.
+            with the run's data and split; a finished run (one holding ``val_bins.csv``) is
+            checked alike (config, data, split) and left as it is: nothing is written.
         progress: tqdm bars.
 
     Returns:
@@ -288,9 +294,10 @@ def train(
         ValueError: bad dataset, config, or resume request, or an ``out_dir`` that is not new,
             empty or (with ``resume``) a run holding ``last.pt``.
     """
-    if resume and (done := finished_summary(Path(out_dir))) is not None:
-        return done
     cfg = (config or TrainConfig()).resolved()
+    if resume and (done := finished_summary(Path(out_dir))) is not None:
+        resume_checkpoint(Path(out_dir), cfg, *_data(cfg, [Path(d) for d in data_dirs])[2:])
+        return done
     run = _prepare([Path(d) for d in data_dirs], Path(out_dir), cfg, resume, progress)
     if run.start == cfg.epochs:  # killed after its last last.pt: complete what follows it
         _write_records(run, config=True)

@@ -82,8 +82,8 @@ def quantize_model(
         area / float area over those both call contact (None if there are none).
 
     Raises:
-        ValueError: ``out`` is the input, ``model`` is already quantized, or fewer than two
-            frames in ``data`` (one to calibrate, one to check).
+        ValueError: ``out`` is the input, ``model`` is already quantized, ``frames`` < 1, or
+            fewer than two frames in ``data`` (one to calibrate, one to check).
     """
     from onnx import load, save
     from onnxruntime.quantization import QuantFormat, QuantType, quantize_static
@@ -97,6 +97,8 @@ def quantize_model(
             f"{model}: already quantized (it holds QuantizeLinear/DequantizeLinear nodes); "
             "expected the float model that `contactcal export` wrote"
         )
+    if frames < 1:
+        raise ValueError(f"frames must be >= 1 (calibration frames), got {frames}")
     spec = float_seg.spec
     pairs = calibration_frames(spec.preprocess, data, 2 * frames)
     calibrate, held = pairs[0::2], pairs[1::2]
