@@ -169,3 +169,16 @@ def test_an_out_reached_through_a_linked_folder_is_a_folder_like_any(
     err = capsys.readouterr().err
     assert err.startswith(f"contactcal: error: --out {tmp_path / 'lnk'}: ") and "link" in err
     assert sorted(p.name for p in (tmp_path / "real").iterdir()) == ["r"]
+
+
+def test_the_epoch_rows_are_progress_on_stderr(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """Standard output holds the run's one summary line: the epoch rows go with the progress
+    bars to stderr, so `train ... | head -1` no longer stops a run after its first epoch."""
+    d = write_dataset(tmp_path / "d", fingers=3)
+    argv = ["train", "--data", str(d), "--out", str(tmp_path / "r"), *TINY[:-1], "--epochs", "2"]
+    assert main(argv) == 0
+    out, err = capsys.readouterr()
+    assert out.count("\n") == 1 and out.startswith(f"{tmp_path / 'r'}: best epoch")
+    assert "epoch 1  train_loss=" in err and "epoch 2  train_loss=" in err

@@ -15,6 +15,7 @@ from __future__ import annotations
 import math
 import os
 import platform
+import sys
 import time
 from collections.abc import Sequence
 from dataclasses import dataclass, field
@@ -243,7 +244,7 @@ def _run_epochs(run: Run, progress: bool) -> None:
         run.history.append(row)
         _save_epoch(run, epoch, row)
         if progress:
-            tqdm.write(_format_row(row))
+            tqdm.write(_format_row(row), file=sys.stderr)  # progress; stdout: the summary
 
 
 def _finish(run: Run) -> dict[str, Any]:
