@@ -41,6 +41,7 @@ from contactcal.infer.pipeline.manifest import (
     read_session,
     sweep_top_warning,
 )
+from contactcal.infer.pipeline.manifest_rows import listed_name
 from contactcal.infer.pipeline.measure import Measured
 from contactcal.infer.pipeline.options import MeasureOptions
 from contactcal.infer.pipeline.readings import DEFAULT_STEP_TOLERANCE_KPA
@@ -174,7 +175,7 @@ def calibrate_session(
         ),
     )
     same = identical_frames(provenance.inputs, [f.pressure_kpa for f in frames])
-    listed = os.path.relpath(frames[0].file, manifest.parent)  # as the manifest names it
+    listed = listed_name(manifest, frames[0].file)
     extra = {
         **_extra(recorded, listed, measure.scale, measured),
         "session_rule": options.session_rule,
@@ -256,10 +257,10 @@ def _interval(
 def _points(
     manifest: Path, frames: list[Frame], measured: list[Measured], scale: PixelScale | None
 ) -> list[CalibrationPoint]:
-    """The session's points, file names relative to the manifest's folder."""
+    """The session's points, frames named as the manifest lists them."""
     return [
         CalibrationPoint(
-            os.path.relpath(m.file, manifest.parent),
+            listed_name(manifest, m.file),
             f.pressure_kpa,
             m.result.contact,
             float(m.result.area_px),

@@ -4,7 +4,6 @@ identifier and package versions (recorded in ``calibration.json``)."""
 from __future__ import annotations
 
 import contextlib
-import os
 from collections.abc import Sequence
 from dataclasses import dataclass
 from pathlib import Path
@@ -12,6 +11,7 @@ from typing import Any
 
 from contactcal.infer.calibration.hysteresis import MATCH_TOLERANCE_KPA
 from contactcal.infer.errors import few
+from contactcal.infer.pipeline.manifest_rows import listed_name
 
 #: Longest accepted ``--device-id``, characters.
 DEVICE_ID_MAX = 100
@@ -68,8 +68,9 @@ def input_digests(
     recorded: Path | None = None,
 ) -> dict[str, Any]:
     """The record of the manifest and each frame with the sha256 of the content the run read
-    (frame names relative to the manifest's folder): digests of the bytes parsed and measured,
-    never of the files read again (which may have been replaced in between).
+    (frames named as the manifest lists them:
+    :func:`~contactcal.infer.pipeline.manifest_rows.listed_name`): digests of the bytes parsed
+    and measured, never of the files read again (which may have been replaced in between).
 
     Args:
         manifest: the manifest read.
@@ -81,7 +82,7 @@ def input_digests(
     """
     return {
         "manifest": {"file": str((recorded or manifest).resolve()), "sha256": manifest_sha256},
-        "frames": [{"file": os.path.relpath(f, manifest.parent), "sha256": h} for f, h in frames],
+        "frames": [{"file": listed_name(manifest, f), "sha256": h} for f, h in frames],
     }
 
 

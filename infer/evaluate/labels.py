@@ -28,6 +28,7 @@ from contactcal.infer.evaluate.errors import LabelError
 from contactcal.infer.evaluate.mask_read import MASK_FIX, read_mask
 from contactcal.infer.image.read import SUPPORTED_SUFFIXES
 from contactcal.infer.pipeline.manifest import Frame
+from contactcal.infer.pipeline.manifest_rows import listed_name
 
 #: Required columns of an ellipse CSV (other columns, e.g. ImageJ's Area, are ignored).
 LABEL_COLUMNS = ("file", "cx", "cy", "major", "minor", "angle_deg")
@@ -208,10 +209,11 @@ def _ellipse(at: str, cells: dict[str, str]) -> ImageJEllipse | None:
     return ImageJEllipse(v["cx"], v["cy"], v["major"], v["minor"], v["angle_deg"])
 
 
-def _frame_of(at: str, name: str, frames: list[Frame], base: Path) -> Path:
-    """The frame a CSV ``file`` cell names (path relative to ``base``, or a unique name)."""
+def _frame_of(at: str, name: str, frames: list[Frame], manifest: Path) -> Path:
+    """The frame a CSV ``file`` cell names (its path as ``manifest`` lists it, or a unique
+    name)."""
     for f in frames:
-        if Path(name) == Path(os.path.relpath(f.file, base)) or Path(name) == f.file:
+        if Path(name) == Path(listed_name(manifest, f.file)) or Path(name) == f.file:
             return f.file
     named = [f.file for f in frames if f.file.name == name]
     if len(named) == 1:
@@ -235,14 +237,13 @@ def _frame_of(at: str, name: str, frames: list[Frame], base: Path) -> Path:
 
 def _ellipse_labels(path: Path, frames: list[Frame], manifest: Path) -> list[Label]:
     col, rows = _read_rows(path)
-    base = manifest.resolve().parent
     out: dict[Path, Label] = {}
     for row, cells in rows:
         at = f"{path}: row {row}"
         if len(cells) <= max(col.values()):
             raise LabelError(f"{at}: expected the columns '{_HEADER}', got {cells!r}")
         named = {k: cells[i].strip() for k, i in col.items()}
-        frame = _frame_of(at, named["file"], frames, base)
+        frame = _frame_of(at, named["file"], frames, manifest)
         if frame in out:
             raise LabelError(
                 f"{at}: {frame.name} is labelled already on row {out[frame].row}; expected one "

@@ -37,6 +37,7 @@ from contactcal.infer.pipeline.manifest import (
     read_session,
     sweep_top_warning,
 )
+from contactcal.infer.pipeline.manifest_rows import listed_name
 from contactcal.infer.pipeline.measure import Measured
 from contactcal.infer.pipeline.options import MeasureOptions
 
@@ -56,10 +57,10 @@ class Evaluation:
 
 
 def _labelled(
-    frames: list[Frame], labels: list[Label], where: Path, base: Path
+    frames: list[Frame], labels: list[Label], where: Path, manifest: Path
 ) -> tuple[list[Frame], list[Label], list[str]]:
-    """The labelled frames (by pressure), their labels, and the unlabelled frames' files
-    (relative to ``base``, the manifest's folder)."""
+    """The labelled frames (by pressure), their labels, and the unlabelled frames' files (as
+    ``manifest`` lists them)."""
     by_frame = {lab.frame: lab for lab in labels}
     done = [f for f in frames if f.file in by_frame]
     if not done:
@@ -67,7 +68,7 @@ def _labelled(
             f"{where}: labels none of the manifest's {len(frames)} frames; expected masks named "
             f"<frame stem>.png or CSV rows naming the frames, e.g. {frames[-1].file.name}"
         )
-    unlabelled = [os.path.relpath(f.file, base) for f in frames if f.file not in by_frame]
+    unlabelled = [listed_name(manifest, f.file) for f in frames if f.file not in by_frame]
     return done, [by_frame[f.file] for f in done], unlabelled
 
 
@@ -206,9 +207,8 @@ def evaluate_session(
     frames = session.frames
     check_sweep_unit(manifest, frames)  # bar or MPa read as kPa, as calibrate refuses them
     high = sweep_top_warning(max(f.pressure_kpa for f in frames), "evaluate")
-    base = manifest.resolve().parent
     labs = read_labels(labels, frames, manifest)
-    labelled, labs, unlabelled = _labelled(frames, labs, labels, base)
+    labelled, labs, unlabelled = _labelled(frames, labs, labels, manifest)
     masks = _label_masks(labs, frames[0].file, measure.bit_depth)  # before any measuring
     protect = [manifest, measure.model, *also_read, *(f.file for f in frames)]
     protect += list({lab.source for lab in labs})
@@ -228,7 +228,7 @@ def evaluate_session(
             "scale_image_width_px": None if measure.scale is None else measure.scale.image_width_px,
             "warning": high,
             "area_note": "errors and IoU against the label's rasterised pixel count",
-            "frames": frame_records(base, masks, [lab.where() for lab in labs], scored),
+            "frames": frame_records(manifest, masks, [lab.where() for lab in labs], scored),
             "unlabelled": unlabelled,
             "summary": {"bins": bins, "onset": onset},
             "boundary_offset": offset,

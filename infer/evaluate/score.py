@@ -7,7 +7,6 @@ same pixels.
 
 from __future__ import annotations
 
-import os
 from collections.abc import Sequence
 from pathlib import Path
 from typing import Any
@@ -16,6 +15,7 @@ from contactcal.infer.bench.scoring import ScoredFrame, outline_iou, session_rev
 from contactcal.infer.calibration.fit import estimate_onset
 from contactcal.infer.calibration.steps import pool
 from contactcal.infer.evaluate.labels import LabelMask
+from contactcal.infer.pipeline.manifest_rows import listed_name
 from contactcal.infer.pipeline.measure import Measured
 from contactcal.infer.pipeline.scale import PixelScale
 
@@ -66,12 +66,15 @@ def _result(s: ScoredFrame) -> dict[str, Any]:
 
 
 def frame_records(
-    base: Path, labels: Sequence[LabelMask], sources: Sequence[str], scored: Sequence[ScoredFrame]
+    manifest: Path,
+    labels: Sequence[LabelMask],
+    sources: Sequence[str],
+    scored: Sequence[ScoredFrame],
 ) -> list[dict[str, Any]]:
     """``evaluation.json``'s ``frames``: per labelled frame, its label and each method's result.
 
     Args:
-        base: the manifest's folder (file names are written relative to it).
+        manifest: the session manifest (frames are named as it lists them).
         labels: the N rasterised labels, in frame order.
         sources: the N labels' locations (mask file or ``CSV row N``).
         scored: :func:`score_frames` of the same frames, each method's N frames in that order.
@@ -86,7 +89,7 @@ def frame_records(
         first = next(iter(by_method.values()))[i]
         records.append(
             {
-                "file": os.path.relpath(first.frame, base),
+                "file": listed_name(manifest, first.frame),
                 "pressure_kpa": first.pressure_kpa,
                 "label": src,
                 "label_area_px": lab.area_px,

@@ -183,6 +183,14 @@ def parse_row(
     return Frame(file.resolve(), pressure, row_no, phase, 0, extras)
 
 
+def listed_name(manifest: str | os.PathLike[str], file: Path) -> str:
+    """A frame's name in a record: its path relative to the folder :func:`parse_row` resolved
+    the manifest's paths against (the manifest's own folder, a linked folder's target), so a
+    manifest reached through a link names its frames as it lists them (``p00.0kpa.jpg``, not
+    ``../real/p00.0kpa.jpg``)."""
+    return os.path.relpath(file, Path(manifest).resolve().parent)
+
+
 def _extra(at: str, name: str, cell: str) -> tuple[str, str | float | None]:
     """A row's other column: :data:`READING_COLUMN` as a number of kPa (None where the cell is
     blank: a frame without a reading), any other as written."""
