@@ -384,7 +384,12 @@ def test_cli(
     assert f"--out {data / 'report'}: inside the dataset folder {data}" in capsys.readouterr().err
     assert not (data / "report").exists()
     assert main(["bench", "--data", str(tmp_path / "none"), "--out", str(out)]) == 2
-    assert "none" in capsys.readouterr().err
+    assert f"--data {tmp_path / 'none'}: does not exist; expected a dataset folder" in (
+        capsys.readouterr().err
+    )
+    (tmp_path / "empty").mkdir()
+    assert main([*args, "--crosscheck", str(tmp_path / "empty")]) == 2
+    assert f"--crosscheck {tmp_path / 'empty'}: missing index.csv" in capsys.readouterr().err
     assert main([*args, "--timing-frames", "0"]) == 2
 
 

@@ -36,9 +36,10 @@ def test_refuses_to_overwrite_the_float_model(tmp_path: Path) -> None:
         quantize_model(DEFAULT_MODEL, DEFAULT_MODEL, [data], frames=2)
 
 
-def test_cli_bad_input(tmp_path: Path) -> None:
+def test_cli_bad_input(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
     argv = ["quantize", str(DEFAULT_MODEL), "--out", str(tmp_path / "q.onnx")]
     assert main([*argv, "--data", str(tmp_path / "missing")]) == 2
+    assert f"--data {tmp_path / 'missing'}: does not exist;" in capsys.readouterr().err
     data = write_dataset(tmp_path / "data")
     assert main([*argv, "--data", str(data), "--frames", "0"]) == 2
     assert not (tmp_path / "q.onnx").exists()

@@ -336,7 +336,11 @@ def test_cli_parsers(tmp_path: Path) -> None:
     assert build_config(args).num_threads == TrainConfig().num_threads
     assert build_config(args).ema_decay == 0.0  # off unless asked
     args = parser.parse_args(["train", "--data", str(tmp_path / "missing"), "--out", "r"])
-    with pytest.raises(ValueError, match="missing"):
+    with pytest.raises(ValueError, match=r"^--data .*missing: does not exist; expected a data"):
+        args.func(args)
+    (tmp_path / "empty").mkdir()
+    args = parser.parse_args(["train", "--data", str(tmp_path / "empty"), "--out", "r"])
+    with pytest.raises(ValueError, match=r"^--data .*empty: missing index\.csv; expected a"):
         args.func(args)
     args = parser.parse_args(["export", "run", "--out", "models/m.onnx"])
     assert args.run_dir == Path("run") and args.out == Path("models/m.onnx")

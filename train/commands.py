@@ -133,13 +133,10 @@ def _check_dirs(dirs: list[Path], out: Path | None = None) -> None:
     """Cheap path checks before torch is imported (clear message, exit 2 in the CLI); ``out``
     (a run folder) must neither be nor lie inside nor hold a dataset folder: its config.json
     and checkpoints would land among (or replace) the data's."""
+    from contactcal.infer.bench.dataset import check_dataset_folder
+
     for d in dirs:
-        if not d.is_dir():
-            raise ValueError(f"{d}: dataset folder does not exist")
-        if not (d / "index.csv").is_file():
-            raise ValueError(
-                f"{d / 'index.csv'}: missing index.csv (is {d} a `contactcal synth` output?)"
-            )
+        check_dataset_folder(d, "--data")
         if out is not None and (
             out.resolve().is_relative_to(d.resolve()) or d.resolve().is_relative_to(out.resolve())
         ):

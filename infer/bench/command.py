@@ -58,6 +58,7 @@ def add_parsers(sub: argparse._SubParsersAction) -> None:
 
 def _cmd_bench(args: argparse.Namespace) -> int:
     from contactcal.infer.bench.config import BenchConfig
+    from contactcal.infer.bench.dataset import check_dataset_folder
     from contactcal.infer.bench.report import REPORT_FILES, ROBUSTNESS_FILES
     from contactcal.infer.bench.run import run_bench
     from contactcal.infer.files.replaced import replaced_note
@@ -66,6 +67,9 @@ def _cmd_bench(args: argparse.Namespace) -> int:
 
     if args.repeats < 1 or args.timing_frames < 1:
         raise ValueError("--repeats and --timing-frames must be >= 1")
+    check_dataset_folder(args.data, "--data")
+    for folder in args.crosscheck:
+        check_dataset_folder(folder, "--crosscheck")
     check_out_folder(args.out, "bench", REPORT_FILES)  # before the work, not after
     _check_out_outside_data(args.out, [args.data, *args.crosscheck])
     variants = tuple(_variant(v) for v in args.variant)

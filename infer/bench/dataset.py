@@ -14,6 +14,8 @@ from pathlib import Path
 
 import numpy as np
 
+from contactcal.infer.errors import option_error
+
 #: Columns every dataset row must have.
 REQUIRED_COLUMNS = (
     "finger",
@@ -97,6 +99,31 @@ def _parse(folder: Path, line: int, r: dict[str, str | None]) -> IndexRow:
     return row
 
 
+def check_dataset_folder(folder: str | os.PathLike[str], option: str | None = None) -> None:
+    """Refuse a path that is no folder holding an ``index.csv`` (cheap: before any work).
+
+    Args:
+        folder: the dataset folder.
+        option: the command-line option that gave it (e.g. ``--data``), named first
+            (:func:`~contactcal.infer.errors.option_error`); None: the folder alone.
+
+    Raises:
+        ValueError: ``[OPTION ]FOLDER: ...; expected a dataset folder written by
+            `contactcal synth```.
+    """
+    root = Path(folder)
+    if not root.is_dir():
+        problem = "is not a folder" if root.exists() else "does not exist"
+    elif not (root / "index.csv").is_file():
+        problem = "missing index.csv"
+    else:
+        return
+    error = ValueError(
+        f"{root}: {problem}; expected a dataset folder written by `contactcal synth`"
+    )
+    raise error if option is None else option_error(option, root, error)
+
+
 def read_index(folder: str | os.PathLike[str]) -> list[IndexRow]:
     """All rows of one dataset folder, in file order.
 
@@ -105,11 +132,8 @@ def read_index(folder: str | os.PathLike[str]) -> list[IndexRow]:
             files; the message names the file and line.
     """
     root = Path(folder)
-    if not root.is_dir():
-        raise ValueError(f"{root}: expected a dataset folder written by `contactcal synth`")
+    check_dataset_folder(root)
     index = root / "index.csv"
-    if not index.is_file():
-        raise ValueError(f"{index}: missing index.csv (is {root} a `contactcal synth` output?)")
     try:
         with open(index, newline="", encoding="utf-8") as fh:
             reader = csv.DictReader(fh)
