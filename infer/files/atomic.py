@@ -40,6 +40,11 @@ class OutputError(ValueError):
     """An output path that must not be written (an input, a link, a device); names the path."""
 
 
+class LinkOutputError(OutputError):
+    """An output path that is a symbolic link; a command whose output has another form adds it
+    (``measure``: ``--out -``, standard output)."""
+
+
 def check_destination(path: str | os.PathLike[str], protect: Iterable[Path] = ()) -> None:
     """Refuse a destination that is a link, not a regular file, or one of the inputs.
 
@@ -58,9 +63,9 @@ def check_destination(path: str | os.PathLike[str], protect: Iterable[Path] = ()
     except (FileNotFoundError, NotADirectoryError):
         return  # nothing there to replace
     if stat.S_ISLNK(st.st_mode):
-        raise OutputError(
-            f"{p}: is a symbolic link; outputs never replace a link or its target "
-            "(give a regular file path; `measure --out -` writes to standard output)"
+        raise LinkOutputError(
+            f"{p}: is a symbolic link; outputs never replace a link or its target; give a "
+            "regular file path"
         )
     if not stat.S_ISREG(st.st_mode):
         raise OutputError(

@@ -5,6 +5,7 @@ from __future__ import annotations
 import argparse
 import sys
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 from contactcal.infer.calibration.command import add_step_tolerance_arg, step_tolerance
 from contactcal.infer.pipeline.args import (
@@ -19,6 +20,9 @@ from contactcal.infer.pipeline.args import (
     run_inputs,
     scale_args,
 )
+
+if TYPE_CHECKING:
+    from contactcal.infer.files.atomic import OutputSet
 
 
 def add_parsers(sub: argparse._SubParsersAction) -> None:
@@ -70,7 +74,7 @@ def _cmd_measure(args: argparse.Namespace) -> int:
         )
     replaced = None if to_stdout else earlier_results_note(args.out)
     with run_outputs([*args.images, *run_inputs(args)]) as outs:
-        json_path = None if to_stdout else outs.stage(args.out)  # refused here, before work
+        json_path = None if to_stdout else _stage_results(outs, args.out)  # before the work
         options = measure_options(args, read_rig(args))
         method = options.method(args.method)
         measured = options.measure(args.images, method, args.reference)
@@ -99,6 +103,17 @@ def _cmd_measure(args: argparse.Namespace) -> int:
             if note is not None:
                 print(note, file=sys.stderr if to_stdout else sys.stdout)
     return 0
+
+
+def _stage_results(outs: OutputSet, out: Path) -> Path:
+    """``measure``'s results file, staged: refused (before the work) where it must not be
+    written, a link with the other way to get the JSON named."""
+    from contactcal.infer.files.atomic import LinkOutputError
+
+    try:
+        return outs.stage(out)
+    except LinkOutputError as exc:
+        raise LinkOutputError(f"{exc}, or --out - for standard output") from None
 
 
 def earlier_results_note(out: Path) -> str | None:
