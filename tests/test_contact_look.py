@@ -101,3 +101,21 @@ def test_cli_camera_ranges() -> None:
     for bad in (["--gamma", "1.7", "0.6"], ["--blur-sigma", "0", "1"]):
         with pytest.raises(ValueError, match="expected a range 0 < lo <= hi"):
             build_config(parser.parse_args([*base, *bad]))
+
+
+def test_cli_blur_share() -> None:
+    """--blur-p sets the share of blurred training frames (H18's lever: placing the edge without
+    ridges); a value outside [0, 1] is refused naming the option."""
+    import argparse
+
+    from contactcal.train.commands import add_parsers, build_config
+
+    parser = argparse.ArgumentParser()
+    add_parsers(parser.add_subparsers())
+    base = ["train", "--data", "d", "--out", "r"]
+    assert build_config(parser.parse_args(base)).augment.blur_p == 0.3
+    assert build_config(parser.parse_args([*base, "--blur-p", "0.6"])).augment.blur_p == 0.6
+    for bad in ("1.5", "-0.1"):
+        said = rf"--blur-p {bad}: expected a probability in \[0, 1\]"
+        with pytest.raises(ValueError, match=said):
+            build_config(parser.parse_args([*base, "--blur-p", bad]))

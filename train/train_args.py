@@ -47,6 +47,9 @@ def build_config(args: argparse.Namespace) -> Any:
     cfg = _with_augment(cfg, "contact", gain=gain)
     camera = {"ridge_blur": args.ridge_blur, "gamma": args.gamma, "blur_sigma": args.blur_sigma}
     camera["blur_kernel_px"] = args.blur_kernel
+    if args.blur_p is not None and not 0.0 <= args.blur_p <= 1.0:
+        raise ValueError(f"--blur-p {args.blur_p:g}: expected a probability in [0, 1]")
+    camera["blur_p"] = args.blur_p
     camera = {k: tuple(v) if isinstance(v, list) else v for k, v in camera.items() if v is not None}
     if camera:
         cfg = dataclasses.replace(cfg, augment=dataclasses.replace(cfg.augment, **camera))
@@ -99,7 +102,8 @@ def add_ridge_args(t: argparse.ArgumentParser) -> None:
 
 
 def add_look_args(t: argparse.ArgumentParser) -> None:
-    """``--contact-gain``, ``--ridge-blur``, ``--gamma``, ``--blur-sigma`` and ``--blur-kernel``."""
+    """``--contact-gain``, ``--ridge-blur``, ``--gamma``, ``--blur-sigma``, ``--blur-p`` and
+    ``--blur-kernel``."""
     ranges = (
         ("--gamma", "range of the gamma (tone curve) augmentation (default 0.7 1.4)"),
         (
@@ -122,6 +126,13 @@ def add_look_args(t: argparse.ArgumentParser) -> None:
         default=None,
         help="the blur augmentation also weakens the ridge-energy channel, as blur weakens "
         "ridges (needs --ridge-channel; default off)",
+    )
+    t.add_argument(
+        "--blur-p",
+        type=float,
+        metavar="P",
+        help="share of training frames the blur augmentation blurs (default 0.3; of those, "
+        "the share beyond the robustness suite's σ 12 px is set by --blur-sigma's range)",
     )
     t.add_argument(
         "--blur-kernel",
