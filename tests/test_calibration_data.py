@@ -1,6 +1,7 @@
-"""The data a restating tool calibrates on (``interval``, ``min_change``): a folder given twice
-and the model's training data (as its ``data_digest`` records it) are refused before any frame is
-read; what was used is recorded in the written entry, which deployment reads as before."""
+"""The data a restating tool calibrates on (``interval``, ``min_change``): a path that is no
+dataset folder, a folder given twice and the model's training data (as its ``data_digest``
+records it) are refused before any frame is read; what was used is recorded in the written entry,
+which deployment reads as before."""
 
 from __future__ import annotations
 
@@ -19,6 +20,7 @@ from contactcal.infer.methods.unet.spec import ModelError, read_spec
 onnx = pytest.importorskip("onnx")
 
 from contactcal.train.change_gate import gate_model  # noqa: E402
+from contactcal.train.change_gate import main as gate_main  # noqa: E402
 from contactcal.train.digest import dataset_digest  # noqa: E402
 from contactcal.train.interval import main as interval_main  # noqa: E402
 from contactcal.train.interval import recalibrate_model  # noqa: E402
@@ -89,6 +91,32 @@ def test_the_cli_names_the_folder_in_one_line(
     assert interval_main(argv) == 2
     err = capsys.readouterr().err
     assert err.startswith(f"error: --data {folders[0]}: the same folder as {folders[0]}")
+    assert err.count("\n") == 1
+    assert not out.exists()
+
+
+@pytest.mark.parametrize("main", [interval_main, gate_main], ids=["interval", "change_gate"])
+@pytest.mark.parametrize(
+    ("kind", "problem"),
+    [("missing", "does not exist"), ("file", "is not a folder"), ("empty", "missing index.csv")],
+)
+def test_the_cli_names_the_option_of_a_bad_folder(
+    main: Callable[[list[str]], int],
+    kind: str,
+    problem: str,
+    folders: list[Path],
+    tmp_path: Path,
+    capsys: pytest.CaptureFixture[str],
+) -> None:
+    bad, out = tmp_path / "bad", tmp_path / "out.onnx"
+    if kind == "file":
+        bad.write_text("x")
+    elif kind == "empty":
+        bad.mkdir()
+    argv = [str(DEFAULT_MODEL), "--data", str(folders[0]), str(bad), "--out", str(out)]
+    assert main(argv) == 2
+    err = capsys.readouterr().err
+    assert err.startswith(f"error: --data {bad}: {problem}; expected a dataset folder")
     assert err.count("\n") == 1
     assert not out.exists()
 

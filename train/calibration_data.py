@@ -4,6 +4,7 @@
 (``min_change``) calibrate on validation renders, never on the model's training data. Before any
 frame is read, :func:`calibration_data` refuses:
 
+* a path that is no dataset folder (``--data D: ...``, as ``contactcal train`` says it);
 * a folder given twice (the same resolved path): its frames would count twice;
 * the model's training data, as far as the model records it. Its metadata's ``data_digest`` is
   :func:`~contactcal.train.digest.dataset_digest` of its training folders' ``index.csv`` files,
@@ -30,7 +31,7 @@ from collections.abc import Sequence
 from pathlib import Path
 from typing import Any
 
-from contactcal.infer.bench.dataset import read_index
+from contactcal.infer.bench.dataset import check_dataset_folder, read_index
 from contactcal.infer.methods.unet.spec import CALIBRATION_DATA_KEY
 from contactcal.train.digest import dataset_digest
 from contactcal.train.restate import load_proto, metadata_of
@@ -50,10 +51,12 @@ def calibration_data(
         "index_sha256": hex, "frames": index rows}`` (what :func:`with_record` writes).
 
     Raises:
-        ValueError: a folder given twice, a folder that is not a dataset, or the model's training
+        ValueError: a folder that is not a dataset, a folder given twice, or the model's training
             data (the message names the folders and the option).
     """
     dirs = [Path(d) for d in data_dirs]
+    for d in dirs:
+        check_dataset_folder(d, "--data")
     _refuse_repeats(dirs)
     frames = [len(read_index(d)) for d in dirs]
     _refuse_training_data(dirs, metadata_of(load_proto(model)).get("data_digest", ""))
