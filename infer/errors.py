@@ -4,6 +4,7 @@ names its option, and the listing of a few names in a message."""
 from __future__ import annotations
 
 import importlib.util
+import os
 from collections.abc import Sequence
 
 
@@ -37,11 +38,21 @@ def require_extra(command: str, extra: str, modules: tuple[str, ...]) -> None:
 
 def option_error(option: str, value: object, exc: Exception) -> ValueError:
     """``exc`` as an error that names the option it is about: ``OPTION VALUE: message``; a
-    message that starts with the value itself (a path check's ``PATH: ...``) does not repeat it.
+    message that starts with the value itself (a path check's ``PATH: ...``), or with a path
+    value made absolute (as :meth:`~contactcal.infer.files.atomic.OutputSet.stage` names it),
+    does not repeat it.
 
     Example: ``raise option_error("--out", out, exc) from None``.
     """
-    return ValueError(f"{option} {value}: {str(exc).removeprefix(f'{value}: ')}")
+    message = str(exc)
+    shown = [str(value)]
+    if isinstance(value, str | os.PathLike):
+        shown.append(os.path.abspath(value))
+    for prefix in (f"{s}: " for s in shown):
+        if message.startswith(prefix):
+            message = message.removeprefix(prefix)
+            break
+    return ValueError(f"{option} {value}: {message}")
 
 
 def few(names: Sequence[str], limit: int = 3, sep: str = ", ") -> str:

@@ -156,7 +156,7 @@ def one_line_naming(err: str, path: Path) -> None:
 
 
 def test_measure_never_replaces_inputs_links_or_devices(
-    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+    tmp_path: Path, capsys: pytest.CaptureFixture[str], monkeypatch: pytest.MonkeyPatch
 ) -> None:
     s = copy_session(tmp_path)
     frames = sorted(s.glob("*.jpg"))
@@ -165,22 +165,26 @@ def test_measure_never_replaces_inputs_links_or_devices(
     for argv in ([str(frames[0]), str(frames[1])], [str(frames[1]), str(frames[1])]):
         assert main(["measure", "--method", "classical", "--out", *argv]) == 2
         one_line_naming(capsys.readouterr().err, Path(argv[0]))
-    rig = s / "rig.json"  # an input that is no image
+    monkeypatch.chdir(tmp_path)
+    rig = Path("s/rig.json")  # an input that is no image, named as given (relative)
     assert main(["measure", "--rig", str(rig), "--out", str(rig), str(frames[1])]) == 2
-    one_line_naming(capsys.readouterr().err, rig)
+    err = capsys.readouterr().err
+    one_line_naming(err, rig)
+    assert f"error: --out {rig}: is an input of this run ({rig})" in err, err
     link = tmp_path / "link.json"
     link.symlink_to(s / "manifest.csv")
-    fifo = tmp_path / "fifo"
+    fifo = tmp_path / "fifo.json"  # named .json: refused as a pipe, not by its name
     os.mkfifo(fifo)
-    for out in (link, fifo):
+    for out, why in ((link, "is a symbolic link"), (fifo, "exists and is not a regular file")):
         assert main(["measure", "--method", "classical", "--out", str(out), str(frames[1])]) == 2
         err = capsys.readouterr().err
         one_line_naming(err, out)
+        assert f"error: --out {out}: {why}" in err, err
         # a link is refused with measure's other way out; a fifo, no link, without it
         assert ("or --out - for standard output" in err) == (out == link), err
     assert {p: p.read_bytes() for p in s.iterdir()} == before
     assert link.is_symlink() and fifo.is_fifo()
-    assert sorted(p.name for p in tmp_path.iterdir()) == ["fifo", "link.json", "s"]
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["fifo.json", "link.json", "s"]
 
 
 def test_measure_out_dash_writes_stdout(

@@ -107,13 +107,18 @@ def _cmd_measure(args: argparse.Namespace) -> int:
 
 def _stage_results(outs: OutputSet, out: Path) -> Path:
     """``measure``'s results file, staged: refused (before the work) where it must not be
-    written, a link with the other way to get the JSON named."""
-    from contactcal.infer.files.atomic import LinkOutputError
+    written (``--out OUT: ...``), a link with the other way to get the JSON named."""
+    from contactcal.infer.errors import option_error
+    from contactcal.infer.files.atomic import LinkOutputError, OutputError
 
     try:
         return outs.stage(out)
     except LinkOutputError as exc:
-        raise LinkOutputError(f"{exc}, or --out - for standard output") from None
+        raise LinkOutputError(
+            f"{option_error('--out', out, exc)}, or --out - for standard output"
+        ) from None
+    except OutputError as exc:
+        raise option_error("--out", out, exc) from None
 
 
 def earlier_results_note(out: Path) -> str | None:
