@@ -44,7 +44,7 @@ from contactcal.train.ema import WeightAverage
 from contactcal.train.metrics import evaluate, segmentation_loss, summarise
 from contactcal.train.model import UNet, count_parameters
 from contactcal.train.report import METRIC_COLUMNS, plot_curves, write_csv
-from contactcal.train.resume import finished_summary, resume_checkpoint
+from contactcal.train.resume import finished_summary, is_finished, resume_checkpoint
 from contactcal.train.run_folder import check_run_folder
 from contactcal.train.split import Split, split_by_finger, split_record
 
@@ -296,9 +296,9 @@ def train(
             empty or (with ``resume``) a run holding ``last.pt``.
     """
     cfg = (config or TrainConfig()).resolved()
-    if resume and (done := finished_summary(Path(out_dir))) is not None:
-        resume_checkpoint(Path(out_dir), cfg, *_data(cfg, [Path(d) for d in data_dirs])[2:])
-        return done
+    if resume and is_finished(Path(out_dir)):  # checked as any run, then left as it is
+        ckpt = resume_checkpoint(Path(out_dir), cfg, *_data(cfg, [Path(d) for d in data_dirs])[2:])
+        return finished_summary(Path(out_dir), ckpt)
     run = _prepare([Path(d) for d in data_dirs], Path(out_dir), cfg, resume, progress)
     if run.start == cfg.epochs:  # killed after its last last.pt: complete what follows it
         _write_records(run, config=True)

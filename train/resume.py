@@ -1,6 +1,6 @@
-"""What ``train --resume`` continues: a finished run it leaves as it is
-(:func:`finished_summary`), an unfinished one with the run's config, data and split
-(:func:`resume_checkpoint`). Which folders ``train`` writes into at all is
+"""What ``train --resume`` continues: a finished run it checks, then leaves as it is
+(:func:`is_finished`, :func:`finished_summary`), an unfinished one with the run's config, data
+and split (:func:`resume_checkpoint`). Which folders ``train`` writes into at all is
 :func:`contactcal.train.run_folder.check_run_folder`'s (no torch: the command line checks it
 before the training stack is imported).
 """
@@ -16,16 +16,19 @@ from contactcal.train.run_folder import read_run_info
 from contactcal.train.split import Split, check_same_split, recorded_split
 
 
-def finished_summary(out: Path) -> dict[str, Any] | None:
-    """What ``train --resume`` returns for a finished run (one holding ``last.pt`` and
-    ``val_bins.csv``, written after its last epoch), which it leaves as it is; None for any other.
+def is_finished(out: Path) -> bool:
+    """Whether ``out`` holds a finished run: ``last.pt`` and ``val_bins.csv``, written after its
+    last epoch (``train --resume`` checks it as any run, then leaves it as it is)."""
+    return (out / "last.pt").is_file() and (out / "val_bins.csv").is_file()
+
+
+def finished_summary(out: Path, ckpt: dict[str, Any]) -> dict[str, Any]:
+    """What ``train --resume`` returns for a finished run (:func:`is_finished`), from its
+    ``last.pt`` as :func:`resume_checkpoint` loaded and checked it.
 
     Returns:
         ``out_dir``, ``finished`` (True), ``epochs_run`` (0), ``best_epoch`` and ``best_score``.
     """
-    if not ((out / "last.pt").is_file() and (out / "val_bins.csv").is_file()):
-        return None
-    ckpt = load_checkpoint(out / "last.pt")
     return {
         "out_dir": str(out),
         "finished": True,
