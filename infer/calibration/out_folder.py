@@ -44,10 +44,7 @@ def check_reused_out(out: Path, device_id: str | None, manifest: Path | None) ->
 def _recorded_device(held: HeldRecord) -> str | None:
     """The device id a held ``calibration.json`` names; None: none, or not a record (which a
     run replaces with a note, as before)."""
-    try:
-        device = held.data.get("device_id")
-    except AttributeError:
-        return None
+    device = None if held.data is None else held.data.get("device_id")
     return None if device is None else str(device)
 
 

@@ -254,8 +254,8 @@ class HeldRecord:
 
     #: Its path.
     path: Path
-    #: Its parsed JSON; None: unreadable or not JSON (a run replaces it with a note).
-    data: Any
+    #: Its JSON object; None: unreadable, or not a JSON object (a run replaces it with a note).
+    data: dict[str, Any] | None
 
 
 def held_record(out_dir: str | os.PathLike[str]) -> HeldRecord | None:
@@ -264,9 +264,10 @@ def held_record(out_dir: str | os.PathLike[str]) -> HeldRecord | None:
     if not path.is_file():
         return None
     try:
-        return HeldRecord(path, json.loads(path.read_text(encoding="utf-8")))
+        data = json.loads(path.read_text(encoding="utf-8"))
     except (OSError, ValueError):
-        return HeldRecord(path, None)
+        data = None
+    return HeldRecord(path, data if isinstance(data, dict) else None)
 
 
 def earlier_record_note(out_dir: str | os.PathLike[str], held: HeldRecord | None) -> str | None:
@@ -294,12 +295,12 @@ def earlier_record_note(out_dir: str | os.PathLike[str], held: HeldRecord | None
             f"calibration.json beside {'them' if len(held_files) > 1 else 'it'}: not a "
             "contactcal record); give each run its own --out to keep both"
         )
-    try:
+    if held.data is None or "created" not in held.data:
+        what = "unreadable as a record"
+    else:
         device = held.data.get("device_id")
         named = "no device id" if device is None else f"device id {device!r}"
         what = f"created {held.data['created']}, {named}"
-    except (KeyError, TypeError, AttributeError):
-        what = "unreadable as a record"
     return (
         f"note: replaced the calibration that {out_dir} held ({what}); give each run its own --out "
         "to keep both"

@@ -52,7 +52,7 @@ def rig_note(
     if rig is not None and (not beside.is_file() or rig.resolve() == beside.resolve()):
         return None
     try:  # --mm-per-px: beside is the rig config the run read, passed on; --rig: not read yet
-        data = read_rig_json(beside) if read is None or rig is not None else read.data
+        data = read.data if rig is None else read_rig_json(beside)
         scale = rig_scale(data, beside) if data.keys() & {"mm_per_px", "image_width_px"} else None
         offset, valid = rig_boundary(data, str(beside)), True
     except ValueError:  # a rig config error: the file is set aside, so it is not refused
