@@ -41,8 +41,8 @@ from cli_speed import _session  # noqa: E402
 PHASES: dict[str, tuple[Any, str]] = {
     "construct (onnxruntime, sessions)": (runner.OnnxSegmenter, "__init__"),
     "start (headers, reference)": (method.UnetMethod, "start"),
-    "decode": (measure, "load_image"),
-    "ring check": (measure, "_check_frame"),
+    "decode": (measure, "_decoded"),
+    "ring check": (measure, "check_frame"),
     "shrink": (method.UnetMethod, "_shrunk"),
     "prepare": (runner, "prepare"),
     "network": (runner.OnnxSegmenter, "probabilities"),
