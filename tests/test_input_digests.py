@@ -130,3 +130,50 @@ def test_evaluation_opens_each_frame_once_and_records_the_content_measured(
     assert inputs["reference"]["sha256"] == _sha(got[NAMES[0]][0])
     recorded = {e["file"]: e["sha256"] for e in inputs["frames"]}
     assert recorded == {n: _sha(got[n][0]) for n in NAMES}
+
+
+def _overlay_run(command: str, s: Path, out: Path) -> list[str]:
+    """The command line of ``command`` drawing overlays of session ``s`` into ``out``."""
+    manifest_csv = str(s / "manifest.csv")
+    if command == "measure":
+        frames = [str(s / n) for n in NAMES[1:]]
+        ref = ["--reference", str(s / NAMES[0])]
+        return [
+            "measure",
+            *frames,
+            *ref,
+            "--overlay",
+            str(out / "ov"),
+            "--out",
+            str(out / "r.json"),
+        ]
+    if command == "calibrate":
+        return ["calibrate", manifest_csv, "--overlay", str(out / "ov"), "--out", str(out / "cal")]
+    return ["demo", "--manifest", manifest_csv, "--out", str(out / "demo")]
+
+
+@pytest.mark.parametrize("command", ["measure", "calibrate", "demo"])
+def test_overlays_are_drawn_only_on_the_content_measured(
+    tmp_path: Path,
+    monkeypatch: pytest.MonkeyPatch,
+    capsys: pytest.CaptureFixture[str],
+    command: str,
+) -> None:
+    s = copy_session(tmp_path, NAMES)
+    out = tmp_path / "out"
+    out.mkdir()
+    _replaced_after_reading(monkeypatch, set(NAMES))  # each read gets other content
+    assert main(_overlay_run(command, s, out)) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "changed after it was measured" in err, err
+    assert any(f"{s / name}: its content" in err for name in NAMES), err
+    assert list(out.iterdir()) == []  # nothing written
+
+
+@pytest.mark.parametrize("command", ["measure", "calibrate", "demo"])
+def test_overlays_of_unchanged_frames_are_drawn(tmp_path: Path, command: str) -> None:
+    s = copy_session(tmp_path, NAMES)
+    out = tmp_path / "out"
+    out.mkdir()
+    assert main(_overlay_run(command, s, out)) == 0
+    assert sorted(out.rglob("*overlay*.png"))
