@@ -16,7 +16,8 @@ from typing import TYPE_CHECKING
 if TYPE_CHECKING:
     from contactcal.infer.methods.base import Method
     from contactcal.infer.pipeline.boundary import BoundaryOffset
-    from contactcal.infer.pipeline.measure import Measured, Source
+    from contactcal.infer.image.read import ImageSource
+    from contactcal.infer.pipeline.measure import Measured
     from contactcal.infer.pipeline.scale import PixelScale
 
 
@@ -62,9 +63,9 @@ class MeasureOptions:
 
     def measure(
         self,
-        files: Sequence[Source],
+        files: Sequence[ImageSource],
         method: Method,
-        reference: Source | None,
+        reference: ImageSource | None,
         digest: bool = False,
     ) -> list[Measured]:
         """``files`` (paths or contents read already) measured with ``method`` against
