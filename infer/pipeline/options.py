@@ -14,9 +14,9 @@ from dataclasses import dataclass
 from typing import TYPE_CHECKING
 
 if TYPE_CHECKING:
+    from contactcal.infer.image.read import ImageSource
     from contactcal.infer.methods.base import Method
     from contactcal.infer.pipeline.boundary import BoundaryOffset
-    from contactcal.infer.image.read import ImageSource
     from contactcal.infer.pipeline.measure import Measured
     from contactcal.infer.pipeline.scale import PixelScale
 
