@@ -18,6 +18,7 @@ from contactcal.infer.cli import main
 from contactcal.infer.evaluate.labels import Label, LabelError, LabelMask
 from contactcal.infer.evaluate.pool import pool_offsets
 from contactcal.infer.evaluate.window import Window, check_label_area, find_window
+from contactcal.infer.image.read import ImageFile
 from contactcal.infer.pipeline.examples import EXAMPLE_SESSION
 
 MANIFEST = EXAMPLE_SESSION / "manifest.csv"
@@ -223,11 +224,11 @@ def test_ellipse_larger_than_the_window_exits_2(
 
 
 def test_window_bound_and_its_absence(tmp_path: Path) -> None:
-    window = find_window(EXAMPLE_SESSION / "p00.0kpa.jpg")
+    window = find_window(ImageFile.read(EXAMPLE_SESSION / "p00.0kpa.jpg"))
     assert window is not None and 120 < window.radius_px < 145
     blank = tmp_path / "blank.png"
     cv2.imwrite(str(blank), np.full((300, 400), 90, np.uint8))
-    assert find_window(blank) is None  # no ring: only the frame (labels.py) bounds a label
+    assert find_window(ImageFile.read(blank)) is None  # no ring: only the frame bounds a label
     label = Label(tmp_path / "f.png", tmp_path / "f_mask.png", None, None)
     big = LabelMask(np.ones((300, 400), bool), 119_999, None)
     check_label_area(label, big, (400, 300), None)

@@ -1,13 +1,18 @@
 """The sha256 digests a record keeps (``calibration.json``, ``evaluation.json`` ``inputs``) are of
 the content the run parsed and measured: a file replaced after the run read it is recorded as it
-was measured, never as it was read again afterwards."""
+was measured, never as it was read again afterwards; and a run opens each frame once (every
+step uses the content read)."""
 
 from __future__ import annotations
 
 import hashlib
 import json
+import os
 import shutil
-from collections.abc import Callable
+import sys
+from collections import Counter
+from collections.abc import Callable, Iterator
+from contextlib import contextmanager
 from pathlib import Path
 from typing import Any
 
@@ -25,6 +30,30 @@ def _sha(data: bytes) -> str:
     return hashlib.sha256(data).hexdigest()
 
 
+_OPENS: list[Counter[str]] = []  # the counter of the test counting (empty: none counts)
+
+
+def _count_open(event: str, args: tuple[Any, ...]) -> None:
+    """Audit hook: every ``open`` of a named file by Python (``Path.read_bytes``, ``open``, a
+    JPEG header's read), counted by file name while a test counts."""
+    if event == "open" and _OPENS and isinstance(args[0], str | os.PathLike):
+        _OPENS[-1][Path(args[0]).name] += 1
+
+
+sys.addaudithook(_count_open)  # an audit hook stays for the process: it counts only in _OPENS
+
+
+@contextmanager
+def _counting() -> Iterator[Counter[str]]:
+    """How many times each file (by name) is opened in the block (a block within it counts
+    apart: the test's own reads and writes are left out so)."""
+    _OPENS.append(Counter())
+    try:
+        yield _OPENS[-1]
+    finally:
+        _OPENS.pop()
+
+
 def _replaced_after_reading(
     monkeypatch: pytest.MonkeyPatch, names: set[str]
 ) -> dict[str, list[bytes]]:
@@ -37,11 +66,13 @@ def _replaced_after_reading(
     def replacing(original: Callable[..., Any]) -> Callable[..., Any]:
         def wrapped(path: Path, *args: Any) -> Any:
             p = Path(path)
-            before = p.read_bytes()
+            with _counting():
+                before = p.read_bytes()
             out = original(path, *args)
             if p.name in names:
                 got.setdefault(p.name, []).append(before)
-                p.write_bytes(before + b"\n")  # after a JPEG's end marker, or a blank CSV line
+                with _counting():  # after a JPEG's end marker, or a blank CSV line
+                    p.write_bytes(before + b"\n")
             return out
 
         return wrapped
@@ -58,10 +89,14 @@ def test_calibration_records_the_digests_of_the_content_measured(
     s = copy_session(tmp_path, NAMES)
     got = _replaced_after_reading(monkeypatch, {*NAMES, "manifest.csv"})
     out = tmp_path / "out"
-    assert main(["calibrate", str(s / "manifest.csv"), "--method", method, "--out", str(out)]) == 0
+    argv = ["calibrate", str(s / "manifest.csv"), "--method", method, "--out", str(out)]
+    with _counting() as opened:
+        assert main(argv) == 0
     inputs = json.loads((out / "calibration.json").read_text(encoding="utf-8"))["inputs"]
-    # each file read once (the reference too: its decode for the method is the one measured)
+    # each file read once (the reference too: its decode for the method is the one measured,
+    # and the U-Net's choice of decode takes its size from that content)
     assert {name: len(reads) for name, reads in got.items()} == dict.fromkeys(got, 1)
+    assert opened[NAMES[0]] == 1
     assert inputs["manifest"]["sha256"] == _sha(got["manifest.csv"][0])
     assert {e["file"]: e["sha256"] for e in inputs["frames"]} == {
         name: _sha(got[name][0]) for name in NAMES
@@ -78,28 +113,67 @@ def _labelled_session(tmp_path: Path) -> tuple[Path, Path]:
     return s / "manifest.csv", s / "masks"
 
 
-def test_evaluation_records_the_digests_of_the_content_measured(
+def test_evaluation_opens_each_frame_once_and_records_the_content_measured(
     tmp_path: Path, monkeypatch: pytest.MonkeyPatch
 ) -> None:
     manifest_csv, masks = _labelled_session(tmp_path)
-    labelled = set(NAMES[1:])  # the reference is read for the labels' check too
-    got = _replaced_after_reading(monkeypatch, {*labelled, "manifest.csv"})
-    out = tmp_path / "out"
-    assert main(["evaluate", str(manifest_csv), "--labels", str(masks), "--out", str(out)]) == 0
-    inputs = json.loads((out / "evaluation.json").read_text(encoding="utf-8"))["inputs"]
-    assert inputs["manifest"]["sha256"] == _sha(got["manifest.csv"][0])
-    recorded = {e["file"]: e["sha256"] for e in inputs["frames"]}
-    assert {name: recorded[name] for name in labelled} == {n: _sha(got[n][0]) for n in labelled}
-
-
-def test_evaluation_refuses_a_frame_that_changed_between_its_methods(
-    tmp_path: Path, monkeypatch: pytest.MonkeyPatch, capsys: pytest.CaptureFixture[str]
-) -> None:
-    manifest_csv, masks = _labelled_session(tmp_path)
-    _replaced_after_reading(monkeypatch, {NAMES[2]})
+    got = _replaced_after_reading(monkeypatch, {*NAMES, "manifest.csv"})  # the reference too
     out = tmp_path / "out"
     argv = ["evaluate", str(manifest_csv), "--labels", str(masks), "--method", "both"]
-    assert main([*argv, "--out", str(out)]) == 2
+    with _counting() as opened:
+        assert main([*argv, "--out", str(out)]) == 0
+    # the labels' checks (the reference's window ring, each frame's size), both methods'
+    # measurements and the record all use the one content read
+    assert {name: opened[name] for name in NAMES} == dict.fromkeys(NAMES, 1)
+    inputs = json.loads((out / "evaluation.json").read_text(encoding="utf-8"))["inputs"]
+    assert inputs["manifest"]["sha256"] == _sha(got["manifest.csv"][0])
+    assert inputs["reference"]["sha256"] == _sha(got[NAMES[0]][0])
+    recorded = {e["file"]: e["sha256"] for e in inputs["frames"]}
+    assert recorded == {n: _sha(got[n][0]) for n in NAMES}
+
+
+def _overlay_run(command: str, s: Path, out: Path) -> list[str]:
+    """The command line of ``command`` drawing overlays of session ``s`` into ``out``."""
+    manifest_csv = str(s / "manifest.csv")
+    if command == "measure":
+        frames = [str(s / n) for n in NAMES[1:]]
+        ref = ["--reference", str(s / NAMES[0])]
+        return [
+            "measure",
+            *frames,
+            *ref,
+            "--overlay",
+            str(out / "ov"),
+            "--out",
+            str(out / "r.json"),
+        ]
+    if command == "calibrate":
+        return ["calibrate", manifest_csv, "--overlay", str(out / "ov"), "--out", str(out / "cal")]
+    return ["demo", "--manifest", manifest_csv, "--out", str(out / "demo")]
+
+
+@pytest.mark.parametrize("command", ["measure", "calibrate", "demo"])
+def test_overlays_are_drawn_only_on_the_content_measured(
+    tmp_path: Path,
+    monkeypatch: pytest.MonkeyPatch,
+    capsys: pytest.CaptureFixture[str],
+    command: str,
+) -> None:
+    s = copy_session(tmp_path, NAMES)
+    out = tmp_path / "out"
+    out.mkdir()
+    _replaced_after_reading(monkeypatch, set(NAMES))  # each read gets other content
+    assert main(_overlay_run(command, s, out)) == 2
     err = capsys.readouterr().err
-    assert err.count("\n") == 1 and NAMES[2] in err and "changed while the run read it" in err
-    assert not out.exists()  # nothing written
+    assert err.count("\n") == 1 and "changed after it was measured" in err, err
+    assert any(f"{s / name}: its content" in err for name in NAMES), err
+    assert list(out.iterdir()) == []  # nothing written
+
+
+@pytest.mark.parametrize("command", ["measure", "calibrate", "demo"])
+def test_overlays_of_unchanged_frames_are_drawn(tmp_path: Path, command: str) -> None:
+    s = copy_session(tmp_path, NAMES)
+    out = tmp_path / "out"
+    out.mkdir()
+    assert main(_overlay_run(command, s, out)) == 0
+    assert sorted(out.rglob("*overlay*.png"))

@@ -27,12 +27,11 @@ than pooled unchecked.
 from __future__ import annotations
 
 import re
-from collections.abc import Mapping, Sequence
+from collections.abc import Sequence
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 from contactcal.infer.calibration.provenance import input_digests as frame_digests
-from contactcal.infer.image.gray import ImageError
 
 if TYPE_CHECKING:
     from contactcal.infer.pipeline.measure import Measured
@@ -47,7 +46,7 @@ SHARED_FRACTION = 0.5
 
 
 def input_digests(
-    manifest: Path, manifest_sha256: str, measured: Mapping[str, Sequence[Measured]]
+    manifest: Path, manifest_sha256: str, measured: Sequence[Measured]
 ) -> dict[str, Any]:
     """The ``inputs`` of ``evaluation.json``: sha256 of the manifest, reference and labelled
     frames, each of the content parsed or measured (not of the files read again).
@@ -58,36 +57,19 @@ def input_digests(
     Args:
         manifest: the session manifest (its path is recorded resolved).
         manifest_sha256: the sha256 of its content as parsed.
-        measured: each method's measurements of the labelled frames, in the order scored,
-            against the session's reference frame (at least one method, one frame).
+        measured: one method's measurements of the labelled frames, in the order scored,
+            against the session's reference frame (at least one frame), with their digests;
+            every method measures the same contents, each file read once.
 
     Returns:
         ``{"manifest": {"file", "sha256"}, "reference": {"file", "sha256"}, "frames": [{"file",
         "sha256"}, ...]}``; frame names are relative to the manifest's folder.
-
-    Raises:
-        ImageError: a frame (or the reference) whose content one method read differs from the
-            content another read: replaced while the run read it (the record would vouch for
-            one of them only).
     """
-    read = {name: _read(run) for name, run in measured.items()}
-    (first, entries), *others = read.items()
-    for name, theirs in others:
-        for (path, mine), (_, other) in zip(entries, theirs, strict=True):
-            if mine != other:
-                raise ImageError(
-                    f"{path}: its content changed while the run read it (sha256 {mine[:12]}… "
-                    f"measured by {first}, {other[:12]}… by {name}); evaluate again once the "
-                    "session's files are final"
-                )
+    entries = [(measured[0].reference, measured[0].reference_sha256)]
+    entries += [(m.file, m.sha256) for m in measured]
     digests = frame_digests(manifest, manifest_sha256, entries)
     reference, *frames = digests["frames"]
     return {"manifest": digests["manifest"], "reference": reference, "frames": frames}
-
-
-def _read(run: Sequence[Measured]) -> list[tuple[Path | None, str | None]]:
-    """The reference's and each frame's path, and the sha256 of the content one method read."""
-    return [(run[0].reference, run[0].reference_sha256), *((m.file, m.sha256) for m in run)]
 
 
 def _entry_ok(value: object) -> bool:

@@ -29,7 +29,7 @@ from contactcal.infer.evaluate.score import frame_records, onset_summary, score_
 from contactcal.infer.evaluate.window import check_label_area, find_window
 from contactcal.infer.files.atomic import OutputSet, run_outputs, write_synced
 from contactcal.infer.files.jsonable import json_text
-from contactcal.infer.image.read import frame_size
+from contactcal.infer.image.read import ImageFile
 from contactcal.infer.methods.registry import METHODS
 from contactcal.infer.pipeline.manifest import (
     Frame,
@@ -72,11 +72,19 @@ def _labelled(
     return done, [by_frame[f.file] for f in done], unlabelled
 
 
+def _read_frames(frames: list[Frame], labelled: list[Frame]) -> dict[Path, ImageFile]:
+    """The content of the reference (the manifest's first frame) and of each labelled frame,
+    each file read once: the labels' checks, the measurements of every method and the
+    record's digests all come from it."""
+    files = dict.fromkeys([frames[0].file, *(f.file for f in labelled)])
+    return {p: ImageFile.read(p) for p in files}
+
+
 def _measure(
-    names: list[str], frames: list[Frame], files: list[Path], measure: MeasureOptions
+    names: list[str], reference: ImageFile, files: list[ImageFile], measure: MeasureOptions
 ) -> tuple[dict[str, list[Measured]], dict[str, Any], str]:
-    """Each method's measurements of ``files`` (the manifest's first frame is the reference),
-    its ``describe()``, and the note of a stale boundary offset left out
+    """Each method's measurements of ``files`` against ``reference``, its ``describe()``, and
+    the note of a stale boundary offset left out
     (:func:`~contactcal.infer.evaluate.offset.current_offset`; "" when none)."""
     out, described, stale = {}, {}, ""
     for name in names:
@@ -85,18 +93,20 @@ def _measure(
         boundary, note = current_offset(measure.boundary, described[name].get("model_sha256"))
         stale = stale or note
         run = replace(measure, boundary=boundary)
-        out[name] = run.measure(files, method, frames[0].file, digest=True)
+        out[name] = run.measure(files, method, reference, digest=True)
     return out, described, stale
 
 
-def _label_masks(labs: list[Label], reference: Path, bit_depth: int | None) -> list[LabelMask]:
-    """The labels rasterised at their frames' sizes (read before any frame is measured, so a
-    mask of another size is refused up front), each checked to fit the window ring of
-    ``reference`` (:func:`~contactcal.infer.evaluate.window.check_label_area`)."""
+def _label_masks(
+    labs: list[Label], reference: ImageFile, read: dict[Path, ImageFile], bit_depth: int | None
+) -> list[LabelMask]:
+    """The labels rasterised at the sizes of their frames' contents ``read`` (before any frame
+    is measured, so a mask of another size is refused up front), each checked to fit the
+    window ring of ``reference`` (:func:`~contactcal.infer.evaluate.window.check_label_area`)."""
     window = find_window(reference, bit_depth)
     masks = []
     for lab in labs:
-        size = frame_size(lab.frame, bit_depth)
+        size = read[lab.frame].size(bit_depth)
         mask = label_mask(lab, size)
         check_label_area(lab, mask, size, window)
         masks.append(mask)
@@ -105,16 +115,18 @@ def _label_masks(labs: list[Label], reference: Path, bit_depth: int | None) -> l
 
 def _score(
     manifest: Path,
+    read: dict[Path, ImageFile],
     frames: list[Frame],
     labelled: list[Frame],
     masks: list[LabelMask],
     names: list[str],
     measure: MeasureOptions,
 ) -> tuple[list[ScoredFrame], dict[str, Any] | None, dict[str, list[Measured]]]:
-    """The labelled frames measured by each method and scored against their labels' masks;
-    the U-Net's boundary offset record (None without a U-Net run); each method's
-    measurements."""
-    measured, described, stale = _measure(names, frames, [f.file for f in labelled], measure)
+    """The labelled frames (their contents ``read``) measured by each method and scored
+    against their labels' masks; the U-Net's boundary offset record (None without a U-Net
+    run); each method's measurements."""
+    files = [read[f.file] for f in labelled]
+    measured, described, stale = _measure(names, read[frames[0].file], files, measure)
     areas = [float(mask.area_px) for mask in masks]
     source = None if measure.boundary is None else measure.boundary.source
     offset = unet_offset(measured.get("unet", []), areas, measure.scale, described, stale, source)
@@ -170,11 +182,13 @@ def evaluate_session(
 ) -> Evaluation:
     """Score ``method`` on the frames of ``manifest`` labelled in ``labels``.
 
-    Every label is rasterised at its frame's size and checked first, before any frame is
-    measured. Every labelled frame is then measured (reference: the manifest's lowest-pressure
-    frame) and compared with its label's rasterised mask: area (relative error against the
-    rasterised pixel count, for ellipses too, so that it agrees with the IoU) and IoU of the
-    method's filled outline. Frames without a label are listed under ``"unlabelled"`` (and in the
+    The reference and every labelled frame are read once, and that content serves every step
+    (the labels' checks, each method's measurement, the digests recorded). Every label is
+    rasterised at its frame's size and checked first, before any frame is measured. Every
+    labelled frame is then measured (reference: the manifest's lowest-pressure frame) and
+    compared with its label's rasterised mask: area (relative error against the rasterised
+    pixel count, for ellipses too, so that it agrees with the IoU) and IoU of the method's
+    filled outline. Frames without a label are listed under ``"unlabelled"`` (and in the
     table), never silently dropped. A boundary offset in ``measure`` is applied as
     ``calibrate`` applies it; the offset measured here (``boundary_offset``,
     :mod:`~contactcal.infer.evaluate.offset`) is then what remains.
@@ -209,18 +223,19 @@ def evaluate_session(
     high = sweep_top_warning(max(f.pressure_kpa for f in frames), "evaluate")
     labs = read_labels(labels, frames, manifest)
     labelled, labs, unlabelled = _labelled(frames, labs, labels, manifest)
-    masks = _label_masks(labs, frames[0].file, measure.bit_depth)  # before any measuring
+    read = _read_frames(frames, labelled)  # each read once, for every step below
+    masks = _label_masks(labs, read[frames[0].file], read, measure.bit_depth)  # before measuring
     protect = [manifest, measure.model, *also_read, *(f.file for f in frames)]
     protect += list({lab.source for lab in labs})
     with run_outputs(protect, join=outputs) as outs:
         paths = {"png": out / "evaluation.png", "json": out / "evaluation.json"}
         staged = {k: outs.stage(p) for k, p in paths.items()}  # refused here, before work
-        scored, offset, measured = _score(manifest, frames, labelled, masks, names, measure)
+        scored, offset, measured = _score(manifest, read, frames, labelled, masks, names, measure)
         onset, bins = onset_summary(scored), bin_table(scored, OPEN_BINS)
         record = {
             "manifest": str(manifest.resolve()),
             "labels": str(labels.resolve()),
-            "inputs": input_digests(manifest, session.sha256, measured),
+            "inputs": input_digests(manifest, session.sha256, measured[names[0]]),
             "methods": names,
             "model": None if measure.model is None else os.fspath(measure.model),
             "change_gate": "on" if measure.change_gate else "off (--no-change-gate)",

@@ -18,7 +18,7 @@ from pathlib import Path
 import numpy as np
 
 from contactcal.infer.evaluate.labels import Label, LabelError, LabelMask
-from contactcal.infer.image.read import load_image
+from contactcal.infer.image.read import ImageFile
 from contactcal.infer.methods.unet.ring import locate_ring
 from contactcal.infer.pipeline.frame_check import RING_RADIUS_TOLERANCE
 
@@ -39,18 +39,19 @@ class Window:
         return math.pi * (self.radius_px * (1.0 + RING_RADIUS_TOLERANCE)) ** 2
 
 
-def find_window(reference: Path, bit_depth: int | None = None) -> Window | None:
+def find_window(reference: ImageFile, bit_depth: int | None = None) -> Window | None:
     """The window ring of ``reference`` (None when no ring is found).
 
     Args:
-        reference: the session's reference frame (the manifest's lowest-pressure frame).
+        reference: the session's reference frame (the manifest's lowest-pressure frame), as
+            read for its measurement.
         bit_depth: significant bits of a 16-bit frame (None: from the file), as measured.
 
     Raises:
-        ImageError: an unreadable frame (``measure`` refuses it first).
+        ImageError: an undecodable frame (``measure`` refuses it as well).
     """
-    ring = locate_ring(load_image(reference, bit_depth=bit_depth))
-    return Window(reference, ring.radius, ring.cx, ring.cy) if ring.found else None
+    ring = locate_ring(reference.decode(bit_depth=bit_depth))
+    return Window(reference.path, ring.radius, ring.cx, ring.cy) if ring.found else None
 
 
 def check_label_area(

@@ -7,6 +7,7 @@ choose its reduced decode).
 
 from __future__ import annotations
 
+import io
 import os
 from pathlib import Path
 from typing import BinaryIO
@@ -57,7 +58,7 @@ def _frame_size(f: BinaryIO) -> tuple[int, int] | None:
         f.seek(length - 2, os.SEEK_CUR)
 
 
-def jpeg_size(path: str | os.PathLike[str]) -> tuple[int, int]:
+def jpeg_size(path: str | os.PathLike[str], data: bytes | None = None) -> tuple[int, int]:
     """The frame size of a JPEG file, read from its header (the pixels are not decoded).
 
     The size is the frame header's, as stored: an EXIF orientation is not applied (nor does
@@ -65,6 +66,7 @@ def jpeg_size(path: str | os.PathLike[str]) -> tuple[int, int]:
 
     Args:
         path: the JPEG file.
+        data: its content, already read (None: read the header from ``path``).
 
     Returns:
         ``(height, width)`` in pixels.
@@ -75,7 +77,7 @@ def jpeg_size(path: str | os.PathLike[str]) -> tuple[int, int]:
     """
     p = Path(path)
     try:
-        with open(p, "rb") as f:
+        with open(p, "rb") if data is None else io.BytesIO(data) as f:
             start = f.read(4)
             if not start.startswith(b"\xff\xd8"):
                 got = next((n for s, n in SIGNATURES.items() if start.startswith(s)), None)

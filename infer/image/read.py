@@ -239,20 +239,41 @@ class ImageFile:
         gray = to_gray_u8(img, name=str(p), bgr=True)
         return gray if jpeg else reduce_area(gray, reduce)
 
+    def size(self, bit_depth: int | None = None) -> tuple[int, int]:
+        """``(width, height)`` of the content as :meth:`decode` reads it: a JPEG's from its
+        header (no pixel decoded), another format's (or a JPEG whose header does not state it)
+        decoded.
 
-def frame_size(path: str | os.PathLike[str], bit_depth: int | None = None) -> tuple[int, int]:
-    """``(width, height)`` of a frame file as :func:`load_image` reads it: a JPEG's from its
-    header (no pixel decoded), another format's (or a file named .jpg that is not one) decoded.
+        Raises:
+            ImageError: as :meth:`decode`.
+        """
+        if self.path.suffix.lower() in (".jpg", ".jpeg"):
+            try:
+                h, w = jpeg_size(self.path, self.data)
+                return w, h
+            except ImageError:
+                pass  # a height left to a DNL segment: OpenCV decodes it, as decode does below
+        h, w = self.decode(bit_depth=bit_depth).shape
+        return w, h
 
-    Raises:
-        ImageError: as :func:`load_image`.
-    """
-    p = Path(path)
-    if p.suffix.lower() in (".jpg", ".jpeg"):
-        try:
-            h, w = jpeg_size(p)
-            return w, h
-        except ImageError:
-            pass  # OpenCV decodes by content, as load_image does below
-    h, w = load_image(p, bit_depth=bit_depth).shape
-    return w, h
+
+#: An image file to read: its path (read when needed), or its content read already.
+ImageSource = str | os.PathLike[str] | ImageFile
+
+
+def source_content(source: ImageSource) -> ImageFile:
+    """The content of ``source``: as given, or its file read now (:meth:`ImageFile.read`)."""
+    return source if isinstance(source, ImageFile) else ImageFile.read(source)
+
+
+def source_path(source: ImageSource) -> Path:
+    """The file of ``source``."""
+    return source.path if isinstance(source, ImageFile) else Path(source)
+
+
+def source_jpeg_size(source: ImageSource) -> tuple[int, int]:
+    """``(height, width)`` from a JPEG's header (:func:`~contactcal.infer.image.jpeg.jpeg_size`):
+    of the content read already, else of the file (only its header read)."""
+    if isinstance(source, ImageFile):
+        return jpeg_size(source.path, source.data)
+    return jpeg_size(source)

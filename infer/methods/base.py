@@ -10,12 +10,11 @@ from __future__ import annotations
 
 from collections.abc import Sequence
 from dataclasses import dataclass, field, replace
-from pathlib import Path
 from typing import Any, Protocol
 
 import numpy as np
 
-from contactcal.infer.image.read import ImageFile
+from contactcal.infer.image.read import ImageFile, ImageSource
 
 #: The start of a frame's note when a method's change gate found its region unchanged from the
 #: reference frame (the U-Net's ``min_change``); ``calibrate`` looks for it to name the gate.
@@ -77,7 +76,10 @@ class Method(Protocol):
     name: str
 
     def start(
-        self, files: Sequence[Path], reference: ImageFile | None, bit_depth: int | None = None
+        self,
+        files: Sequence[ImageSource],
+        reference: ImageFile | None,
+        bit_depth: int | None = None,
     ) -> Started:
         """Begin a session of image files: decode the reference, choose the decode reduction k.
 
@@ -86,7 +88,9 @@ class Method(Protocol):
         k, so a frame decoded at 1/k is exactly k times smaller per side.
         ``bit_depth`` is the significant bits of 16-bit files (None: from the file). The
         reference is decoded from the content the caller read (whose digest it records), and
-        returned decoded at 1/k with k, so that nothing decodes it again.
+        returned decoded at 1/k with k, so that nothing decodes it again. ``files`` are the
+        frames' paths, or their contents where the caller read them already (what the method
+        needs of them, e.g. a JPEG's header, is then taken from that content).
         """
 
     def set_reference(self, reference: np.ndarray | None, reduction: int = 1) -> None:

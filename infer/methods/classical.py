@@ -21,7 +21,6 @@ import dataclasses
 import math
 from collections.abc import Sequence
 from dataclasses import dataclass, field
-from pathlib import Path
 from typing import Any
 
 import cv2
@@ -29,7 +28,7 @@ import numpy as np
 
 from contactcal.infer.image.frame import as_frame
 from contactcal.infer.image.gray import ImageError, to_gray_u8
-from contactcal.infer.image.read import ImageFile
+from contactcal.infer.image.read import ImageFile, ImageSource
 from contactcal.infer.methods.base import AreaResult, Started, load_reference
 
 
@@ -206,7 +205,10 @@ class ClassicalMethod:
         self.shape: tuple[int, int] | None = None  # the reference frame's (H, W), px
 
     def start(
-        self, files: Sequence[Path], reference: ImageFile | None, bit_depth: int | None = None
+        self,
+        files: Sequence[ImageSource],
+        reference: ImageFile | None,
+        bit_depth: int | None = None,
     ) -> Started:
         """Read the reference fully decoded (the routine's constants are for full frames)."""
         ref = load_reference(reference, bit_depth=bit_depth)

@@ -239,13 +239,16 @@ def overlay_runs(
     files: list[Path],
     reference: Path | None,
 ) -> dict[str, list[Measured]]:
-    """Measurements of every method for the overlays (the primary run is reused; the others
-    only draw outlines, so they get no scale or boundary offset)."""
+    """Measurements of every method for the overlays (the primary run, measured with its
+    digests, is reused; the others only draw outlines, so they get no scale or boundary
+    offset), each with the digest of the content measured
+    (:func:`~contactcal.infer.pipeline.overlay.measured_frame` checks it)."""
     from dataclasses import replace
 
     outlines = replace(options, scale=None, boundary=None)
     runs = {args.method: primary}
     for name in METHODS:
         if name not in runs:
-            runs[name] = outlines.measure(files, outlines.method(name, outline=True), reference)
+            method = outlines.method(name, outline=True)
+            runs[name] = outlines.measure(files, method, reference, digest=True)
     return runs

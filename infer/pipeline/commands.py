@@ -77,7 +77,8 @@ def _cmd_measure(args: argparse.Namespace) -> int:
         json_path = None if to_stdout else _stage_results(outs, args.out)  # before the work
         options = measure_options(args, read_rig(args))
         method = options.method(args.method)
-        measured = options.measure(args.images, method, args.reference)
+        overlay = args.overlay is not None  # its frames are checked to be the ones measured
+        measured = options.measure(args.images, method, args.reference, digest=overlay)
         measured, warnings = note_self_reference(measured, args.reference)
         # device_id: the display measured, per object (the output stays a list of objects).
         rows = [{**m.to_json(method.name), "device_id": args.device_id} for m in measured]
@@ -85,7 +86,7 @@ def _cmd_measure(args: argparse.Namespace) -> int:
         if json_path is not None:
             write_synced(json_path, text)
         written: list[Path] = []
-        if args.overlay is not None:
+        if overlay:
             runs = overlay_runs(args, options, measured, args.images, args.reference)
             written = write_overlays(runs, args.overlay, outputs=outs, bit_depth=args.bit_depth)
     overlays = [] if args.overlay is None else [args.overlay]

@@ -16,7 +16,6 @@ from contactcal.infer.calibration.calibrate import (
 )
 from contactcal.infer.calibration.provenance import Provenance
 from contactcal.infer.files.atomic import run_outputs, write_synced
-from contactcal.infer.image.read import load_image
 from contactcal.infer.image.write import write_image
 from contactcal.infer.methods.registry import METHODS
 from contactcal.infer.pipeline.args import NO_SCALE_NOTE
@@ -24,7 +23,7 @@ from contactcal.infer.pipeline.boundary import rig_boundary
 from contactcal.infer.pipeline.examples import example_manifest
 from contactcal.infer.pipeline.manifest import beside_manifest
 from contactcal.infer.pipeline.options import MeasureOptions
-from contactcal.infer.pipeline.overlay import draw_overlay, montage
+from contactcal.infer.pipeline.overlay import draw_overlay, measured_frame, montage
 from contactcal.infer.pipeline.scale import read_rig_json, rig_scale
 
 #: Pressures shown in the overlay montage (nearest frames), kPa.
@@ -79,9 +78,10 @@ def run_demo(
         picks = sorted({int(np.argmin(np.abs(np.subtract(pressures, p)))) for p in MONTAGE_KPA})
         tiles = []
         for i in picks:
-            contours = {name: rep.measured[i].result.contour for name, rep in reports.items()}
+            at = {name: rep.measured[i] for name, rep in reports.items()}
+            contours = {name: m.result.contour for name, m in at.items()}
             title = f"{frames[i].pressure_kpa:g} kPa"
-            gray = load_image(frames[i].file, bit_depth=bit_depth)
+            gray = measured_frame(frames[i].file, at, bit_depth)  # the content measured
             tiles.append(draw_overlay(gray, contours, title))
         write_image(outs.stage(out / "overlay_montage.png"), montage(tiles, columns=3))
         lines.append(f"\noverlays: {out / 'overlay_montage.png'}")

@@ -130,14 +130,14 @@ def reference_width(
     path: str | os.PathLike[str], step_tolerance_kpa: float, bit_depth: int | None
 ) -> int:
     """Width (px) of the manifest's reference frame, which its frames share (a run refuses
-    others), as :func:`~contactcal.infer.image.read.frame_size` reads it (a JPEG's header).
+    others), as :meth:`~contactcal.infer.image.read.ImageFile.size` reads it (a JPEG's header).
 
     Raises:
         ManifestError / ImageError: as a run reading that manifest and frame would.
     """
-    from contactcal.infer.image.read import frame_size
+    from contactcal.infer.image.read import ImageFile
 
-    return frame_size(read_manifest(path, step_tolerance_kpa)[0].file, bit_depth)[0]
+    return ImageFile.read(read_manifest(path, step_tolerance_kpa)[0].file).size(bit_depth)[0]
 
 
 def read_manifest(

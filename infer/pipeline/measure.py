@@ -15,7 +15,7 @@ from typing import Any
 
 import numpy as np
 
-from contactcal.infer.image.read import ImageFile
+from contactcal.infer.image.read import ImageSource, source_content, source_path
 from contactcal.infer.methods.base import UNCHANGED_NOTE, AreaResult, Method
 from contactcal.infer.pipeline.boundary import BoundaryOffset, BoundaryOffsetError, apply_offset
 from contactcal.infer.pipeline.frame_check import (
@@ -71,12 +71,18 @@ class Measured:
 
 
 def _start(
-    method: Method, images: list[Path], reference: Path | None, bit_depth: int | None, digest: bool
+    method: Method,
+    images: Sequence[ImageSource],
+    reference: ImageSource | None,
+    bit_depth: int | None,
+    digest: bool,
 ) -> tuple[int, FrameReference | None]:
     """Start the method; the decode reduction k and the reference the frames must match (the
-    method's own decode of it at 1/k, of its content read here once: the frame check and its
-    measurement as a frame decode nothing more)."""
-    content = None if reference is None else ImageFile.read(reference)
+    method's own decode of it at 1/k, of its content read here once: the method's look at the
+    frames, the frame check and its measurement as a frame read and decode nothing more)."""
+    content = None if reference is None else source_content(reference)
+    if content is not None:
+        images = [content if source_path(f) == content.path else f for f in images]
     started = method.start(images, content, bit_depth)
     k, img = started.reduction, started.reference
     if content is None:
@@ -92,13 +98,13 @@ def _start(
 
 
 def _decoded(
-    path: Path, k: int, bit_depth: int | None, ref: FrameReference | None, digest: bool
+    source: ImageSource, k: int, bit_depth: int | None, ref: FrameReference | None, digest: bool
 ) -> tuple[np.ndarray, str | None]:
     """A frame decoded at 1/k and, with ``digest``, the sha256 of the content decoded (the
     reference's own decode where the frame is the reference: read and decoded once)."""
-    if ref is not None and path == ref.path:
+    if ref is not None and source_path(source) == ref.path:
         return ref.image, ref.sha256
-    content = ImageFile.read(path)
+    content = source_content(source)
     return content.decode(k, bit_depth), content.sha256() if digest else None
 
 
@@ -132,9 +138,9 @@ def offset_for(
 
 
 def measure_files(
-    files: Sequence[str | os.PathLike[str]],
+    files: Sequence[ImageSource],
     method: Method,
-    reference: str | os.PathLike[str] | None = None,
+    reference: ImageSource | None = None,
     scale: PixelScale | None = None,
     progress: bool = False,
     bit_depth: int | None = None,
@@ -150,9 +156,12 @@ def measure_files(
     position is said in the result's note.
 
     Args:
-        files: image paths.
+        files: image paths (each read when it is measured), or their contents read already
+            (:class:`~contactcal.infer.image.read.ImageFile`: a run that reads a frame for
+            more than its measurement measures the content it read).
         method: a prepared-on-demand method (:func:`contactcal.infer.methods.registry.make_method`).
-        reference: the session's zero-pressure frame; None → each frame is its own reference.
+        reference: the session's zero-pressure frame (a path or its content, as ``files``);
+            None → each frame is its own reference.
         scale: pixel scale for mm² (None → ``area_mm2`` is None).
         progress: show a progress bar on stderr.
         bit_depth: significant bits of 16-bit files (:func:`load_image`); None → from the file.
@@ -171,17 +180,16 @@ def measure_files(
         BoundaryOffsetError: an offset measured for another model, or without a scale.
     """
     active = offset_for(method, boundary, scale)
-    images = [Path(f) for f in files]
-    reference = None if reference is None else Path(reference)
-    k, ref = _start(method, images, reference, bit_depth, digest)
+    images = [source_path(f) for f in files]
+    k, ref = _start(method, files, reference, bit_depth, digest)
     out: list[Measured] = []
-    it: Any = images
+    it: Any = zip(images, files, strict=True)
     if progress:
         from tqdm import tqdm
 
-        it = tqdm(images, desc=f"measure ({method.name})", unit="frame", leave=False)
-    for path in it:
-        img, sha = _decoded(path, k, bit_depth, ref, digest)
+        it = tqdm(it, desc=f"measure ({method.name})", total=len(images), unit="frame", leave=False)
+    for path, source in it:
+        img, sha = _decoded(source, k, bit_depth, ref, digest)
         w, h = file_size(img, k)
         note = method.NO_REFERENCE if ref is None else check_frame(ref, path, img, (w, h))
         res = method.measure(img)  # in the file's pixels

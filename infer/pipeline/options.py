@@ -14,6 +14,7 @@ from dataclasses import dataclass
 from typing import TYPE_CHECKING
 
 if TYPE_CHECKING:
+    from contactcal.infer.image.read import ImageSource
     from contactcal.infer.methods.base import Method
     from contactcal.infer.pipeline.boundary import BoundaryOffset
     from contactcal.infer.pipeline.measure import Measured
@@ -62,14 +63,15 @@ class MeasureOptions:
 
     def measure(
         self,
-        files: Sequence[str | os.PathLike[str]],
+        files: Sequence[ImageSource],
         method: Method,
-        reference: str | os.PathLike[str] | None,
+        reference: ImageSource | None,
         digest: bool = False,
     ) -> list[Measured]:
-        """``files`` measured with ``method`` against ``reference``, with this run's scale, bit
-        depth and boundary offset (:func:`~contactcal.infer.pipeline.measure.measure_files`;
-        ``digest``: with the sha256 of each file's content measured, for a record)."""
+        """``files`` (paths or contents read already) measured with ``method`` against
+        ``reference``, with this run's scale, bit depth and boundary offset
+        (:func:`~contactcal.infer.pipeline.measure.measure_files`; ``digest``: with the sha256
+        of each file's content measured, for a record)."""
         from contactcal.infer.pipeline.measure import measure_files
 
         return measure_files(

@@ -11,7 +11,8 @@ import cv2
 import numpy as np
 
 from contactcal.infer.files.atomic import OutputSet, run_outputs
-from contactcal.infer.image.read import load_image
+from contactcal.infer.image.gray import ImageError
+from contactcal.infer.image.read import ImageFile
 from contactcal.infer.image.write import write_image
 from contactcal.infer.pipeline.measure import Measured
 
@@ -97,6 +98,40 @@ def overlay_names(files: Sequence[str | os.PathLike[str]]) -> list[str]:
             level[k] = min(level[k] + 1, len(forms) - 1)
 
 
+def measured_frame(
+    file: Path, measured: Mapping[str, Measured], bit_depth: int | None = None
+) -> np.ndarray:
+    """``file`` decoded at full size to draw outlines on, read again and refused unless its
+    content is the one every method measured (a frame replaced since would be drawn on with
+    another content's outlines).
+
+    Args:
+        file: the frame.
+        measured: method name → its measurement of ``file``, with the digest of the content
+            measured (``digest=True``).
+        bit_depth: significant bits of a 16-bit frame, as measured (None: from the file).
+
+    Returns:
+        ``(H, W) uint8`` frame.
+
+    Raises:
+        ImageError: the file's content is not the one measured (naming it and the method).
+        ValueError: a measurement without its digest (a caller's error, not bad input).
+    """
+    content = ImageFile.read(file)
+    sha = content.sha256()
+    for name, m in measured.items():
+        if m.sha256 is None:
+            raise ValueError(f"{name}: {file} was measured without its digest (digest=True)")
+        if m.sha256 != sha:
+            raise ImageError(
+                f"{file}: its content changed after it was measured (sha256 {m.sha256[:12]}… "
+                f"measured by {name}, {sha[:12]}… read to draw its outlines); run again once "
+                "the session's files are final"
+            )
+    return content.decode(bit_depth=bit_depth)
+
+
 def write_overlays(
     runs: dict[str, list[Measured]],
     out_dir: str | os.PathLike[str],
@@ -109,7 +144,9 @@ def write_overlays(
     File names: :func:`overlay_names`. All or nothing (:func:`run_outputs`).
 
     Args:
-        runs: method name → its measurements of the same files (same order).
+        runs: method name → its measurements of the same files (same order), with their
+            digests: each frame is drawn on only as the content every method measured
+            (:func:`measured_frame`).
         out_dir: folder for the overlays.
         titles: per-file caption (e.g. ``"8.0 kPa"``); default the file name.
         outputs: the enclosing run's outputs to stage into (None: this call is the run).
@@ -123,8 +160,9 @@ def write_overlays(
     paths = [Path(out_dir) / name for name in names]
     with run_outputs([m.file for m in first], join=outputs) as outs:
         for k, m in enumerate(first):
-            gray = load_image(m.file, bit_depth=bit_depth)
-            contours = {name: ms[k].result.contour for name, ms in runs.items()}
+            at = {name: ms[k] for name, ms in runs.items()}
+            gray = measured_frame(m.file, at, bit_depth)
+            contours = {name: mk.result.contour for name, mk in at.items()}
             title = titles[k] if titles is not None else m.file.name
             write_image(outs.stage(paths[k]), draw_overlay(gray, contours, title))
     return paths

@@ -10,7 +10,6 @@ from __future__ import annotations
 import dataclasses
 import os
 from collections.abc import Sequence
-from pathlib import Path
 from types import MappingProxyType
 from typing import Any
 
@@ -20,8 +19,13 @@ import numpy as np
 from contactcal.infer.files.digest import sha256_file
 from contactcal.infer.image.frame import as_frame
 from contactcal.infer.image.gray import reduce_area
-from contactcal.infer.image.jpeg import jpeg_size
-from contactcal.infer.image.read import ImageFile
+from contactcal.infer.image.read import (
+    ImageFile,
+    ImageSource,
+    source_content,
+    source_jpeg_size,
+    source_path,
+)
 from contactcal.infer.methods.base import UNCHANGED_NOTE, AreaResult, Started, load_reference
 from contactcal.infer.methods.unet.postprocess import Segmentation, mask_in_input
 from contactcal.infer.methods.unet.prepare import session_reference
@@ -89,7 +93,10 @@ class UnetMethod:
         self.shrink: int | None = None  # the method shrinks them further (None: not decided)
 
     def start(
-        self, files: Sequence[Path], reference: ImageFile | None, bit_depth: int | None = None
+        self,
+        files: Sequence[ImageSource],
+        reference: ImageFile | None,
+        bit_depth: int | None = None,
     ) -> Started:
         """Choose the decode reduction from the ring's size, then prepare the reference.
 
@@ -99,15 +106,17 @@ class UnetMethod:
         search is the session's, and that decode is the reference returned (at k < 8 the
         reference's content, read once, is decoded again at 1/k).
         """
-        paths = [*files, *([reference.path] if reference is not None else [])]
-        jpegs = bool(paths) and all(p.suffix.lower() in (".jpg", ".jpeg") for p in paths)
-        sizes = {jpeg_size(p) for p in paths} if jpegs else set()
+        sources = [*files, *([reference] if reference is not None else [])]
+        jpegs = bool(sources) and all(
+            source_path(s).suffix.lower() in (".jpg", ".jpeg") for s in sources
+        )
+        sizes = {source_jpeg_size(s) for s in sources} if jpegs else set()
         if len(sizes) != 1:  # not all JPEG, or JPEGs of several sizes: decode fully
             ref = load_reference(reference, bit_depth=bit_depth)
             self.set_reference(ref)
             return Started(1, ref)
         (h, w), cfg = sizes.pop(), self.segmenter.spec.preprocess
-        first = reference if reference is not None else ImageFile.read(paths[-1])
+        first = reference if reference is not None else source_content(files[-1])
         coarse = session_reference(first.decode(8, bit_depth), cfg)
         k = 1
         if coarse.box is not None:  # the ring was found
