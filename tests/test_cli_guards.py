@@ -63,12 +63,12 @@ def test_evaluate_gate_flag_and_labels_folder(
 def test_interrupt_is_one_line_and_leaves_nothing(
     tmp_path: Path, capsys: pytest.CaptureFixture[str], monkeypatch
 ) -> None:
-    from contactcal.infer.pipeline import measure
+    from contactcal.infer.image import read as image_read
 
     def stop(*args: object, **kwargs: object) -> None:
         raise KeyboardInterrupt
 
-    monkeypatch.setattr(measure.ImageFile, "read", stop)
+    monkeypatch.setattr(image_read.ImageFile, "read", stop)
     out = tmp_path / "cal"
     assert main(["calibrate", MANIFEST, "--method", "classical", "--out", str(out)]) == 130
     assert "interrupted" in _one_error(capsys)
@@ -214,12 +214,12 @@ def test_sigterm_is_handled_as_ctrl_c(
 ) -> None:
     import signal
 
-    from contactcal.infer.pipeline import measure
+    from contactcal.infer.image import read as image_read
 
     def term(*args: object, **kwargs: object) -> None:
         signal.raise_signal(signal.SIGTERM)
 
-    monkeypatch.setattr(measure.ImageFile, "read", term)
+    monkeypatch.setattr(image_read.ImageFile, "read", term)
     out = tmp_path / "cal"
     before = signal.getsignal(signal.SIGTERM)
     code = main(["calibrate", MANIFEST, "--method", "classical", "--out", str(out)])
