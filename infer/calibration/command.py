@@ -13,6 +13,7 @@ from contactcal.infer.pipeline.args import (
     NO_SCALE_NOTE,
     check_change_gate,
     check_out_folder,
+    check_output_folder,
     measure_options,
     method_args,
     overlay_runs,
@@ -96,6 +97,7 @@ def _cmd_calibrate(args: argparse.Namespace) -> int:
     from contactcal.infer.calibration.calibrate import calibrate_session
     from contactcal.infer.calibration.out_folder import check_reused_out
     from contactcal.infer.calibration.provenance import Provenance
+    from contactcal.infer.calibration.record import CALIBRATION_FILES
     from contactcal.infer.files.atomic import run_outputs
     from contactcal.infer.files.stdout import printing_after
     from contactcal.infer.pipeline.manifest import beside_manifest, reference_width
@@ -106,8 +108,9 @@ def _cmd_calibrate(args: argparse.Namespace) -> int:
 
     provenance = Provenance(argv=args.argv, device_id=args.device_id)  # refuses a bad id
     check_change_gate(args)
-    check_out_folder(args.out, "calibrate")
+    check_out_folder(args.out, "calibrate", CALIBRATION_FILES)  # before the work
     video = is_video_run(args)  # checks the options' combination
+    check_output_folder("--overlay", args.overlay)
     # another display's record, or an earlier recording's frames or preview: refused before
     # any work (a video run's own: check_fresh_recording)
     replaced = check_reused_out(args.out, args.device_id, None if video else args.manifest)

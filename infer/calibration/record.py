@@ -205,6 +205,10 @@ def _csv_text(fit: SessionFit) -> str:
     return buf.getvalue()
 
 
+#: The files a calibration writes into its folder.
+CALIBRATION_FILES = ("calibration.json", "calibration.csv", "curve.png")
+
+
 def write_calibration(
     out_dir: str | os.PathLike[str],
     results: list[CalibrationPoint],
@@ -231,11 +235,8 @@ def write_calibration(
         ``{"json": path, "csv": path, "png": path}``, final paths.
     """
     out = Path(out_dir)
-    paths = {
-        "json": out / "calibration.json",
-        "csv": out / "calibration.csv",
-        "png": out / "curve.png",
-    }
+    keys = ("json", "csv", "png")
+    paths = {key: out / name for key, name in zip(keys, CALIBRATION_FILES, strict=True)}
     # Serialise first: a content error fails before anything touches the disk.
     record = calibration_record(results, fit, method, extra or {}, provenance)
     text = json_text(record, ensure_ascii=False)

@@ -188,22 +188,50 @@ VIDEO_SCALE = "no --mm-per-px or --rig; a video or camera run reads no rig.json"
 
 def check_out_folder(out: Path, command: str, files: tuple[str, ...] = ()) -> None:
     """Refuse ``--out -`` for a command whose outputs are a folder of files, and, before the
-    work, each of ``files`` in ``out`` that could not be written (a folder that is a file or a
-    link, or above it; a file that is a link or a device: ``check_destination``).
+    work, an ``out`` that could not receive them or any of ``files`` in it that could not be
+    written (:func:`check_output_folder`).
 
     Raises:
         ValueError: ``out`` is ``-`` (standard output: ``measure``'s JSON only), or an output
-            that must not be written (named).
+            that must not be written (``--out OUT: ...``).
     """
-    from contactcal.infer.files.atomic import check_destination
-
     if str(out) == "-":
         raise ValueError(
             f"--out -: {command} writes a folder of files, not one stream; give a folder "
             "(standard output is for `contactcal measure --out -` only)"
         )
-    for name in files:
-        check_destination(out / name)
+    check_output_folder("--out", out, files)
+
+
+def check_output_folder(option: str, folder: Path | None, files: tuple[str, ...] = ()) -> None:
+    """Refuse, before the work, an output folder option whose folder could not receive outputs
+    (it, or the nearest existing folder above it, is a file or a link) or any of ``files`` in it
+    that could not be written (a link, a folder, a device: ``check_destination``), rather than
+    after measuring every frame.
+
+    Args:
+        option: the option, for the message (``"--out"``, ``"--overlay"``).
+        folder: its value (None: not given, nothing to check).
+        files: names of the outputs the run writes into ``folder`` (may hold a subfolder).
+
+    Raises:
+        ValueError: ``OPTION FOLDER: ...``, naming the path refused and why.
+    """
+    from contactcal.infer.errors import option_error
+    from contactcal.infer.files.atomic import (
+        OutputError,
+        check_destination,
+        check_receiving_folder,
+    )
+
+    if folder is None:
+        return
+    try:
+        check_receiving_folder(folder / "output")  # the folder itself receives the outputs
+        for name in files:
+            check_destination(folder / name)
+    except OutputError as exc:
+        raise option_error(option, folder, exc) from None
 
 
 def measure_options(args: argparse.Namespace, rig: RigConfig | None) -> MeasureOptions:

@@ -13,6 +13,7 @@ from contactcal.infer.pipeline.args import (
     check_bit_depth,
     check_change_gate,
     check_out_folder,
+    check_output_folder,
     measure_options,
     method_args,
     overlay_runs,
@@ -55,6 +56,7 @@ def _cmd_measure(args: argparse.Namespace) -> int:
 
     check_device_id(args.device_id)
     check_change_gate(args)
+    check_output_folder("--overlay", args.overlay)  # before the work
     to_stdout = str(args.out) == "-"
     if to_stdout and sys.stdout is None:
         raise ValueError(
@@ -149,11 +151,11 @@ def _cmd_demo(args: argparse.Namespace) -> int:
     from contactcal.infer.calibration.record import earlier_record_note, held_record
     from contactcal.infer.files.stdout import printing_after
     from contactcal.infer.methods.registry import METHODS
-    from contactcal.infer.pipeline.demo import run_demo
+    from contactcal.infer.pipeline.demo import DEMO_FILES, run_demo
 
     options = SessionOptions(step_tolerance_kpa=step_tolerance(args))
     check_bit_depth(args.bit_depth)
-    check_out_folder(args.out, "demo")
+    check_out_folder(args.out, "demo", DEMO_FILES)  # before the work
     replaced = [earlier_record_note(d, held_record(d)) for d in (args.out / m for m in METHODS)]
     summary = run_demo(args.out, args.manifest, args.argv, options, args.bit_depth)
     with printing_after([args.out], replaced):

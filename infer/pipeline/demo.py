@@ -15,6 +15,7 @@ from contactcal.infer.calibration.calibrate import (
     calibrate_session,
 )
 from contactcal.infer.calibration.provenance import Provenance
+from contactcal.infer.calibration.record import CALIBRATION_FILES
 from contactcal.infer.files.atomic import run_outputs, write_synced
 from contactcal.infer.image.write import write_image
 from contactcal.infer.methods.registry import METHODS
@@ -28,6 +29,10 @@ from contactcal.infer.pipeline.scale import read_rig_json, rig_scale
 
 #: Pressures shown in the overlay montage (nearest frames), kPa.
 MONTAGE_KPA = (0.0, 2.0, 4.0, 8.0, 14.0, 20.0)
+#: The files a demo writes into its output folder: each method's calibration, the montage and
+#: the summary.
+MONTAGE, SUMMARY = "overlay_montage.png", "summary.txt"
+DEMO_FILES = (*(f"{m}/{n}" for m in METHODS for n in CALIBRATION_FILES), MONTAGE, SUMMARY)
 
 
 def run_demo(
@@ -83,10 +88,10 @@ def run_demo(
             title = f"{frames[i].pressure_kpa:g} kPa"
             gray = measured_frame(frames[i].file, at, bit_depth)  # the content measured
             tiles.append(draw_overlay(gray, contours, title))
-        write_image(outs.stage(out / "overlay_montage.png"), montage(tiles, columns=3))
-        lines.append(f"\noverlays: {out / 'overlay_montage.png'}")
+        write_image(outs.stage(out / MONTAGE), montage(tiles, columns=3))
+        lines.append(f"\noverlays: {out / MONTAGE}")
         if measure.scale is None:  # as calibrate says it
             lines.append(NO_SCALE_NOTE.format(looked="no rig.json beside the manifest"))
         text = "\n".join(lines) + "\n"
-        write_synced(outs.stage(out / "summary.txt"), text)
+        write_synced(outs.stage(out / SUMMARY), text)
     return text
