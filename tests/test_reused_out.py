@@ -1,7 +1,7 @@
-"""What ``calibrate`` and ``measure`` do with an ``--out`` that already holds a run's files:
-another display's calibration and an earlier recording's frames are refused before any work; a
-re-calibration of the same display replaces its record, and ``measure`` its results file, with
-a note."""
+"""What ``calibrate``, ``demo`` and ``measure`` do with an ``--out`` that already holds a run's
+files: another display's calibration and an earlier recording's frames are refused before any
+work; a re-calibration of the same display replaces its record, and ``measure`` its results
+file, with a note."""
 
 from __future__ import annotations
 
@@ -46,6 +46,30 @@ def test_another_displays_calibration_is_refused_not_replaced(
     assert "device id 'display-07'" in printed.err and "another --out" in printed.err
     assert "remove it first" in printed.err and printed.out == ""
     assert _snapshot(out) == before
+
+
+def test_demo_refuses_a_displays_calibration_in_its_folders(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str], monkeypatch
+) -> None:
+    """demo (no --device-id) replaced display-07's record in DIR/classical with a note."""
+    from contactcal.infer.pipeline import demo
+
+    s = copy_session(tmp_path)
+    out = tmp_path / "cal"
+    assert main(_calibrate(s / "manifest.csv", out / "classical", "--device-id", "display-07")) == 0
+    capsys.readouterr()
+    before = _snapshot(out)
+
+    def measured(*args: object, **kwargs: object) -> None:
+        raise AssertionError("measured before the --out was checked")
+
+    monkeypatch.setattr(demo, "run_demo", measured)
+    assert main(["demo", "--out", str(out)]) == 2
+    printed = capsys.readouterr()
+    one_line_naming(printed.err, out / "classical" / "calibration.json")
+    assert "device id 'display-07'" in printed.err and "another --out" in printed.err
+    assert "--device-id 'display-07'" not in printed.err  # demo has no such option
+    assert printed.out == "" and _snapshot(out) == before
 
 
 def test_the_same_display_or_none_is_replaced_with_a_note(

@@ -48,7 +48,9 @@ def _recorded_device(held: HeldRecord) -> str | None:
     return None if device is None else str(device)
 
 
-def check_same_device(held: HeldRecord | None, device_id: str | None) -> None:
+def check_same_device(
+    held: HeldRecord | None, device_id: str | None, takes_device_id: bool = True
+) -> None:
     """Refuse to replace a calibration that names another display than this run's.
 
     A record with a device id is replaced only by a run with that id (a re-calibration). A run
@@ -59,6 +61,8 @@ def check_same_device(held: HeldRecord | None, device_id: str | None) -> None:
         held: the ``--out`` folder's ``calibration.json`` as read before the run
             (:func:`~contactcal.infer.calibration.record.held_record`; None: none).
         device_id: this run's ``--device-id`` (None: not given).
+        takes_device_id: whether the command has ``--device-id`` (``demo`` has none: the
+            message then does not suggest it).
 
     Raises:
         ValueError: the record's id differs from ``device_id`` or ``device_id`` is None.
@@ -69,10 +73,11 @@ def check_same_device(held: HeldRecord | None, device_id: str | None) -> None:
     if recorded is None or recorded == device_id:
         return
     this = "gives no --device-id" if device_id is None else f"is for --device-id {device_id!r}"
-    again = f"--device-id {recorded!r}"
+    again = f"to re-calibrate {recorded!r}, give --device-id {recorded!r}; "
+    again = again if takes_device_id else ""
     raise ValueError(
         f"{held.path}: holds the calibration of device id {recorded!r}, and this run {this}; "
-        f"expected another --out for this display (to re-calibrate {recorded!r}, give {again}; "
+        f"expected another --out for this display ({again}"
         "to replace that record deliberately, remove it first)"
     )
 

@@ -148,6 +148,7 @@ def earlier_results_note(out: Path) -> str | None:
 
 def _cmd_demo(args: argparse.Namespace) -> int:
     from contactcal.infer.calibration.calibrate import SessionOptions
+    from contactcal.infer.calibration.out_folder import check_same_device
     from contactcal.infer.calibration.record import earlier_record_note, held_record
     from contactcal.infer.files.stdout import printing_after
     from contactcal.infer.methods.registry import METHODS
@@ -156,7 +157,10 @@ def _cmd_demo(args: argparse.Namespace) -> int:
     options = SessionOptions(step_tolerance_kpa=step_tolerance(args))
     check_bit_depth(args.bit_depth)
     check_out_folder(args.out, "demo", DEMO_FILES)  # before the work
-    replaced = [earlier_record_note(d, held_record(d)) for d in (args.out / m for m in METHODS)]
+    held = {d: held_record(d) for d in (args.out / m for m in METHODS)}
+    for record in held.values():  # a display's calibration: refused, as calibrate does
+        check_same_device(record, None, takes_device_id=False)
+    replaced = [earlier_record_note(d, record) for d, record in held.items()]
     summary = run_demo(args.out, args.manifest, args.argv, options, args.bit_depth)
     with printing_after([args.out], replaced):
         print(summary)
