@@ -193,9 +193,9 @@ def check_out_folder(out: Path, command: str, files: tuple[str, ...] = ()) -> No
 
     Raises:
         ValueError: ``out`` is ``-`` (standard output: ``measure``'s JSON only), or an output
-            that must not be written (named).
+            that must not be written: ``--out OUT: ...`` (as a refused staged output says it).
     """
-    from contactcal.infer.files.atomic import check_destination
+    from contactcal.infer.files.destination import OutputError, by_option, check_destination
 
     if str(out) == "-":
         raise ValueError(
@@ -203,7 +203,10 @@ def check_out_folder(out: Path, command: str, files: tuple[str, ...] = ()) -> No
             "(standard output is for `contactcal measure --out -` only)"
         )
     for name in files:
-        check_destination(out / name)
+        try:
+            check_destination(out / name)
+        except OutputError as exc:
+            raise by_option(out / name, exc, {"--out": out}) from None
 
 
 def measure_options(args: argparse.Namespace, rig: RigConfig | None) -> MeasureOptions:

@@ -15,7 +15,7 @@ from contactcal.infer.calibration.calibrate import (
     calibrate_session,
 )
 from contactcal.infer.calibration.provenance import Provenance
-from contactcal.infer.files.atomic import run_outputs, write_synced
+from contactcal.infer.files.atomic import OutputSet, run_outputs, write_synced
 from contactcal.infer.image.read import load_image
 from contactcal.infer.image.write import write_image
 from contactcal.infer.methods.registry import METHODS
@@ -37,6 +37,7 @@ def run_demo(
     argv: Sequence[str] | None = None,
     options: SessionOptions | None = None,
     bit_depth: int | None = None,
+    outputs: OutputSet | None = None,
 ) -> str:
     """Calibrate a session (default: the bundled example) with every method.
 
@@ -51,6 +52,7 @@ def run_demo(
             defaults, as ``calibrate``'s.
         bit_depth: significant bits of the session's 16-bit frames (``--bit-depth``); None:
             from each file.
+        outputs: the enclosing run's outputs to stage into (None: this call is the run).
 
     Returns:
         The printed summary (one table per method).
@@ -67,7 +69,7 @@ def run_demo(
     recorded = Provenance(argv=None if argv is None else list(argv))
     reports: dict[str, CalibrationReport] = {}
     lines = [f"session: {manifest}"]
-    with run_outputs() as outs:
+    with run_outputs(join=outputs) as outs:
         for method in METHODS:
             rep = calibrate_session(
                 manifest, out / method, method, measure, options, recorded, outputs=outs
