@@ -78,6 +78,7 @@ def _cmd_synth(args: argparse.Namespace) -> int:
         render=RenderConfig(width=width, height=height, spp=args.spp, variant=args.variant),
     )
     shard = parse_shard(args.shard)
+    check_out_folder(args.out, "synth", ("config.json",))  # e.g. a file above it: named
     stats = build_dataset(
         args.out, config, args.workers, shard, progress=not args.quiet, run_args=_args(args)
     )
@@ -157,7 +158,7 @@ def _cmd_fidelity(args: argparse.Namespace) -> int:
     )
     results = run_fidelity(config)
     summary = summarise([r for r, _ in results]) | {"args": _args(args)}
-    with run_outputs() as out:
+    with run_outputs(options={"--out": args.out}) as out:
         write_json(out.stage(args.out / json_name), summary)
         write_text(out.stage(args.out / md_name), summary_markdown(summary))
         strip = np.ascontiguousarray(results[0][1][:, :, ::-1])  # RGB → BGR

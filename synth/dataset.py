@@ -251,7 +251,13 @@ def _open_folder(
     check_out_folder(root)
     variant = choose_variant(config.render.variant)
     config = replace(config, render=replace(config.render, variant=variant))
-    root.mkdir(parents=True, exist_ok=True)
+    try:
+        root.mkdir(parents=True, exist_ok=True)
+    except OSError as exc:
+        raise ValueError(
+            f"--out {root}: cannot create the dataset folder ({exc.strerror}); expected a "
+            "folder that can be written"
+        ) from None
     remove_stale_temporaries(root)  # left by a killed run
     check_config_matches(root, config)
     for path in root.glob("finger_*/frames/*.json"):

@@ -121,6 +121,24 @@ def test_the_cli_names_the_option_of_a_bad_folder(
     assert not out.exists()
 
 
+@pytest.mark.parametrize("main", [interval_main, gate_main], ids=["interval", "change_gate"])
+def test_a_bad_folder_or_option_is_named_before_the_model_is_read(
+    main: Callable[[list[str]], int], tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    model, out = tmp_path / "broken.onnx", tmp_path / "out.onnx"
+    model.write_text("not a model")  # its error would come first if it were read first
+    argv = [str(model), "--data", str(tmp_path / "none"), "--out", str(out)]
+    assert main(argv) == 2
+    assert capsys.readouterr().err.startswith(f"error: --data {tmp_path / 'none'}: does not exist")
+    if main is gate_main:
+        from procedural import write_dataset
+
+        data = write_dataset(tmp_path / "d", fingers=1)
+        assert main([str(model), "--data", str(data), "--out", str(out), "--draws", "0"]) == 2
+        assert capsys.readouterr().err.startswith("error: --draws 0: expected at least 1")
+    assert not out.exists()
+
+
 def test_recorded_entries_read_as_the_spec_and_others_stay_errors() -> None:
     meta = {p.key: p.value for p in onnx.load(str(DEFAULT_MODEL)).metadata_props}
     spec = read_spec(meta, "m.onnx")

@@ -15,12 +15,12 @@ import pytest
 from contactcal.infer.cli import main
 from contactcal.infer.files import atomic
 from contactcal.infer.files.atomic import (
-    OutputError,
     atomic_path,
     remove_stale_temporaries,
     run_outputs,
     write_json,
 )
+from contactcal.infer.files.destination import OutputError
 from contactcal.infer.image.write import write_image
 from contactcal.infer.pipeline.overlay import overlay_names
 

@@ -173,10 +173,8 @@ def test_cli(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
     capsys.readouterr()
     assert main([*args, "--out", str(afile / "x")]) == 2  # once a raw "[Errno 17] File exists"
     (err,) = capsys.readouterr().err.strip().splitlines()
-    assert err == (
-        f"contactcal: error: --out {afile / 'x'}: {afile}: is not a folder; cannot write "
-        "outputs into it"
-    )
+    said = f"--out {afile / 'x'}: {afile}: is not a folder; cannot write outputs into it"
+    assert err == f"contactcal: error: {said}", err
     assert afile.read_text() == "kept"
 
 

@@ -184,15 +184,18 @@ def gate_model(
         (:func:`~contactcal.train.restate.stale`: the interval, when the gate changed).
 
     Raises:
-        ValueError: bad output name or option, a model without a reference channel, a folder
-            given twice, the model's training data, or data without a region in contact.
+        ValueError: bad output name or option, a path that is no dataset folder, a folder given
+            twice, the model's training data, a model without a reference channel, or data
+            without a region in contact; the cheap checks (output, options, folders) come
+            before the model is loaded.
     """
 
     src, dst = check_paths(model, out)
+    _check_options(specks, draws, seed)  # the cheap checks first: no model loaded for a typo
+    dirs, record = calibration_data(src, data_dirs)  # the folders before the model is read
     base = UnetMethod(src).segmenter.spec
     if not base.uses_reference:
         raise ValueError(f"{src}: the change gate needs a model with a reference channel")
-    dirs, record = calibration_data(src, data_dirs)
     change, contact, frames = collect_changes(src, dirs, specks, draws, seed)
     t, summary = margin_threshold(change, contact)
     spec = dataclasses.replace(base, min_change=t)

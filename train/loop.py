@@ -1,9 +1,10 @@
 """Training loop: cached data → U-Net with BCE + soft Dice, AdamW, one-cycle schedule, resume.
 
-:func:`train` reads as its three steps: :func:`_prepare` (data, split, model, optimiser and
-generators, restored from ``last.pt`` on resume), :func:`_run_epochs` (train, validate with the
-deployed decision, checkpoint) and :func:`_finish` (``best.pt`` on the validation fingers). With
-``ema_decay`` > 0 the weights' running average is validated and saved; ``last.pt`` keeps both.
+:func:`train` reads as its three steps: :func:`_prepare` (data and split,
+:mod:`~contactcal.train.run_data`; model, optimiser and generators, restored from ``last.pt`` on
+resume), :func:`_run_epochs` (train, validate with the deployed decision, checkpoint) and
+:func:`_finish` (``best.pt`` on the validation fingers). With ``ema_decay`` > 0 the weights'
+running average is validated and saved; ``last.pt`` keeps both.
 
 Randomness is explicit: the finger split (numpy Generator from ``seed``), weight init (torch's
 global generator seeded with ``seed``), the batch order (``Run.shuffle``, seeded ``seed``) and the
@@ -26,7 +27,6 @@ import torch
 from tqdm import tqdm
 
 from contactcal.infer import __version__
-from contactcal.infer.bench.dataset import IndexRow, read_datasets
 from contactcal.infer.bench.scoring import ScoredFrame, bin_table
 from contactcal.infer.files.atomic import write_json
 from contactcal.train.augment import Augmenter
@@ -39,14 +39,14 @@ from contactcal.train.checkpoint import (
 )
 from contactcal.train.config import TrainConfig, resolve_device
 from contactcal.train.data import CachedSet, build_cache
-from contactcal.train.digest import dataset_digest, render_digest
 from contactcal.train.ema import WeightAverage
 from contactcal.train.metrics import evaluate, segmentation_loss, summarise
 from contactcal.train.model import UNet, count_parameters
 from contactcal.train.report import METRIC_COLUMNS, plot_curves, write_csv
 from contactcal.train.resume import finished_summary, is_finished, resume_checkpoint
+from contactcal.train.run_data import run_data
 from contactcal.train.run_folder import check_run_folder
-from contactcal.train.split import Split, split_by_finger, split_record
+from contactcal.train.split import Split
 
 
 @dataclass
@@ -94,37 +94,10 @@ def _run_info(
     }
 
 
-def _split(cfg: TrainConfig, dirs: list[Path]) -> tuple[list[IndexRow], list[IndexRow]]:
-    """Read the datasets and split them by finger (>= 2 training frames)."""
-    train_rows, val_rows = split_by_finger(read_datasets(dirs), cfg.val_fraction, cfg.seed)
-    if len(train_rows) < 2:
-        raise ValueError(
-            f"{dirs[0]}: need >= 2 training frames after the split, got {len(train_rows)}"
-        )
-    if not val_rows:
-        fingers = len({r.finger_key for r in train_rows})
-        raise ValueError(
-            f"{', '.join(map(str, dirs))}: {fingers} finger(s), none left for validation; "
-            "expected >= 2 fingers (validation chooses best.pt, and export calibrates the "
-            "area interval on the validation fingers)"
-        )
-    return train_rows, val_rows
-
-
-def _data(
-    cfg: TrainConfig, dirs: list[Path]
-) -> tuple[list[IndexRow], list[IndexRow], tuple[str, str], Split]:
-    """The run's frames split by finger, the data's digests (``dataset_digest``,
-    ``render_digest``) and the split as recorded, all that ``--resume`` checks against the run."""
-    train_rows, val_rows = _split(cfg, dirs)  # validates the folders first
-    digests = (dataset_digest(dirs), render_digest(dirs))
-    return train_rows, val_rows, digests, split_record(train_rows, val_rows)
-
-
 def _prepare(dirs: list[Path], out: Path, cfg: TrainConfig, resume: bool, progress: bool) -> Run:
     """Step 1: data, split, model, optimiser, schedule and generators (restored on resume)."""
     check_run_folder(out, resume)
-    train_rows, val_rows, digests, split = _data(cfg, dirs)
+    train_rows, val_rows, digests, split = run_data(cfg, dirs)
     device = resolve_device(cfg.device)
     if cfg.num_threads > 0:
         torch.set_num_threads(cfg.num_threads)
@@ -296,10 +269,11 @@ def train(
             empty or (with ``resume``) a run holding ``last.pt``.
     """
     cfg = (config or TrainConfig()).resolved()
+    dirs = [Path(d) for d in data_dirs]
     if resume and is_finished(Path(out_dir)):  # checked as any run, then left as it is
-        ckpt = resume_checkpoint(Path(out_dir), cfg, *_data(cfg, [Path(d) for d in data_dirs])[2:])
+        ckpt = resume_checkpoint(Path(out_dir), cfg, *run_data(cfg, dirs)[2:])
         return finished_summary(Path(out_dir), ckpt)
-    run = _prepare([Path(d) for d in data_dirs], Path(out_dir), cfg, resume, progress)
+    run = _prepare(dirs, Path(out_dir), cfg, resume, progress)
     if run.start == cfg.epochs:  # killed after its last last.pt: complete what follows it
         _write_records(run, config=True)
     _run_epochs(run, progress)

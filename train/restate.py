@@ -19,7 +19,8 @@ from pathlib import Path
 from typing import Any
 
 from contactcal.infer.errors import option_error
-from contactcal.infer.files.atomic import atomic_open, check_destination
+from contactcal.infer.files.atomic import atomic_open
+from contactcal.infer.files.destination import check_destination
 from contactcal.infer.methods.unet.spec import ModelSpec, read_spec
 
 #: Each calibrated metadata entry: what it is, and the tool that calibrates it; in the order to

@@ -16,7 +16,8 @@ from pathlib import Path
 from typing import Any
 
 from contactcal.infer.errors import few
-from contactcal.infer.files.atomic import TEMP_NAME, check_receiving_folder
+from contactcal.infer.files.atomic import TEMP_NAME
+from contactcal.infer.files.destination import check_receiving_folder
 
 
 def read_run_info(run_dir: str | os.PathLike[str]) -> dict[str, Any]:
@@ -43,7 +44,7 @@ def read_run_info(run_dir: str | os.PathLike[str]) -> dict[str, Any]:
 
 def check_run_folder(out: Path, resume: bool) -> None:
     """Refuse an ``out`` that ``train`` would write over, or could not write into (under a file
-    or a link: :func:`~contactcal.infer.files.atomic.check_receiving_folder`, checked for the
+    or a link: :func:`~contactcal.infer.files.destination.check_receiving_folder`, checked for the
     files it writes): a new run needs a new or empty folder (staged temporaries of a killed write
     aside), ``resume`` a run that holds ``last.pt``.
 

@@ -61,6 +61,7 @@ def _cmd_bench(args: argparse.Namespace) -> int:
     from contactcal.infer.bench.dataset import check_dataset_folder
     from contactcal.infer.bench.report import REPORT_FILES, ROBUSTNESS_FILES
     from contactcal.infer.bench.run import run_bench
+    from contactcal.infer.files.atomic import run_outputs
     from contactcal.infer.files.replaced import replaced_note
     from contactcal.infer.files.stdout import printing_after
     from contactcal.infer.pipeline.args import check_out_folder
@@ -93,7 +94,8 @@ def _cmd_bench(args: argparse.Namespace) -> int:
     model = None if args.model is None else str(args.model)
     writes = [n for n in REPORT_FILES if args.robustness or n not in ROBUSTNESS_FILES]
     replaced = replaced_note(args.out, writes, "report")
-    res = run_bench(args.data, args.out, model, cfg, args.crosscheck)
+    with run_outputs(options={"--out": args.out}) as outs:
+        res = run_bench(args.data, args.out, model, cfg, args.crosscheck, outs)
     with printing_after([args.out], [replaced]):
         _print_summary(res, args.out)
         if replaced is not None:

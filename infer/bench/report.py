@@ -30,7 +30,7 @@ from contactcal.infer.bench.scoring import (
     not_references,
 )
 from contactcal.infer.bench.timing import TIMED_KPA
-from contactcal.infer.files.atomic import run_outputs, write_json, write_text
+from contactcal.infer.files.atomic import OutputSet, run_outputs, write_json, write_text
 
 BIN_COLUMNS: Columns = (
     ("method", "method", False),
@@ -275,6 +275,7 @@ def write_report(
     frames: Sequence[ScoredFrame],
     bins: Sequence[tuple[float, float]],
     extra_text: str = "",
+    outputs: OutputSet | None = None,
 ) -> None:
     """Add the tables of :func:`accuracy_tables` to ``results``; write ``results.json``,
     the figures (``error_vs_pressure.png``, ``pareto.png``, with ``robustness`` results also
@@ -288,20 +289,21 @@ def write_report(
         frames: the scored frames.
         bins: pressure bins, kPa, ``[lo, hi)``.
         extra_text: Markdown sections appended to ``report.md`` (the cross-check datasets).
+        outputs: the enclosing run's outputs to stage into (None: this call is the run).
     """
     out = Path(out_dir)
     results.update(accuracy_tables(frames, results["onset"], bins))
     size = tuple(results["config"]["full_size"])
     text = report_text(results)
-    with run_outputs() as outputs:  # every file of the report, or none
-        write_json(outputs.stage(out / "results.json"), results)
-        plot_error_vs_pressure(outputs.stage(out / "error_vs_pressure.png"), not_references(frames))
-        pareto = outputs.stage(out / "pareto.png")
+    with run_outputs(join=outputs) as outs:  # every file of the report, or none
+        write_json(outs.stage(out / "results.json"), results)
+        plot_error_vs_pressure(outs.stage(out / "error_vs_pressure.png"), not_references(frames))
+        pareto = outs.stage(out / "pareto.png")
         plot_pareto(pareto, results["bins"], results["timing"], (size[0], size[1]))
         if "robustness" in results:
             rob = results["robustness"]
             figure, no_contact = ROBUSTNESS_FILES
-            plot_robustness(outputs.stage(out / figure), rob)
-            plot_robustness(outputs.stage(out / no_contact), rob, "no_contact")
+            plot_robustness(outs.stage(out / figure), rob)
+            plot_robustness(outs.stage(out / no_contact), rob, "no_contact")
         md = text + ("\n" + extra_text if extra_text else "")
-        write_text(outputs.stage(out / "report.md"), md)
+        write_text(outs.stage(out / "report.md"), md)

@@ -35,6 +35,7 @@ from contactcal.infer.bench.report import write_report
 from contactcal.infer.bench.robustness import run_robustness
 from contactcal.infer.bench.scoring import ScoredFrame
 from contactcal.infer.bench.timing import timing
+from contactcal.infer.files.atomic import OutputSet
 from contactcal.infer.files.digest import sha256_file
 from contactcal.infer.methods.unet.runner import DEFAULT_MODEL
 
@@ -45,6 +46,7 @@ def run_bench(
     model: str | os.PathLike[str] | None = None,
     config: BenchConfig | None = None,
     crosscheck: Sequence[str | os.PathLike[str]] = (),
+    outputs: OutputSet | None = None,
 ) -> dict[str, Any]:
     """Run the accuracy and speed benchmarks; write ``report.md``, ``results.json`` and plots.
 
@@ -55,6 +57,8 @@ def run_bench(
         config: what to measure (default :class:`BenchConfig`).
         crosscheck: further dataset folders scored the same way (no timing), reported beside
             ``data`` (:mod:`~contactcal.infer.bench.crosscheck`).
+        outputs: the enclosing run's outputs to stage the report into (None: this call is the
+            run).
 
     Returns:
         The content of ``results.json``: header keys (with ``use_reference=False`` also
@@ -112,7 +116,7 @@ def run_bench(
     extra = ""
     if crosscheck:
         extra = _crosscheck(results, data, frames, crosscheck, others, model, config)
-    write_report(out_dir, results, frames, config.bins, extra)
+    write_report(out_dir, results, frames, config.bins, extra, outputs)
     return results
 
 

@@ -129,7 +129,8 @@ def _cmd_calibrate(args: argparse.Namespace) -> int:
     )
     provenance = replace(provenance, rig_note=set_aside)  # recorded: extra.rig_note
     written: list[Path] = []
-    with run_outputs(run_inputs(args)) as outs:
+    named = {"--out": args.out, "--overlay": args.overlay}
+    with run_outputs(run_inputs(args), options=named) as outs:
         rep = calibrate_session(
             args.manifest,
             args.out,

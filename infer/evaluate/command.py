@@ -52,6 +52,7 @@ def add_parsers(sub: argparse._SubParsersAction) -> None:
 
 def _cmd_evaluate(args: argparse.Namespace) -> int:
     from contactcal.infer.evaluate.run import evaluate_session
+    from contactcal.infer.files.atomic import run_outputs
     from contactcal.infer.files.stdout import printing_after
     from contactcal.infer.pipeline.manifest import beside_manifest, reference_width
     from contactcal.infer.pipeline.rig_note import rig_note
@@ -69,14 +70,16 @@ def _cmd_evaluate(args: argparse.Namespace) -> int:
         lambda: reference_width(args.manifest, 0.0, args.bit_depth),
     )
     replaced = earlier_evaluation_note(args.out, args.manifest)
-    rep = evaluate_session(
-        args.manifest,
-        args.labels,
-        args.out,
-        args.method,
-        measure,
-        also_read=[rig.path] if rig else [],
-    )
+    with run_outputs(options={"--out": args.out}) as outs:
+        rep = evaluate_session(
+            args.manifest,
+            args.labels,
+            args.out,
+            args.method,
+            measure,
+            outputs=outs,
+            also_read=[rig.path] if rig else [],
+        )
     with printing_after([args.out], [set_aside, replaced]):
         print(rep.table)
         print(f"evaluation: {rep.files['json']}, {rep.files['png']}")

@@ -7,7 +7,10 @@ renamed onto their destinations, in the order they were staged; on any error the
 from an earlier run stay as they were. A reader therefore sees complete old or complete new files.
 
 Outputs never replace an input of the run, a symbolic link (or, through it, its target) or
-anything that is not a regular file (a device, a folder, a pipe): :func:`check_destination`.
+anything that is not a regular file (a device, a folder, a pipe):
+:func:`~contactcal.infer.files.destination.check_destination`. A refused output under a
+command-line option's value is named by that option (``--out OUT: ...``; ``options`` of
+:func:`run_outputs`).
 
 Staging folders are named ``.<name>.<pid>.<random>.tmp`` (``name``: the first output staged in
 that folder; ``pid``: the writing process). A process killed with ``kill -9`` leaves its staging
@@ -22,84 +25,18 @@ import errno
 import os
 import re
 import shutil
-import stat
 import tempfile
-from collections.abc import Iterable, Iterator
+from collections.abc import Iterable, Iterator, Mapping
 from pathlib import Path
 from typing import IO, Any
 
+from contactcal.infer.files.destination import OutputError, by_option, check_destination
 from contactcal.infer.files.interrupt import deferred_interrupt
 from contactcal.infer.files.jsonable import json_text
 from contactcal.infer.files.stdout import StdoutError
 
 #: Names of this module's temporaries: ``.<name>.<pid>.<random>.tmp``.
 TEMP_NAME = re.compile(r"^\..+\.(?P<pid>[0-9]+)\.[A-Za-z0-9_]+\.tmp$")
-
-
-class OutputError(ValueError):
-    """An output path that must not be written (an input, a link, a device); names the path."""
-
-
-class LinkOutputError(OutputError):
-    """An output path that is a symbolic link; a command whose output has another form adds it
-    (``measure``: ``--out -``, standard output)."""
-
-
-def check_destination(path: str | os.PathLike[str], protect: Iterable[Path] = ()) -> None:
-    """Refuse a destination that is a link, not a regular file, or one of the inputs.
-
-    Args:
-        path: the output path.
-        protect: the run's input files (compared by device and inode, so another spelling or a
-            hard link of an input is refused too).
-
-    Raises:
-        OutputError: the message names the path and says what to do instead.
-    """
-    p = Path(path)
-    check_receiving_folder(p)
-    try:
-        st = os.lstat(p)
-    except (FileNotFoundError, NotADirectoryError):
-        return  # nothing there to replace
-    if stat.S_ISLNK(st.st_mode):
-        raise LinkOutputError(
-            f"{p}: is a symbolic link; outputs never replace a link or its target; give a "
-            "regular file path"
-        )
-    if not stat.S_ISREG(st.st_mode):
-        raise OutputError(
-            f"{p}: exists and is not a regular file (a folder, device or pipe); "
-            "outputs replace only regular files"
-        )
-    for q in protect:
-        with contextlib.suppress(OSError):
-            qs = os.stat(q)
-            if (qs.st_dev, qs.st_ino) == (st.st_dev, st.st_ino):
-                raise OutputError(
-                    f"{p}: is an input of this run ({q}); refusing to overwrite it "
-                    "(choose another output path)"
-                )
-
-
-def check_receiving_folder(path: str | os.PathLike[str]) -> None:
-    """Refuse an output whose nearest existing folder above it is a link or not a folder.
-
-    That folder gets the new entries (the output, or the missing folders on its way).
-
-    Raises:
-        OutputError: naming that folder.
-    """
-    final = Path(os.path.abspath(path))
-    receiving = next(p for p in (final.parent, *final.parents) if os.path.lexists(p))
-    if receiving.is_symlink():
-        raise OutputError(
-            f"{receiving}: is a symbolic link to a folder; outputs never write "
-            f"through a link into its target (give the folder itself: "
-            f"{receiving.resolve()})"
-        )
-    if not receiving.is_dir():
-        raise OutputError(f"{receiving}: is not a folder; cannot write outputs into it")
 
 
 def _pid_running(pid: int) -> bool:
@@ -145,18 +82,31 @@ class OutputSet:
 
     Args:
         protect: the run's input files, never to be replaced (see :func:`check_destination`).
+        options: the options that name the outputs (see :meth:`name_options`).
     """
 
-    def __init__(self, protect: Iterable[str | os.PathLike[str] | None] = ()) -> None:
+    def __init__(
+        self,
+        protect: Iterable[str | os.PathLike[str] | None] = (),
+        options: Mapping[str, str | os.PathLike[str] | None] | None = None,
+    ) -> None:
         self._protect: list[Path] = []
+        self._options: dict[str, Path] = {}
         self._staged: dict[Path, Path] = {}  # destination → staged file, in staging order
         self._stages: dict[Path, Path] = {}  # destination folder → its staging folder
         self._made: list[Path] = []  # output folders this run created, parents first
         self.protect(*protect)
+        self.name_options(options or {})
 
     def protect(self, *paths: str | os.PathLike[str] | None) -> None:
         """Add input files that no output may replace (None entries are ignored)."""
         self._protect += [Path(p) for p in paths if p is not None]
+
+    def name_options(self, options: Mapping[str, str | os.PathLike[str] | None]) -> None:
+        """Name the outputs by the options that gave them: a refused output at or under an
+        option's value (``{"--out": args.out}``; None values are ignored) says ``--out OUT:``
+        first, the value as given (:func:`~contactcal.infer.files.destination.by_option`)."""
+        self._options |= {o: Path(v) for o, v in options.items() if v is not None}
 
     def stage(self, path: str | os.PathLike[str]) -> Path:
         """The path to write destination ``path`` to (same name, in a staging folder).
@@ -164,7 +114,17 @@ class OutputSet:
         Raises:
             OutputError: ``path`` must not be written, or was staged already in this run.
             OSError: its folder cannot be created (the message names it).
+            ValueError: that folder error, for a ``path`` an option gave (named by it).
         """
+        try:
+            return self._stage(path)
+        except (OutputError, OSError) as exc:
+            named = by_option(path, exc, self._options)
+            if named is exc:
+                raise
+            raise named from None
+
+    def _stage(self, path: str | os.PathLike[str]) -> Path:
         final = Path(os.path.abspath(path))
         check_destination(final, self._protect)
         if final in self._staged:
@@ -235,7 +195,9 @@ class OutputSet:
 
 @contextlib.contextmanager
 def run_outputs(
-    protect: Iterable[str | os.PathLike[str] | None] = (), join: OutputSet | None = None
+    protect: Iterable[str | os.PathLike[str] | None] = (),
+    join: OutputSet | None = None,
+    options: Mapping[str, str | os.PathLike[str] | None] | None = None,
 ) -> Iterator[OutputSet]:
     """All outputs of a run: stage them in the block, committed when the block succeeds.
 
@@ -243,15 +205,19 @@ def run_outputs(
         protect: the run's input files (never replaced).
         join: an enclosing run's :class:`OutputSet` to stage into instead (the enclosing run
             commits, or discards, everything together).
+        options: the command-line options that give the outputs' paths, with their values as
+            given (``{"--out": args.out}``): a refused output says which
+            (:meth:`OutputSet.name_options`).
 
     Yields:
         The :class:`OutputSet`; write each output to ``outputs.stage(destination)``.
     """
     if join is not None:
         join.protect(*protect)
+        join.name_options(options or {})
         yield join
         return
-    outputs = OutputSet(protect)
+    outputs = OutputSet(protect, options)
     try:
         yield outputs
         outputs.commit()

@@ -217,9 +217,9 @@ def check_output_folder(option: str, folder: Path | None, files: tuple[str, ...]
     Raises:
         ValueError: ``OPTION FOLDER: ...``, naming the path refused and why.
     """
-    from contactcal.infer.errors import option_error
-    from contactcal.infer.files.atomic import (
+    from contactcal.infer.files.destination import (
         OutputError,
+        by_option,
         check_destination,
         check_receiving_folder,
     )
@@ -231,7 +231,7 @@ def check_output_folder(option: str, folder: Path | None, files: tuple[str, ...]
         for name in files:
             check_destination(folder / name)
     except OutputError as exc:
-        raise option_error(option, folder, exc) from None
+        raise by_option(folder, exc, {option: folder}) from None
 
 
 def measure_options(args: argparse.Namespace, rig: RigConfig | None) -> MeasureOptions:

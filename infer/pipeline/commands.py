@@ -75,7 +75,8 @@ def _cmd_measure(args: argparse.Namespace) -> int:
             )
         )
     replaced = None if to_stdout else earlier_results_note(args.out)
-    with run_outputs([*args.images, *run_inputs(args)]) as outs:
+    named = {"--out": None if to_stdout else args.out, "--overlay": args.overlay}
+    with run_outputs([*args.images, *run_inputs(args)], options=named) as outs:
         json_path = None if to_stdout else _stage_results(outs, args.out)  # before the work
         options = measure_options(args, read_rig(args))
         method = options.method(args.method)
@@ -110,18 +111,14 @@ def _cmd_measure(args: argparse.Namespace) -> int:
 
 def _stage_results(outs: OutputSet, out: Path) -> Path:
     """``measure``'s results file, staged: refused (before the work) where it must not be
-    written (``--out OUT: ...``), a link with the other way to get the JSON named."""
-    from contactcal.infer.errors import option_error
-    from contactcal.infer.files.atomic import LinkOutputError, OutputError
+    written (``--out OUT: ...``: ``outs`` names ``--out``), a link with the other way to get the
+    JSON named."""
+    from contactcal.infer.files.destination import LinkOutputError
 
     try:
         return outs.stage(out)
     except LinkOutputError as exc:
-        raise LinkOutputError(
-            f"{option_error('--out', out, exc)}, or --out - for standard output"
-        ) from None
-    except OutputError as exc:
-        raise option_error("--out", out, exc) from None
+        raise LinkOutputError(f"{exc}, or --out - for standard output") from None
 
 
 def earlier_results_note(out: Path) -> str | None:
@@ -150,6 +147,7 @@ def _cmd_demo(args: argparse.Namespace) -> int:
     from contactcal.infer.calibration.calibrate import SessionOptions
     from contactcal.infer.calibration.out_folder import check_same_device
     from contactcal.infer.calibration.record import earlier_record_note, held_record
+    from contactcal.infer.files.atomic import run_outputs
     from contactcal.infer.files.stdout import printing_after
     from contactcal.infer.methods.registry import METHODS
     from contactcal.infer.pipeline.demo import DEMO_FILES, run_demo
@@ -161,7 +159,8 @@ def _cmd_demo(args: argparse.Namespace) -> int:
     for record in held.values():  # a display's calibration: refused, as calibrate does
         check_same_device(record, None, takes_device_id=False)
     replaced = [earlier_record_note(d, record) for d, record in held.items()]
-    summary = run_demo(args.out, args.manifest, args.argv, options, args.bit_depth)
+    with run_outputs(options={"--out": args.out}) as outs:
+        summary = run_demo(args.out, args.manifest, args.argv, options, args.bit_depth, outs)
     with printing_after([args.out], replaced):
         print(summary)
         for note in replaced:

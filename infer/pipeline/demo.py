@@ -16,7 +16,7 @@ from contactcal.infer.calibration.calibrate import (
 )
 from contactcal.infer.calibration.provenance import Provenance
 from contactcal.infer.calibration.record import CALIBRATION_FILES
-from contactcal.infer.files.atomic import run_outputs, write_synced
+from contactcal.infer.files.atomic import OutputSet, run_outputs, write_synced
 from contactcal.infer.image.write import write_image
 from contactcal.infer.methods.registry import METHODS
 from contactcal.infer.pipeline.args import NO_SCALE_NOTE
@@ -41,6 +41,7 @@ def run_demo(
     argv: Sequence[str] | None = None,
     options: SessionOptions | None = None,
     bit_depth: int | None = None,
+    outputs: OutputSet | None = None,
 ) -> str:
     """Calibrate a session (default: the bundled example) with every method.
 
@@ -55,6 +56,7 @@ def run_demo(
             defaults, as ``calibrate``'s.
         bit_depth: significant bits of the session's 16-bit frames (``--bit-depth``); None:
             from each file.
+        outputs: the enclosing run's outputs to stage into (None: this call is the run).
 
     Returns:
         The printed summary (one table per method).
@@ -71,7 +73,7 @@ def run_demo(
     recorded = Provenance(argv=None if argv is None else list(argv))
     reports: dict[str, CalibrationReport] = {}
     lines = [f"session: {manifest}"]
-    with run_outputs() as outs:
+    with run_outputs(join=outputs) as outs:
         for method in METHODS:
             rep = calibrate_session(
                 manifest, out / method, method, measure, options, recorded, outputs=outs

@@ -187,7 +187,7 @@ def calibrate_video(
     )
     check_fresh_recording(args.out)
     protect = [args.video, args.pressure_log, args.model, args.rig]
-    with run_outputs(protect) as outs:
+    with run_outputs(protect, options={"--out": args.out}) as outs:
         ex = extract.Extractor(cfg, args.out / "frames", outs.stage)
         frames, feed, stop, fps = _source(args)
         preview = _preview(args, measure, outs, ex, fps)
