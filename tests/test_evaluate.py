@@ -18,7 +18,7 @@ from contactcal.infer.cli import main
 from contactcal.infer.evaluate.ellipse import ImageJEllipse, rasterise
 from contactcal.infer.evaluate.labels import label_mask, read_labels
 from contactcal.infer.pipeline.examples import EXAMPLE_SESSION
-from contactcal.infer.pipeline.manifest import read_manifest
+from contactcal.infer.pipeline.manifest import read_session
 
 MANIFEST = EXAMPLE_SESSION / "manifest.csv"
 MASKS = EXAMPLE_SESSION / "masks"
@@ -127,7 +127,8 @@ def test_imagej_ellipse_csv_matches_the_masks(tmp_path: Path) -> None:
             assert f["results"]["unet"]["iou"] > 0.9, f["file"]
         if not mask.any():  # an empty row labels a frame without contact
             assert f["label_area_px"] == 0 and f["results"]["unet"]["rel_error"] is None
-    for lab in read_labels(labels, read_manifest(MANIFEST), MANIFEST):
+    session = read_session(MANIFEST)
+    for lab in read_labels(labels, session.frames, session.folder):
         truth = cv2.imread(str(MASKS / (lab.frame.stem + ".png")), 0) > 0
         if truth.sum() > 5000:  # >= 5 kPa
             mask = label_mask(lab, (400, 300)).mask

@@ -177,3 +177,25 @@ def test_overlays_of_unchanged_frames_are_drawn(tmp_path: Path, command: str) ->
     out.mkdir()
     assert main(_overlay_run(command, s, out)) == 0
     assert sorted(out.rglob("*overlay*.png"))
+
+
+@pytest.mark.parametrize("command", ["calibrate", "evaluate"])
+def test_mm_per_px_reads_the_manifest_once(
+    tmp_path: Path,
+    monkeypatch: pytest.MonkeyPatch,
+    capsys: pytest.CaptureFixture[str],
+    command: str,
+) -> None:
+    """``--mm-per-px`` against the scale of the ``rig.json`` beside the manifest compares them
+    at the frames' width: the manifest read for it is the run's one read, passed on (two reads
+    could see two versions of it)."""
+    manifest_csv, masks = _labelled_session(tmp_path)
+    got = _replaced_after_reading(monkeypatch, {"manifest.csv"})
+    out = tmp_path / "out"
+    argv = [command, str(manifest_csv), "--method", "classical", "--mm-per-px", "0.2"]
+    argv += ["--labels", str(masks)] if command == "evaluate" else []
+    assert main([*argv, "--out", str(out)]) == 0
+    assert "note: --mm-per-px 0.2 used in place of the scale of" in capsys.readouterr().out
+    assert len(got["manifest.csv"]) == 1
+    record = json.loads((out / f"{command[:-1]}ion.json").read_text(encoding="utf-8"))
+    assert record["inputs"]["manifest"]["sha256"] == _sha(got["manifest.csv"][0])

@@ -118,6 +118,7 @@ def calibrate_session(
     provenance: Provenance | None = None,
     outputs: OutputSet | None = None,
     manifest_as: str | os.PathLike[str] | None = None,
+    session: Session | None = None,
 ) -> CalibrationReport:
     """Calibrate the session listed in ``manifest`` and write its outputs into ``out_dir``.
 
@@ -140,6 +141,9 @@ def calibrate_session(
             manifest and its frames are protected: no output may replace them.
         manifest_as: the path recorded for the manifest: its final place when the manifest
             itself is an output staged in this run (video input); None → ``manifest``.
+        session: ``manifest`` as the caller read it with ``options.step_tolerance_kpa``
+            (:func:`~contactcal.infer.pipeline.manifest.read_session`; the command shares its
+            one read with its rig note), not read again; None: read here.
 
     Returns:
         The :class:`CalibrationReport` (table, measurements, curve, written files).
@@ -153,12 +157,13 @@ def calibrate_session(
     manifest = Path(manifest)
     measure = measure if measure is not None else MeasureOptions()
     options = options if options is not None else SessionOptions()
-    session = read_session(manifest, options.step_tolerance_kpa)
+    if session is None:
+        session = read_session(manifest, options.step_tolerance_kpa)
     check_sweep_unit(manifest, session.frames)
     frames, files = session.frames, [f.file for f in session.frames]
     method = measure.method(method_name)
     measured = measure.measure(files, method, frames[0].file, digest=True)
-    points = _points(manifest, frames, measured, measure.scale)
+    points = _points(session.folder, frames, measured, measure.scale)
     where = Path(manifest_as if manifest_as is not None else manifest)  # not a staging path
     results, checks = session_points(where, points, options.session_rule, method.name)
     unit = PX if measure.scale is None else MM2
@@ -170,12 +175,10 @@ def calibrate_session(
     provenance = replace(
         provenance if provenance is not None else Provenance(),
         method_config=method.describe(),
-        inputs=input_digests(
-            manifest, session.sha256, [(m.file, m.sha256) for m in measured], recorded
-        ),
+        inputs=input_digests(manifest, session, [(m.file, m.sha256) for m in measured], recorded),
     )
     same = identical_frames(provenance.inputs, [f.pressure_kpa for f in frames])
-    listed = listed_name(manifest, frames[0].file)
+    listed = listed_name(session.folder, frames[0].file)
     extra = {
         **_extra(recorded, listed, measure.scale, measured),
         "session_rule": options.session_rule,
@@ -255,12 +258,13 @@ def _interval(
 
 
 def _points(
-    manifest: Path, frames: list[Frame], measured: list[Measured], scale: PixelScale | None
+    folder: Path, frames: list[Frame], measured: list[Measured], scale: PixelScale | None
 ) -> list[CalibrationPoint]:
-    """The session's points, frames named as the manifest lists them."""
+    """The session's points, frames named as the manifest lists them (``folder``: its
+    :attr:`~contactcal.infer.pipeline.manifest.Session.folder`)."""
     return [
         CalibrationPoint(
-            listed_name(manifest, m.file),
+            listed_name(folder, m.file),
             f.pressure_kpa,
             m.result.contact,
             float(m.result.area_px),

@@ -100,7 +100,7 @@ def _cmd_calibrate(args: argparse.Namespace) -> int:
     from contactcal.infer.calibration.record import CALIBRATION_FILES
     from contactcal.infer.files.atomic import run_outputs
     from contactcal.infer.files.stdout import printing_after
-    from contactcal.infer.pipeline.manifest import beside_manifest, reference_width
+    from contactcal.infer.pipeline.manifest import beside_manifest, read_session, reference_width
     from contactcal.infer.pipeline.overlay import earlier_overlays_note, write_overlays
     from contactcal.infer.pipeline.rig_note import rig_note
     from contactcal.infer.video.args import is_video_run
@@ -119,13 +119,10 @@ def _cmd_calibrate(args: argparse.Namespace) -> int:
     beside = beside_manifest(args.manifest)
     rig = read_rig(args, beside)
     measure = measure_options(args, rig)
-    tolerance = step_tolerance(args)  # the manifest read as the run reads it
+    options = session_options(args)
+    session = read_session(args.manifest, options.step_tolerance_kpa)  # read once, passed on
     set_aside = rig_note(
-        args,
-        measure,
-        beside,
-        rig,
-        lambda: reference_width(args.manifest, tolerance, args.bit_depth),
+        args, measure, beside, rig, lambda: reference_width(session, args.bit_depth)
     )
     provenance = replace(provenance, rig_note=set_aside)  # recorded: extra.rig_note
     written: list[Path] = []
@@ -136,9 +133,10 @@ def _cmd_calibrate(args: argparse.Namespace) -> int:
             args.out,
             args.method,
             measure,
-            session_options(args),
+            options,
             provenance,
             outputs=outs,
+            session=session,
         )
         if args.overlay is not None:
             files = [f.file for f in rep.frames]

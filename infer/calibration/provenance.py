@@ -7,11 +7,14 @@ import contextlib
 from collections.abc import Sequence
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 from contactcal.infer.calibration.hysteresis import MATCH_TOLERANCE_KPA
 from contactcal.infer.errors import few
 from contactcal.infer.pipeline.manifest_rows import listed_name
+
+if TYPE_CHECKING:
+    from contactcal.infer.pipeline.manifest import Session
 
 #: Longest accepted ``--device-id``, characters.
 DEVICE_ID_MAX = 100
@@ -63,7 +66,7 @@ def check_device_id(device_id: str | None) -> str | None:
 
 def input_digests(
     manifest: Path,
-    manifest_sha256: str,
+    session: Session,
     frames: Sequence[tuple[Path, str]],
     recorded: Path | None = None,
 ) -> dict[str, Any]:
@@ -74,15 +77,15 @@ def input_digests(
 
     Args:
         manifest: the manifest read.
-        manifest_sha256: the sha256 of the manifest's content as parsed
-            (:attr:`~contactcal.infer.pipeline.manifest.Session.sha256`).
+        session: the manifest as read: the sha256 of its content as parsed and the folder its
+            frame paths were joined to (:class:`~contactcal.infer.pipeline.manifest.Session`).
         frames: each frame's path and the sha256 of its content as measured
             (:attr:`~contactcal.infer.pipeline.measure.Measured.sha256`).
         recorded: the manifest's path in the record (None: ``manifest`` itself).
     """
     return {
-        "manifest": {"file": str((recorded or manifest).resolve()), "sha256": manifest_sha256},
-        "frames": [{"file": listed_name(manifest, f), "sha256": h} for f, h in frames],
+        "manifest": {"file": str((recorded or manifest).resolve()), "sha256": session.sha256},
+        "frames": [{"file": listed_name(session.folder, f), "sha256": h} for f, h in frames],
     }
 
 

@@ -51,7 +51,7 @@ def add_parsers(sub: argparse._SubParsersAction) -> None:
 
 
 def _cmd_evaluate(args: argparse.Namespace) -> int:
-    from contactcal.infer.evaluate.run import evaluate_session
+    from contactcal.infer.evaluate.run import evaluate_session, evaluated_session
     from contactcal.infer.files.atomic import run_outputs
     from contactcal.infer.files.stdout import printing_after
     from contactcal.infer.pipeline.manifest import beside_manifest, reference_width
@@ -62,12 +62,9 @@ def _cmd_evaluate(args: argparse.Namespace) -> int:
     default_rig = beside_manifest(args.manifest)
     rig = read_rig(args, default_rig)  # read once; the file protected from --out
     measure = measure_options(args, rig)
-    set_aside = rig_note(  # each frame scored at its own pressure: steps not pooled
-        args,
-        measure,
-        default_rig,
-        rig,
-        lambda: reference_width(args.manifest, 0.0, args.bit_depth),
+    session = evaluated_session(args.manifest)  # read once, passed on
+    set_aside = rig_note(
+        args, measure, default_rig, rig, lambda: reference_width(session, args.bit_depth)
     )
     replaced = earlier_evaluation_note(args.out, args.manifest)
     with run_outputs(options={"--out": args.out}) as outs:
@@ -79,6 +76,7 @@ def _cmd_evaluate(args: argparse.Namespace) -> int:
             measure,
             outputs=outs,
             also_read=[rig.path] if rig else [],
+            session=session,
         )
     with printing_after([args.out], [set_aside, replaced]):
         print(rep.table)

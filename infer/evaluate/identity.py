@@ -34,6 +34,7 @@ from typing import TYPE_CHECKING, Any
 from contactcal.infer.calibration.provenance import input_digests as frame_digests
 
 if TYPE_CHECKING:
+    from contactcal.infer.pipeline.manifest import Session
     from contactcal.infer.pipeline.measure import Measured
 
 _HEX64 = re.compile(r"[0-9a-f]{64}")
@@ -45,9 +46,7 @@ SHARED_LABELS = 3
 SHARED_FRACTION = 0.5
 
 
-def input_digests(
-    manifest: Path, manifest_sha256: str, measured: Sequence[Measured]
-) -> dict[str, Any]:
+def input_digests(manifest: Path, session: Session, measured: Sequence[Measured]) -> dict[str, Any]:
     """The ``inputs`` of ``evaluation.json``: sha256 of the manifest, reference and labelled
     frames, each of the content parsed or measured (not of the files read again).
 
@@ -56,7 +55,8 @@ def input_digests(
 
     Args:
         manifest: the session manifest (its path is recorded resolved).
-        manifest_sha256: the sha256 of its content as parsed.
+        session: the manifest as read (its content's sha256, the folder frames are named
+            relative to).
         measured: one method's measurements of the labelled frames, in the order scored,
             against the session's reference frame (at least one frame), with their digests;
             every method measures the same contents, each file read once.
@@ -67,7 +67,7 @@ def input_digests(
     """
     entries = [(measured[0].reference, measured[0].reference_sha256)]
     entries += [(m.file, m.sha256) for m in measured]
-    digests = frame_digests(manifest, manifest_sha256, entries)
+    digests = frame_digests(manifest, session, entries)
     reference, *frames = digests["frames"]
     return {"manifest": digests["manifest"], "reference": reference, "frames": frames}
 

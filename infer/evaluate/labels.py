@@ -39,7 +39,7 @@ _HEADER = ",".join(LABEL_COLUMNS)
 class Label:
     """One frame's hand label."""
 
-    frame: Path  # the labelled frame (as resolved by the manifest)
+    frame: Path  # the labelled frame (its Frame.file)
     source: Path  # the mask PNG, or the CSV
     row: int | None  # 1-based CSV data row; None for a mask
     ellipse: ImageJEllipse | None  # CSV label; None for a mask or a no-contact row
@@ -59,8 +59,10 @@ class LabelMask:
     note: str | None = None  # how the label was read, when not as drawn (a soft-edged mask)
 
 
-def read_labels(labels: str | os.PathLike[str], frames: list[Frame], manifest: Path) -> list[Label]:
-    """The labels in ``labels`` (a folder of masks or a CSV), each matched to a frame.
+def read_labels(labels: str | os.PathLike[str], frames: list[Frame], folder: Path) -> list[Label]:
+    """The labels in ``labels`` (a folder of masks or a CSV), each matched to a frame (a CSV's
+    ``file`` cell as the manifest lists it: relative to ``folder``, its
+    :attr:`~contactcal.infer.pipeline.manifest.Session.folder`).
 
     Raises:
         LabelError: unreadable labels, a label naming no frame of the manifest, two labels of
@@ -74,7 +76,7 @@ def read_labels(labels: str | os.PathLike[str], frames: list[Frame], manifest: P
             f"{path}: labels not found; expected a folder of <frame stem>.png masks or a CSV "
             f"'{_HEADER}'"
         )
-    return _ellipse_labels(path, frames, manifest)
+    return _ellipse_labels(path, frames, folder)
 
 
 def _mask_labels(folder: Path, frames: list[Frame]) -> list[Label]:
@@ -209,11 +211,11 @@ def _ellipse(at: str, cells: dict[str, str]) -> ImageJEllipse | None:
     return ImageJEllipse(v["cx"], v["cy"], v["major"], v["minor"], v["angle_deg"])
 
 
-def _frame_of(at: str, name: str, frames: list[Frame], manifest: Path) -> Path:
-    """The frame a CSV ``file`` cell names (its path as ``manifest`` lists it, or a unique
-    name)."""
+def _frame_of(at: str, name: str, frames: list[Frame], folder: Path) -> Path:
+    """The frame a CSV ``file`` cell names (its path as the manifest lists it, relative to
+    ``folder``, or a unique name)."""
     for f in frames:
-        if Path(name) == Path(listed_name(manifest, f.file)) or Path(name) == f.file:
+        if Path(name) == Path(listed_name(folder, f.file)) or Path(name) == f.file:
             return f.file
     named = [f.file for f in frames if f.file.name == name]
     if len(named) == 1:
@@ -235,7 +237,7 @@ def _frame_of(at: str, name: str, frames: list[Frame], manifest: Path) -> Path:
     )
 
 
-def _ellipse_labels(path: Path, frames: list[Frame], manifest: Path) -> list[Label]:
+def _ellipse_labels(path: Path, frames: list[Frame], folder: Path) -> list[Label]:
     col, rows = _read_rows(path)
     out: dict[Path, Label] = {}
     for row, cells in rows:
@@ -243,7 +245,7 @@ def _ellipse_labels(path: Path, frames: list[Frame], manifest: Path) -> list[Lab
         if len(cells) <= max(col.values()):
             raise LabelError(f"{at}: expected the columns '{_HEADER}', got {cells!r}")
         named = {k: cells[i].strip() for k, i in col.items()}
-        frame = _frame_of(at, named["file"], frames, manifest)
+        frame = _frame_of(at, named["file"], frames, folder)
         if frame in out:
             raise LabelError(
                 f"{at}: {frame.name} is labelled already on row {out[frame].row}; expected one "

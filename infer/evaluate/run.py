@@ -33,6 +33,7 @@ from contactcal.infer.image.read import ImageFile
 from contactcal.infer.methods.registry import METHODS
 from contactcal.infer.pipeline.manifest import (
     Frame,
+    Session,
     check_sweep_unit,
     read_session,
     sweep_top_warning,
@@ -57,10 +58,11 @@ class Evaluation:
 
 
 def _labelled(
-    frames: list[Frame], labels: list[Label], where: Path, manifest: Path
+    frames: list[Frame], labels: list[Label], where: Path, folder: Path
 ) -> tuple[list[Frame], list[Label], list[str]]:
     """The labelled frames (by pressure), their labels, and the unlabelled frames' files (as
-    ``manifest`` lists them)."""
+    the manifest lists them; ``folder``: its
+    :attr:`~contactcal.infer.pipeline.manifest.Session.folder`)."""
     by_frame = {lab.frame: lab for lab in labels}
     done = [f for f in frames if f.file in by_frame]
     if not done:
@@ -68,7 +70,7 @@ def _labelled(
             f"{where}: labels none of the manifest's {len(frames)} frames; expected masks named "
             f"<frame stem>.png or CSV rows naming the frames, e.g. {frames[-1].file.name}"
         )
-    unlabelled = [listed_name(manifest, f.file) for f in frames if f.file not in by_frame]
+    unlabelled = [listed_name(folder, f.file) for f in frames if f.file not in by_frame]
     return done, [by_frame[f.file] for f in done], unlabelled
 
 
@@ -171,6 +173,16 @@ def _check_request(method: str, labels: Path, out: Path) -> None:
         )
 
 
+def evaluated_session(manifest: str | os.PathLike[str]) -> Session:
+    """The manifest as an evaluation reads it: readings not pooled into steps (step tolerance
+    0), each frame scored at its own pressure.
+
+    Raises:
+        ManifestError: a bad manifest.
+    """
+    return read_session(manifest, 0.0)
+
+
 def evaluate_session(
     manifest: str | os.PathLike[str],
     labels: str | os.PathLike[str],
@@ -179,6 +191,7 @@ def evaluate_session(
     measure: MeasureOptions | None = None,
     outputs: OutputSet | None = None,
     also_read: Sequence[Path] = (),
+    session: Session | None = None,
 ) -> Evaluation:
     """Score ``method`` on the frames of ``manifest`` labelled in ``labels``.
 
@@ -203,6 +216,8 @@ def evaluate_session(
             rig's offset, bit depth, change gate); None: the defaults (pixels only).
         outputs: the enclosing run's outputs to stage into (None: this call is the run).
         also_read: further files the run reads (the rig config): no output may replace them.
+        session: ``manifest`` as the caller read it (:func:`evaluated_session`; the command
+            shares its one read with its rig note), not read again; None: read here.
 
     Returns:
         The :class:`Evaluation`.
@@ -217,12 +232,12 @@ def evaluate_session(
     measure = measure if measure is not None else MeasureOptions()
     _check_request(method, labels, out)
     names = list(METHODS) if method == "both" else [method]
-    session = read_session(manifest, 0.0)  # each frame scored at its own pressure
+    session = session if session is not None else evaluated_session(manifest)
     frames = session.frames
     check_sweep_unit(manifest, frames)  # bar or MPa read as kPa, as calibrate refuses them
     high = sweep_top_warning(max(f.pressure_kpa for f in frames), "evaluate")
-    labs = read_labels(labels, frames, manifest)
-    labelled, labs, unlabelled = _labelled(frames, labs, labels, manifest)
+    labs = read_labels(labels, frames, session.folder)
+    labelled, labs, unlabelled = _labelled(frames, labs, labels, session.folder)
     read = _read_frames(frames, labelled)  # each read once, for every step below
     masks = _label_masks(labs, read[frames[0].file], read, measure.bit_depth)  # before measuring
     protect = [manifest, measure.model, *also_read, *(f.file for f in frames)]
@@ -235,7 +250,7 @@ def evaluate_session(
         record = {
             "manifest": str(manifest.resolve()),
             "labels": str(labels.resolve()),
-            "inputs": input_digests(manifest, session.sha256, measured[names[0]]),
+            "inputs": input_digests(manifest, session, measured[names[0]]),
             "methods": names,
             "model": None if measure.model is None else os.fspath(measure.model),
             "change_gate": "on" if measure.change_gate else "off (--no-change-gate)",
@@ -243,7 +258,7 @@ def evaluate_session(
             "scale_image_width_px": None if measure.scale is None else measure.scale.image_width_px,
             "warning": high,
             "area_note": "errors and IoU against the label's rasterised pixel count",
-            "frames": frame_records(manifest, masks, [lab.where() for lab in labs], scored),
+            "frames": frame_records(session.folder, masks, [lab.where() for lab in labs], scored),
             "unlabelled": unlabelled,
             "summary": {"bins": bins, "onset": onset},
             "boundary_offset": offset,

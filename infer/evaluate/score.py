@@ -66,7 +66,7 @@ def _result(s: ScoredFrame) -> dict[str, Any]:
 
 
 def frame_records(
-    manifest: Path,
+    folder: Path,
     labels: Sequence[LabelMask],
     sources: Sequence[str],
     scored: Sequence[ScoredFrame],
@@ -74,7 +74,8 @@ def frame_records(
     """``evaluation.json``'s ``frames``: per labelled frame, its label and each method's result.
 
     Args:
-        manifest: the session manifest (frames are named as it lists them).
+        folder: the manifest's :attr:`~contactcal.infer.pipeline.manifest.Session.folder`
+            (frames are named as the manifest lists them).
         labels: the N rasterised labels, in frame order.
         sources: the N labels' locations (mask file or ``CSV row N``).
         scored: :func:`score_frames` of the same frames, each method's N frames in that order.
@@ -89,7 +90,7 @@ def frame_records(
         first = next(iter(by_method.values()))[i]
         records.append(
             {
-                "file": listed_name(manifest, first.frame),
+                "file": listed_name(folder, first.frame),
                 "pressure_kpa": first.pressure_kpa,
                 "label": src,
                 "label_area_px": lab.area_px,

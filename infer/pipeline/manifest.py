@@ -54,6 +54,7 @@ from contactcal.infer.pipeline.manifest_rows import (
     ManifestError,
     check_header,
     check_sweep_top,
+    manifest_folder,
     parse_row,
     read_rows,
     sweep_top_warning,
@@ -102,6 +103,9 @@ class Session:
     frames: list[Frame]  # sorted by phase (loading first), pressure, row; [0] is the reference
     phase_source: str  # phases.FROM_COLUMN, FROM_ORDER or SINGLE_PASS
     sha256: str  # of the manifest's content as read once and parsed (the record's digest)
+    #: the folder its relative frame paths were joined to (manifest_folder, resolved once):
+    #: records name the frames relative to it (manifest_rows.listed_name)
+    folder: Path
     pooled: Pooled | None = None  # steps pooled from differing readings (readings.py); None: none
     at_rest: AtRest | None = None  # steps read below 0 kPa, given as 0; None: none
     #: rows that broke an otherwise rising (then falling) order, read as one pass (a typo?):
@@ -123,21 +127,20 @@ def beside_manifest(path: str | os.PathLike[str], name: str = "rig.json") -> Pat
     """The file ``name`` in the folder the manifest's frame paths are resolved against: the
     manifest file's own folder, a link's target's (so a linked manifest finds the ``rig.json``
     of its frames, not of the link's folder)."""
-    return Path(path).resolve().parent / name
+    return manifest_folder(path) / name
 
 
-def reference_width(
-    path: str | os.PathLike[str], step_tolerance_kpa: float, bit_depth: int | None
-) -> int:
-    """Width (px) of the manifest's reference frame, which its frames share (a run refuses
-    others), as :meth:`~contactcal.infer.image.read.ImageFile.size` reads it (a JPEG's header).
+def reference_width(session: Session, bit_depth: int | None) -> int:
+    """Width (px) of the reference frame of ``session`` (the manifest as the run read it, not
+    read again), which its frames share (a run refuses others), as
+    :meth:`~contactcal.infer.image.read.ImageFile.size` reads it (a JPEG's header).
 
     Raises:
-        ManifestError / ImageError: as a run reading that manifest and frame would.
+        ImageError: as a run reading that frame would.
     """
     from contactcal.infer.image.read import ImageFile
 
-    return ImageFile.read(read_manifest(path, step_tolerance_kpa)[0].file).size(bit_depth)[0]
+    return ImageFile.read(session.frames[0].file).size(bit_depth)[0]
 
 
 def read_manifest(
@@ -171,6 +174,7 @@ def read_session(
     mpath = Path(path)
     where = str(mpath)
     rows, sha256 = read_rows(mpath)
+    folder = manifest_folder(mpath)
     if not rows:
         raise ManifestError(
             f"{where}: the manifest is empty; expected a header line '{HEADER}' "
@@ -186,7 +190,7 @@ def read_session(
             "(a calibration needs >= 2 pressure steps)"
         )
     frames = [
-        parse_row(where, mpath, names, row_no, line_no, cells)
+        parse_row(where, folder, names, row_no, line_no, cells)
         for row_no, (line_no, cells) in enumerate(data, start=1)
     ]
     source, out_of_order = FROM_COLUMN, ()
@@ -203,8 +207,8 @@ def read_session(
     merged = f"readings less than {step_tolerance_kpa:g} kPa apart are one step"
     hint = "" if pooled is None else f" ({merged}: --step-tolerance-kpa)"
     frames = _number_steps(where, frames, hint)
-    _check_files(where, frames, mpath.resolve().parent)
-    return Session(frames, source, sha256, pooled, at_rest, out_of_order)
+    _check_files(where, frames, folder)
+    return Session(frames, source, sha256, folder, pooled, at_rest, out_of_order)
 
 
 #: At most this many rows, and this share of the rows, may break the order for them to be named

@@ -44,7 +44,10 @@ class Frame:
     """One manifest row.
 
     Attributes:
-        file: absolute image path (relative paths are resolved against the manifest's folder).
+        file: the image's absolute path as the manifest lists it: a relative entry joined to
+            the folder the manifest's paths are resolved against (:func:`manifest_folder`),
+            nothing resolved past that folder, so a frame that is a symbolic link keeps its
+            own name (its content is read through it).
         pressure_kpa: chamber gauge pressure, kPa, >= -:data:`GAUGE_ZERO_NOISE_KPA` as read
             (``read_session`` gives a step below 0 as 0 kPa).
         row: 1-based data row number in the manifest (header and blank lines not counted).
@@ -151,10 +154,17 @@ def _parse_pressure(at: str, cell: str) -> float:
     return value
 
 
+def manifest_folder(manifest: str | os.PathLike[str]) -> Path:
+    """The folder a manifest's relative frame paths are resolved against: the manifest file's
+    own folder, resolved (a linked manifest's or folder's target), once per manifest read."""
+    return Path(manifest).resolve().parent
+
+
 def parse_row(
-    where: str, mpath: Path, names: list[str], row_no: int, line_no: int, cells: list[str]
+    where: str, folder: Path, names: list[str], row_no: int, line_no: int, cells: list[str]
 ) -> Frame:
-    """One data row → a :class:`Frame` (path resolved against the manifest's folder)."""
+    """One data row → a :class:`Frame` (a relative path joined to ``folder``, the
+    :func:`manifest_folder`)."""
     at = f"{where}: row {row_no} (line {line_no})"
     if len(cells) != len(names):
         raise ManifestError(
@@ -176,19 +186,21 @@ def parse_row(
                 "(case-insensitive)"
             )
         phase = parsed
-    file = Path(row["file"]).expanduser()
-    if not file.is_absolute():
-        file = mpath.resolve().parent / file
+    file = folder / Path(row["file"]).expanduser()  # an absolute entry stays as it is
     extras = tuple(_extra(at, n, row[n]) for n in names if n not in KNOWN_COLUMNS)
-    return Frame(file.resolve(), pressure, row_no, phase, 0, extras)
+    return Frame(file, pressure, row_no, phase, 0, extras)
 
 
-def listed_name(manifest: str | os.PathLike[str], file: Path) -> str:
-    """A frame's name in a record: its path relative to the folder :func:`parse_row` resolved
-    the manifest's paths against (the manifest's own folder, a linked folder's target), so a
-    manifest reached through a link names its frames as it lists them (``p00.0kpa.jpg``, not
-    ``../real/p00.0kpa.jpg``)."""
-    return os.path.relpath(file, Path(manifest).resolve().parent)
+def listed_name(folder: Path, file: str | os.PathLike[str]) -> str:
+    """A frame's name in a record: as the manifest lists it, its :attr:`Frame.file` relative
+    to ``folder``, the :func:`manifest_folder` its paths were joined to
+    (:attr:`~contactcal.infer.pipeline.manifest.Session.folder`). A manifest reached through a
+    linked folder, and a frame that is itself a link, name it as listed (``p00.0kpa.jpg``, not
+    ``../real/p00.0kpa.jpg``); an absolute entry elsewhere, relative to ``folder``."""
+    try:
+        return str(Path(file).relative_to(folder))  # the entry, spelled as listed (".." kept)
+    except ValueError:
+        return os.path.relpath(file, folder)
 
 
 def _extra(at: str, name: str, cell: str) -> tuple[str, str | float | None]:
