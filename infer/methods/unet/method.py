@@ -16,7 +16,6 @@ from typing import Any
 import cv2
 import numpy as np
 
-from contactcal.infer.files.digest import sha256_file
 from contactcal.infer.image.frame import as_frame
 from contactcal.infer.image.gray import reduce_area
 from contactcal.infer.image.read import (
@@ -208,7 +207,7 @@ class UnetMethod:
         return {
             "name": self.name,
             "model": str(seg.path.resolve()),
-            "model_sha256": sha256_file(seg.path),
+            "model_sha256": seg.sha256,  # of the content loaded, not read again
             "data_digest": seg.metadata.get("data_digest"),
             "spec": {
                 "channels": spec.channels,

@@ -17,6 +17,7 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
+from contactcal.infer.files.digest import sha256_bytes
 from contactcal.infer.methods.unet.postprocess import Segmentation, postprocess
 from contactcal.infer.methods.unet.prepare import (
     SessionReference,
@@ -118,12 +119,13 @@ def static_dims(shape: list[object], spec: ModelSpec) -> dict[str, int]:
     return {d: w for d, w in zip(shape, want, strict=False) if isinstance(d, str) and d}
 
 
-def _session(path: Path, opts: SessionOptions) -> InferenceSession:
-    """``onnxruntime.InferenceSession`` of ``path`` on the CPU; ModelError when unloadable."""
+def _session(path: Path, data: bytes, opts: SessionOptions) -> InferenceSession:
+    """``onnxruntime.InferenceSession`` of the model ``data`` read from ``path``, on the CPU;
+    ModelError (naming ``path``) when unloadable."""
     import onnxruntime as ort
 
     try:
-        return ort.InferenceSession(str(path), opts, providers=["CPUExecutionProvider"])
+        return ort.InferenceSession(data, opts, providers=["CPUExecutionProvider"])
     except Exception as exc:  # onnxruntime raises its own exception types
         raise ModelError(f"{path}: not a loadable ONNX model ({exc})") from exc
 
@@ -161,12 +163,18 @@ class OnnxSegmenter:
         self.path = Path(path) if path is not None else DEFAULT_MODEL
         if not self.path.is_file():
             raise ModelError(f"{self.path}: no such model file")
+        try:  # read once: both sessions and the recorded sha256 are of this content
+            data = self.path.read_bytes()
+        except OSError as exc:
+            raise ModelError(f"{self.path}: cannot read the model ({exc.strerror})") from None
+        #: sha256 of the model content loaded (lower-case hex)
+        self.sha256 = sha256_bytes(data)
         # A cheap unoptimised session reads the metadata; the one that runs is built with the
         # input's free dimensions fixed to what deployment feeds it (static_dims).
         cheap = ort.SessionOptions()
         cheap.intra_op_num_threads = 1
         cheap.graph_optimization_level = ort.GraphOptimizationLevel.ORT_DISABLE_ALL
-        probe = _session(self.path, cheap)
+        probe = _session(self.path, data, cheap)
         self.metadata = dict(probe.get_modelmeta().custom_metadata_map)
         self.spec = read_spec(self.metadata, self.path)
         check_graph_io(probe, self.spec, self.path)
@@ -180,7 +188,7 @@ class OnnxSegmenter:
         opts.enable_mem_pattern = False
         for name, value in static_dims(probe.get_inputs()[0].shape, self.spec).items():
             opts.add_free_dimension_override_by_name(name, value)
-        self.ort_session = _session(self.path, opts)  # checked above: same graph, fixed dims
+        self.ort_session = _session(self.path, data, opts)  # checked above: same graph, fixed dims
         self.input_name = self.ort_session.get_inputs()[0].name
 
     def probabilities(self, x: np.ndarray) -> np.ndarray:
