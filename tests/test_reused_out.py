@@ -68,7 +68,8 @@ def test_demo_refuses_a_displays_calibration_in_its_folders(
     printed = capsys.readouterr()
     one_line_naming(printed.err, out / "classical" / "calibration.json")
     assert "device id 'display-07'" in printed.err and "another --out" in printed.err
-    assert "--device-id 'display-07'" not in printed.err  # demo has no such option
+    assert "--device-id" not in printed.err  # demo has no such option
+    assert "this run records no device id" in printed.err
     assert printed.out == "" and _snapshot(out) == before
 
 

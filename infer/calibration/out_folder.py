@@ -62,7 +62,7 @@ def check_same_device(
             (:func:`~contactcal.infer.calibration.record.held_record`; None: none).
         device_id: this run's ``--device-id`` (None: not given).
         takes_device_id: whether the command has ``--device-id`` (``demo`` has none: the
-            message then does not suggest it).
+            message then names no such option).
 
     Raises:
         ValueError: the record's id differs from ``device_id`` or ``device_id`` is None.
@@ -72,9 +72,11 @@ def check_same_device(
     recorded = _recorded_device(held)
     if recorded is None or recorded == device_id:
         return
-    this = "gives no --device-id" if device_id is None else f"is for --device-id {device_id!r}"
-    again = f"to re-calibrate {recorded!r}, give --device-id {recorded!r}; "
-    again = again if takes_device_id else ""
+    if not takes_device_id:
+        this, again = "records no device id", ""
+    else:
+        this = "gives no --device-id" if device_id is None else f"is for --device-id {device_id!r}"
+        again = f"to re-calibrate {recorded!r}, give --device-id {recorded!r}; "
     raise ValueError(
         f"{held.path}: holds the calibration of device id {recorded!r}, and this run {this}; "
         f"expected another --out for this display ({again}"
