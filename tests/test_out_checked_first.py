@@ -34,6 +34,11 @@ def _cases(tmp: Path) -> list[tuple[list[str], str]]:
     (linked / "unet").mkdir(parents=True)
     os.symlink(afile, linked / "calibration.json")
     (linked / "unet" / "curve.png").mkdir()
+    overlays = tmp / "overlays"  # an overlay's name taken by a folder: known before measuring
+    (overlays / "p10.0kpa_overlay.png").mkdir(parents=True)
+    evaluated = tmp / "evaluated"
+    evaluated.mkdir()
+    os.symlink(afile, evaluated / "evaluation.json")
     return [
         (["calibrate", MANIFEST, "--out", str(afile)], f"--out {afile}: is not a folder"),
         (["calibrate", MANIFEST, "--out", str(linked)], "is a symbolic link"),
@@ -47,10 +52,22 @@ def _cases(tmp: Path) -> list[tuple[list[str], str]]:
         ),
         (["demo", "--out", str(afile)], f"--out {afile}: is not a folder"),
         (["demo", "--out", str(linked)], "is not a regular file"),
+        (
+            ["calibrate", MANIFEST, "--out", str(tmp / "c"), "--overlay", str(overlays)],
+            f"--overlay {overlays}: {overlays / 'p10.0kpa_overlay.png'}: exists and is not",
+        ),
+        (
+            ["measure", "--out", str(tmp / "r.json"), "--overlay", str(overlays), FRAME],
+            f"--overlay {overlays}: {overlays / 'p10.0kpa_overlay.png'}: exists and is not",
+        ),
+        (
+            ["evaluate", MANIFEST, "--labels", str(EXAMPLE / "masks"), "--out", str(evaluated)],
+            f"--out {evaluated}: {evaluated / 'evaluation.json'}: is a symbolic link",
+        ),
     ]
 
 
-@pytest.mark.parametrize("case", range(6))
+@pytest.mark.parametrize("case", range(9))
 def test_output_folder_refused_before_the_work(
     case: int, tmp_path: Path, capsys: pytest.CaptureFixture[str], no_frame_read: None
 ) -> None:

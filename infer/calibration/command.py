@@ -101,7 +101,11 @@ def _cmd_calibrate(args: argparse.Namespace) -> int:
     from contactcal.infer.files.atomic import run_outputs
     from contactcal.infer.files.stdout import printing_after
     from contactcal.infer.pipeline.manifest import beside_manifest, read_session, reference_width
-    from contactcal.infer.pipeline.overlay import earlier_overlays_note, write_overlays
+    from contactcal.infer.pipeline.overlay import (
+        earlier_overlays_note,
+        overlay_names,
+        write_overlays,
+    )
     from contactcal.infer.pipeline.rig_note import rig_note
     from contactcal.infer.video.args import is_video_run
     from contactcal.infer.video.command import calibrate_video
@@ -110,7 +114,6 @@ def _cmd_calibrate(args: argparse.Namespace) -> int:
     check_change_gate(args)
     check_out_folder(args.out, "calibrate", CALIBRATION_FILES)  # before the work
     video = is_video_run(args)  # checks the options' combination
-    check_output_folder("--overlay", args.overlay)
     # another display's record, or an earlier recording's frames or preview: refused before
     # any work (a video run's own: check_fresh_recording)
     replaced = check_reused_out(args.out, args.device_id, None if video else args.manifest)
@@ -121,6 +124,8 @@ def _cmd_calibrate(args: argparse.Namespace) -> int:
     measure = measure_options(args, rig)
     options = session_options(args)
     session = read_session(args.manifest, options.step_tolerance_kpa)  # read once, passed on
+    named_as = tuple(overlay_names([f.file for f in session.frames]))
+    check_output_folder("--overlay", args.overlay, named_as)  # before any frame is read
     set_aside = rig_note(
         args, measure, beside, rig, lambda: reference_width(session, args.bit_depth)
     )

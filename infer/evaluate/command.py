@@ -51,14 +51,18 @@ def add_parsers(sub: argparse._SubParsersAction) -> None:
 
 
 def _cmd_evaluate(args: argparse.Namespace) -> int:
-    from contactcal.infer.evaluate.run import evaluate_session, evaluated_session
+    from contactcal.infer.evaluate.run import (
+        EVALUATION_FILES,
+        evaluate_session,
+        evaluated_session,
+    )
     from contactcal.infer.files.atomic import run_outputs
     from contactcal.infer.files.stdout import printing_after
     from contactcal.infer.pipeline.manifest import beside_manifest, reference_width
     from contactcal.infer.pipeline.rig_note import rig_note
 
     check_change_gate(args)
-    check_out_folder(args.out, "evaluate")
+    check_out_folder(args.out, "evaluate", EVALUATION_FILES)  # before the work
     default_rig = beside_manifest(args.manifest)
     rig = read_rig(args, default_rig)  # read once; the file protected from --out
     measure = measure_options(args, rig)
@@ -96,7 +100,9 @@ def earlier_evaluation_note(out: Path, manifest: Path) -> str | None:
         out: the run's output folder, before the run.
         manifest: the manifest this run evaluates.
     """
-    held = [n for n in ("evaluation.json", "evaluation.png") if (out / n).is_file()]
+    from contactcal.infer.evaluate.run import EVALUATION_FILES
+
+    held = [n for n in EVALUATION_FILES if (out / n).is_file()]
     if not held:
         return None
     try:

@@ -48,6 +48,10 @@ LISTED = 10
 METHOD_CHOICES = (*METHODS, "both")
 
 
+#: The files an evaluation writes into its ``--out`` folder: the record and its figure.
+EVALUATION_FILES = ("evaluation.json", "evaluation.png")
+
+
 @dataclass(frozen=True)
 class Evaluation:
     """What an evaluation run produced."""
@@ -243,7 +247,7 @@ def evaluate_session(
     protect = [manifest, measure.model, *also_read, *(f.file for f in frames)]
     protect += list({lab.source for lab in labs})
     with run_outputs(protect, join=outputs) as outs:
-        paths = {"png": out / "evaluation.png", "json": out / "evaluation.json"}
+        paths = {"png": out / EVALUATION_FILES[1], "json": out / EVALUATION_FILES[0]}
         staged = {k: outs.stage(p) for k, p in paths.items()}  # refused here, before work
         scored, offset, measured = _score(manifest, read, frames, labelled, masks, names, measure)
         onset, bins = onset_summary(scored), bin_table(scored, OPEN_BINS)

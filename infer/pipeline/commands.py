@@ -52,11 +52,16 @@ def _cmd_measure(args: argparse.Namespace) -> int:
     from contactcal.infer.files.stdout import printing_after
     from contactcal.infer.image.read import SUPPORTED_SUFFIXES
     from contactcal.infer.pipeline.measure import note_self_reference
-    from contactcal.infer.pipeline.overlay import earlier_overlays_note, write_overlays
+    from contactcal.infer.pipeline.overlay import (
+        earlier_overlays_note,
+        overlay_names,
+        write_overlays,
+    )
 
     check_device_id(args.device_id)
     check_change_gate(args)
-    check_output_folder("--overlay", args.overlay)  # before the work
+    named_as = tuple(overlay_names(args.images))
+    check_output_folder("--overlay", args.overlay, named_as)  # before the work
     to_stdout = str(args.out) == "-"
     if to_stdout and sys.stdout is None:
         raise ValueError(
