@@ -116,11 +116,10 @@ def _cmd_calibrate(args: argparse.Namespace) -> int:
     rig = read_rig(args, beside)
     measure = measure_options(args, rig)  # the run's scale, before the --out check needs it
     no_scale = None if measure.scale is not None else VIDEO_SCALE if video else MANIFEST_SCALE
-    # another display's record, one in mm² this run (no scale) would make px, or an earlier
-    # recording's frames or preview: refused before any work (a video run's: check_fresh_recording)
-    replaced = check_reused_out(
-        args.out, args.device_id, None if video else args.manifest, no_scale
-    )
+    # another display's record, one in mm² this run would make px, or an earlier recording's
+    # frames or preview: refused before any work (a video run's: check_fresh_recording)
+    manifest = None if video else args.manifest
+    replaced = check_reused_out(args.out, args.device_id, manifest, no_scale)
     if video:  # --video / --camera: contactcal.infer.video.command
         return calibrate_video(args, measure, provenance, replaced)
     options = session_options(args)
