@@ -448,7 +448,8 @@ def test_a_vent_to_zero_is_left_out_and_a_rerun_is_refused(
     stills = tmp_path / "stills"
     assert main(["calibrate", manifest, "--method", "classical", "--out", str(stills)]) == 0
     capsys.readouterr()
-    assert main([*argv, str(tmp_path / "log.csv"), "--out", str(stills)]) == 0
+    scaled = ["--mm-per-px", "0.05"]  # its record is in mm² (a run without a scale is refused)
+    assert main([*argv, str(tmp_path / "log.csv"), *scaled, "--out", str(stills)]) == 0
     assert f"note: replaced the calibration that {stills} held (created " in capsys.readouterr().out
     for flat, expected in (  # one steady step only: at rest (no sweep), or at 5 kPa
         ([0, 0], "flat.csv: the highest pressure_kpa is 0.0"),

@@ -11,6 +11,7 @@ from typing import TYPE_CHECKING
 from contactcal.infer.pipeline.args import (
     MANIFEST_SCALE,
     NO_SCALE_NOTE,
+    VIDEO_SCALE,
     check_change_gate,
     check_out_folder,
     check_output_folder,
@@ -114,14 +115,16 @@ def _cmd_calibrate(args: argparse.Namespace) -> int:
     check_change_gate(args)
     check_out_folder(args.out, "calibrate", CALIBRATION_FILES)  # before the work
     video = is_video_run(args)  # checks the options' combination
-    # another display's record, or an earlier recording's frames or preview: refused before
-    # any work (a video run's own: check_fresh_recording)
-    replaced = check_reused_out(args.out, args.device_id, None if video else args.manifest)
-    if video:  # --video / --camera: contactcal.infer.video.command
-        return calibrate_video(args, measure_options(args, read_rig(args)), provenance, replaced)
-    beside = beside_manifest(args.manifest)
+    beside = None if video else beside_manifest(args.manifest)
     rig = read_rig(args, beside)
-    measure = measure_options(args, rig)
+    measure = measure_options(args, rig)  # the run's scale, before the --out check needs it
+    no_scale = None if measure.scale is not None else VIDEO_SCALE if video else MANIFEST_SCALE
+    # another display's record, one in mm² this run would make px, or an earlier recording's
+    # frames or preview: refused before any work (a video run's: check_fresh_recording)
+    manifest = None if video else args.manifest
+    replaced = check_reused_out(args.out, args.device_id, manifest, no_scale)
+    if video:  # --video / --camera: contactcal.infer.video.command
+        return calibrate_video(args, measure, provenance, replaced)
     options = session_options(args)
     session = read_session(args.manifest, options.step_tolerance_kpa)  # read once, passed on
     named_as = tuple(overlay_names([f.file for f in session.frames]))
@@ -153,8 +156,8 @@ def _cmd_calibrate(args: argparse.Namespace) -> int:
     overlays = [] if args.overlay is None else [args.overlay]
     with printing_after([args.out, *overlays], [set_aside, replaced]):
         print(rep.table)
-        if measure.scale is None:
-            print(NO_SCALE_NOTE.format(looked=MANIFEST_SCALE))
+        if no_scale is not None:
+            print(NO_SCALE_NOTE.format(looked=no_scale))
         for note in (set_aside, replaced, earlier_overlays_note(written)):
             if note is not None:
                 print(note)

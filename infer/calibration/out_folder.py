@@ -2,21 +2,26 @@
 
 A run into a folder that holds a calibration replaces it whole, with a note
 (:func:`~contactcal.infer.calibration.record.earlier_record_note`): a re-calibration of the same
-display. It is refused where that would lose another display's record (the device ids differ)
-or leave a recording's ``frames/`` and preview beside a calibration made of other frames.
+display. It is refused where that would lose another display's record (the device ids differ),
+replace a record in mm² with one in px (this run has no pixel scale), or leave a recording's
+``frames/`` and preview beside a calibration made of other frames.
 """
 
 from __future__ import annotations
 
 import os
+import shlex
 from pathlib import Path
 
+from contactcal.infer.calibration.curve import MM2
 from contactcal.infer.calibration.record import HeldRecord, earlier_record_note, held_record
 from contactcal.infer.files.atomic import TEMP_NAME
 from contactcal.infer.video.preview_files import previews_in
 
 
-def check_reused_out(out: Path, device_id: str | None, manifest: Path | None) -> str | None:
+def check_reused_out(
+    out: Path, device_id: str | None, manifest: Path | None, no_scale: str | None
+) -> str | None:
     """Refuse an ``--out`` this run must not write into; else the note on what it replaces.
 
     Args:
@@ -25,17 +30,21 @@ def check_reused_out(out: Path, device_id: str | None, manifest: Path | None) ->
         manifest: the still frames' manifest (None: a video or camera run, whose own check
             refuses an earlier recording's frames or preview:
             :func:`~contactcal.infer.video.command.check_fresh_recording`).
+        no_scale: where this run looked for a pixel scale and found none (as
+            :data:`~contactcal.infer.pipeline.args.NO_SCALE_NOTE` says it); None: it has one.
 
     Returns:
         The note :func:`~contactcal.infer.calibration.record.earlier_record_note` gives (None:
         nothing replaced), from the ``calibration.json`` read once for both.
 
     Raises:
-        ValueError: ``out`` holds another display's calibration, or (a manifest run) an earlier
+        ValueError: ``out`` holds another display's calibration, one in mm² that this run
+            without a scale would replace with one in px, or (a manifest run) an earlier
             recording's frames or preview; one line naming it and what to do.
     """
     held = held_record(out)
     check_same_device(held, device_id)
+    check_same_unit(held, no_scale, "give the --rig or --mm-per-px it used")
     if manifest is not None:
         check_no_recording(out, manifest)
     return earlier_record_note(out, held)
@@ -82,6 +91,57 @@ def check_same_device(
         f"expected another --out for this display ({again}"
         "to replace that record deliberately, remove it first)"
     )
+
+
+def check_same_unit(held: HeldRecord | None, no_scale: str | None, scale_from: str) -> None:
+    """Refuse to replace a calibration in mm² with one in px: a run without a pixel scale
+    (typically a re-calibration that left out the earlier run's ``--rig``) would otherwise
+    turn the record a controller loads as mm² into one it refuses, said only in notes.
+
+    A run with a scale may replace a record in px (the areas gain their unit).
+
+    Args:
+        held: the ``--out`` folder's ``calibration.json`` as read before the run
+            (:func:`~contactcal.infer.calibration.record.held_record`; None: none).
+        no_scale: where this run looked for a pixel scale and found none; None: it has one.
+        scale_from: what to do to give this run the earlier run's scale (the command's own
+            ways: ``demo`` reads only the rig.json beside its manifest).
+
+    Raises:
+        ValueError: the record is in mm² and ``no_scale`` is not None; one line naming it, the
+            scale options its command line gave (if it recorded them), and what to do.
+    """
+    if held is None or held.data is None or no_scale is None:
+        return
+    if held.data.get("area_unit") != MM2:
+        return
+    given = _scale_options(held.data.get("argv"))
+    earlier = "" if given is None else f" (its command line gave {given})"
+    raise ValueError(
+        f"{held.path}: holds a calibration in {MM2}, and this run has no pixel scale "
+        f"({no_scale}): its areas would be in px, in a record a controller expecting {MM2} "
+        f"refuses; expected the earlier run's scale: {scale_from}{earlier}, or remove that "
+        "record first to replace it with one in px deliberately"
+    )
+
+
+#: The options that give ``calibrate`` its pixel scale.
+SCALE_OPTIONS = ("--rig", "--mm-per-px")
+
+
+def _scale_options(argv: object) -> str | None:
+    """The pixel scale options a held record's ``argv`` gave, quoted for a shell; None: it
+    recorded no command line, or one without them."""
+    if not isinstance(argv, list):
+        return None
+    args = [str(a) for a in argv]
+    given: list[str] = []
+    for i, arg in enumerate(args):
+        if arg in SCALE_OPTIONS and i + 1 < len(args):
+            given += args[i : i + 2]
+        elif arg.startswith(tuple(f"{o}=" for o in SCALE_OPTIONS)):
+            given.append(arg)
+    return shlex.join(given) if given else None
 
 
 def check_no_recording(out: Path, manifest: Path) -> None:

@@ -150,22 +150,27 @@ def earlier_results_note(out: Path) -> str | None:
 
 def _cmd_demo(args: argparse.Namespace) -> int:
     from contactcal.infer.calibration.calibrate import SessionOptions
-    from contactcal.infer.calibration.out_folder import check_same_device
+    from contactcal.infer.calibration.out_folder import check_same_device, check_same_unit
     from contactcal.infer.calibration.record import earlier_record_note, held_record
     from contactcal.infer.files.atomic import run_outputs
     from contactcal.infer.files.stdout import printing_after
     from contactcal.infer.methods.registry import METHODS
-    from contactcal.infer.pipeline.demo import DEMO_FILES, run_demo
+    from contactcal.infer.pipeline.demo import DEMO_FILES, DEMO_SCALE, demo_measure, run_demo
+    from contactcal.infer.pipeline.examples import example_manifest
 
     options = SessionOptions(step_tolerance_kpa=step_tolerance(args))
     check_bit_depth(args.bit_depth)
     check_out_folder(args.out, "demo", DEMO_FILES)  # before the work
+    manifest = example_manifest() if args.manifest is None else args.manifest
+    measure = demo_measure(manifest, args.bit_depth)  # the scale, for the --out check
+    no_scale = DEMO_SCALE if measure.scale is None else None
     held = {d: held_record(d) for d in (args.out / m for m in METHODS)}
-    for record in held.values():  # a display's calibration: refused, as calibrate does
+    for record in held.values():  # a display's calibration, or one in mm²: as calibrate does
         check_same_device(record, None, takes_device_id=False)
+        check_same_unit(record, no_scale, "put the rig.json it used beside the manifest")
     replaced = [earlier_record_note(d, record) for d, record in held.items()]
     with run_outputs(options={"--out": args.out}) as outs:
-        summary = run_demo(args.out, args.manifest, args.argv, options, args.bit_depth, outs)
+        summary = run_demo(args.out, manifest, args.argv, options, measure, outs)
     with printing_after([args.out], replaced):
         print(summary)
         for note in replaced:

@@ -34,13 +34,33 @@ MONTAGE_KPA = (0.0, 2.0, 4.0, 8.0, 14.0, 20.0)
 MONTAGE, SUMMARY = "overlay_montage.png", "summary.txt"
 DEMO_FILES = (*(f"{m}/{n}" for m in METHODS for n in CALIBRATION_FILES), MONTAGE, SUMMARY)
 
+#: Where ``demo`` looks for a pixel scale (it has no --mm-per-px or --rig), as
+#: :data:`~contactcal.infer.pipeline.args.NO_SCALE_NOTE` says when it finds none.
+DEMO_SCALE = "no rig.json beside the manifest"
+
+
+def demo_measure(manifest: Path, bit_depth: int | None = None) -> MeasureOptions:
+    """How ``demo`` measures the session ``manifest`` lists: with the scale and boundary offset
+    of the ``rig.json`` beside it, read once as ``calibrate`` reads it (none: no scale, areas in
+    px), outlines for the montage, and ``bit_depth`` (``--bit-depth``; None: from each file).
+
+    Raises:
+        RigConfigError: that rig.json unreadable or not a rig config's JSON object.
+    """
+    rig = beside_manifest(manifest)
+    measure = MeasureOptions(bit_depth=bit_depth, outline=True)
+    if not rig.is_file():
+        return measure
+    data = read_rig_json(rig)
+    return replace(measure, scale=rig_scale(data, rig), boundary=rig_boundary(data, str(rig)))
+
 
 def run_demo(
     out_dir: str | os.PathLike[str],
     manifest: str | os.PathLike[str] | None = None,
     argv: Sequence[str] | None = None,
     options: SessionOptions | None = None,
-    bit_depth: int | None = None,
+    measure: MeasureOptions | None = None,
     outputs: OutputSet | None = None,
 ) -> str:
     """Calibrate a session (default: the bundled example) with every method.
@@ -54,8 +74,9 @@ def run_demo(
         argv: the command line, recorded in each ``calibration.json`` (None: not run from it).
         options: how the measurements become curves (``--step-tolerance-kpa``); None: the
             defaults, as ``calibrate``'s.
-        bit_depth: significant bits of the session's 16-bit frames (``--bit-depth``); None:
-            from each file.
+        measure: how its frames are measured, as :func:`demo_measure` decides it (the caller
+            decided it first: ``demo`` checks its ``--out`` against the scale); None:
+            ``demo_measure(manifest)``.
         outputs: the enclosing run's outputs to stage into (None: this call is the run).
 
     Returns:
@@ -63,13 +84,7 @@ def run_demo(
     """
     out = Path(out_dir)
     manifest = Path(manifest) if manifest is not None else example_manifest()
-    rig = beside_manifest(manifest)
-    measure = MeasureOptions(bit_depth=bit_depth, outline=True)
-    if rig.is_file():  # as `calibrate` reads the rig.json beside a manifest (once)
-        data = read_rig_json(rig)
-        measure = replace(
-            measure, scale=rig_scale(data, rig), boundary=rig_boundary(data, str(rig))
-        )
+    measure = demo_measure(manifest) if measure is None else measure
     recorded = Provenance(argv=None if argv is None else list(argv))
     reports: dict[str, CalibrationReport] = {}
     lines = [f"session: {manifest}"]
@@ -88,12 +103,12 @@ def run_demo(
             at = {name: rep.measured[i] for name, rep in reports.items()}
             contours = {name: m.result.contour for name, m in at.items()}
             title = f"{frames[i].pressure_kpa:g} kPa"
-            gray = measured_frame(frames[i].file, at, bit_depth)  # the content measured
+            gray = measured_frame(frames[i].file, at, measure.bit_depth)  # the content measured
             tiles.append(draw_overlay(gray, contours, title))
         write_image(outs.stage(out / MONTAGE), montage(tiles, columns=3))
         lines.append(f"\noverlays: {out / MONTAGE}")
         if measure.scale is None:  # as calibrate says it
-            lines.append(NO_SCALE_NOTE.format(looked="no rig.json beside the manifest"))
+            lines.append(NO_SCALE_NOTE.format(looked=DEMO_SCALE))
         text = "\n".join(lines) + "\n"
         write_synced(outs.stage(out / SUMMARY), text)
     return text
