@@ -25,7 +25,7 @@ import numpy as np
 from contactcal.infer.files.atomic import remove_stale_temporaries, write_json, write_text
 from contactcal.infer.files.jsonable import jsonable
 from contactcal.infer.image.write import write_image
-from contactcal.synth.layout import INDEX_COLUMNS, frame_name, index_row
+from contactcal.synth.layout import INDEX_COLUMNS, creating_dataset_folder, frame_name, index_row
 from contactcal.synth.procedural.config import GeneratorConfig
 from contactcal.synth.procedural.frame import Frame, session_frames
 from contactcal.synth.procedural.session import Finger, finger_params
@@ -86,15 +86,17 @@ def build_dataset(
         ``fingers``, ``frames``, ``seconds`` and ``frames_per_s``.
 
     Raises:
-        ValueError: ``out_dir`` exists (the message names it).
+        ValueError: ``out_dir`` exists, or it or its staging folder cannot be created (the
+            message names it).
     """
     out = Path(out_dir)
     if out.exists() or out.is_symlink():
         raise ValueError(f"{out}: already exists; give a new --out folder (nothing was written)")
-    out.parent.mkdir(parents=True, exist_ok=True)
-    remove_stale_temporaries(out.parent)  # staging folders of killed runs
-    prefix = f".{out.name}.{os.getpid()}."
-    stage = Path(tempfile.mkdtemp(prefix=prefix, suffix=".tmp", dir=out.parent))
+    with creating_dataset_folder(out):
+        out.parent.mkdir(parents=True, exist_ok=True)
+        remove_stale_temporaries(out.parent)  # staging folders of killed runs
+        prefix = f".{out.name}.{os.getpid()}."
+        stage = Path(tempfile.mkdtemp(prefix=prefix, suffix=".tmp", dir=out.parent))
     start = time.perf_counter()
     try:
         write_json(stage / "config.json", jsonable(asdict(config)))
