@@ -20,8 +20,9 @@ from typing import Any
 
 import numpy as np
 
-from contactcal.infer.files.atomic import remove_stale_temporaries, write_json, write_text
+from contactcal.infer.files.atomic import write_json, write_text
 from contactcal.infer.files.jsonable import jsonable
+from contactcal.infer.files.temporaries import remove_stale_temporaries
 from contactcal.infer.image.write import write_image
 from contactcal.synth.dataset_folder import SYNTH_REVISION as SYNTH_REVISION  # re-exported
 from contactcal.synth.dataset_folder import (

@@ -13,7 +13,6 @@ import csv
 import io
 import os
 import shutil
-import tempfile
 import time
 from collections.abc import Callable
 from dataclasses import asdict
@@ -22,8 +21,9 @@ from typing import Any
 
 import numpy as np
 
-from contactcal.infer.files.atomic import remove_stale_temporaries, write_json, write_text
+from contactcal.infer.files.atomic import write_json, write_text
 from contactcal.infer.files.jsonable import jsonable
+from contactcal.infer.files.temporaries import make_staging_folder, remove_stale_temporaries
 from contactcal.infer.image.write import write_image
 from contactcal.synth.layout import INDEX_COLUMNS, creating_dataset_folder, frame_name, index_row
 from contactcal.synth.procedural.config import GeneratorConfig
@@ -95,8 +95,7 @@ def build_dataset(
     with creating_dataset_folder(out):
         out.parent.mkdir(parents=True, exist_ok=True)
         remove_stale_temporaries(out.parent)  # staging folders of killed runs
-        prefix = f".{out.name}.{os.getpid()}."
-        stage = Path(tempfile.mkdtemp(prefix=prefix, suffix=".tmp", dir=out.parent))
+        stage = make_staging_folder(out.parent, out.name)
     start = time.perf_counter()
     try:
         write_json(stage / "config.json", jsonable(asdict(config)))
