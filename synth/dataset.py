@@ -20,8 +20,9 @@ from typing import Any
 
 import numpy as np
 
-from contactcal.infer.files.atomic import remove_stale_temporaries, write_json, write_text
+from contactcal.infer.files.atomic import write_json, write_text
 from contactcal.infer.files.jsonable import jsonable
+from contactcal.infer.files.temporaries import remove_stale_temporaries
 from contactcal.infer.image.write import write_image
 from contactcal.synth.dataset_folder import SYNTH_REVISION as SYNTH_REVISION  # re-exported
 from contactcal.synth.dataset_folder import (
@@ -35,6 +36,7 @@ from contactcal.synth.dataset_folder import (
 from contactcal.synth.layout import (
     INDEX_COLUMNS,
     check_sweep,
+    creating_dataset_folder,
     frame_name,
     index_row,
 )
@@ -251,13 +253,8 @@ def _open_folder(
     check_out_folder(root)
     variant = choose_variant(config.render.variant)
     config = replace(config, render=replace(config.render, variant=variant))
-    try:
+    with creating_dataset_folder(root):
         root.mkdir(parents=True, exist_ok=True)
-    except OSError as exc:
-        raise ValueError(
-            f"--out {root}: cannot create the dataset folder ({exc.strerror}); expected a "
-            "folder that can be written"
-        ) from None
     remove_stale_temporaries(root)  # left by a killed run
     check_config_matches(root, config)
     for path in root.glob("finger_*/frames/*.json"):

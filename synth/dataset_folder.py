@@ -15,8 +15,9 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 from contactcal.infer.errors import few
-from contactcal.infer.files.atomic import TEMP_NAME, write_json
+from contactcal.infer.files.atomic import write_json
 from contactcal.infer.files.jsonable import jsonable
+from contactcal.infer.files.temporaries import TEMP_NAME
 from contactcal.synth.layout import INDEX_COLUMNS
 from contactcal.synth.variant import VARIANTS
 

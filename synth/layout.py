@@ -5,7 +5,10 @@ and the command-line formats of sizes and pressures, shared by both generators (
 
 from __future__ import annotations
 
+import contextlib
 import math
+from collections.abc import Iterator
+from pathlib import Path
 from typing import Any
 
 import numpy as np
@@ -176,3 +179,21 @@ def index_row(
         "height": h,
         "hard": int(hard),
     }
+
+
+@contextlib.contextmanager
+def creating_dataset_folder(out: Path) -> Iterator[None]:
+    """Make the folders of dataset ``out`` (``--out``, as given) in the block: an ``OSError``
+    there (its parent read-only, a file system that takes no folders) is one line naming it.
+
+    Raises:
+        ValueError: ``--out OUT: cannot create the dataset folder (REASON); expected a folder
+            that can be written``.
+    """
+    try:
+        yield
+    except OSError as exc:
+        raise ValueError(
+            f"--out {out}: cannot create the dataset folder ({exc.strerror}); expected a "
+            "folder that can be written"
+        ) from None

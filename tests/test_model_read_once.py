@@ -50,3 +50,34 @@ def test_a_model_that_cannot_be_read_is_one_model_error(
         ModelError, match=r"model\.onnx: cannot read the model \(Permission denied\)"
     ):
         UnetMethod(model)
+
+
+def test_the_change_gate_measures_and_rewrites_the_model_as_first_read(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    onnx = pytest.importorskip("onnx")
+    from procedural import write_dataset
+
+    from contactcal.train.change_gate import gate_model
+
+    data = write_dataset(tmp_path / "data", fingers=2)
+    model, out = tmp_path / "model.onnx", tmp_path / "gated.onnx"
+    shutil.copyfile(DEFAULT_MODEL, model)
+    real = Path.read_bytes
+
+    def read_then_replace(self: Path) -> bytes:
+        content = real(self)
+        if self == model:  # a re-export into the same path, half done, right after each read
+            model.write_bytes(b"not a model any more")
+        return content
+
+    monkeypatch.setattr(Path, "read_bytes", read_then_replace)
+    summary = gate_model(model, [data], out, draws=1)  # once read again: a ModelError
+    new, src = onnx.load(str(out)), onnx.load(str(DEFAULT_MODEL))
+    assert new.graph.SerializeToString() == src.graph.SerializeToString()
+    meta = {p.key: p.value for p in new.metadata_props}
+    assert meta == {
+        **{p.key: p.value for p in src.metadata_props},
+        "min_change": meta["min_change"],
+    }
+    assert summary["min_change"] > 0.0

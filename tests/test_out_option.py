@@ -4,6 +4,7 @@ as given: ``--out OUT: ...`` (exit 2, one line), from every command and writer."
 from __future__ import annotations
 
 import shutil
+import tempfile
 from pathlib import Path
 
 import numpy as np
@@ -131,6 +132,31 @@ def test_synth_out_under_a_file_or_uncreatable_names_out(
         "contactcal: error: --out d: cannot create the dataset folder (Permission denied); "
         "expected a folder that can be written"
     ), line
+
+
+def _denied(*args: object, **kwargs: object) -> None:
+    raise PermissionError(13, "Permission denied")
+
+
+@pytest.mark.parametrize(
+    ("value", "target", "name"),
+    [("d/sub", Path, "mkdir"), ("d", tempfile, "mkdtemp")],  # its parent; its staging folder
+)
+def test_procedural_out_uncreatable_names_out(
+    value: str,
+    target: object,
+    name: str,
+    here: Path,
+    capsys: pytest.CaptureFixture[str],
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    monkeypatch.setattr(target, name, _denied)
+    line = refused(["procedural", "--fingers", "1", "--out", value], capsys)
+    assert line == (
+        f"contactcal: error: --out {value}: cannot create the dataset folder (Permission "
+        "denied); expected a folder that can be written"
+    ), line
+    assert sorted(p.name for p in here.iterdir()) == ["afile", "s"]
 
 
 def test_by_option_names_the_innermost_option_and_keeps_the_class(tmp_path: Path) -> None:

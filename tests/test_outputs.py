@@ -13,14 +13,9 @@ import cv2
 import pytest
 
 from contactcal.infer.cli import main
-from contactcal.infer.files import atomic
-from contactcal.infer.files.atomic import (
-    atomic_path,
-    remove_stale_temporaries,
-    run_outputs,
-    write_json,
-)
+from contactcal.infer.files.atomic import atomic_path, run_outputs, write_json
 from contactcal.infer.files.destination import OutputError
+from contactcal.infer.files.temporaries import TEMP_NAME, remove_stale_temporaries
 from contactcal.infer.image.write import write_image
 from contactcal.infer.pipeline.overlay import overlay_names
 
@@ -118,7 +113,7 @@ def test_stale_temporaries_of_dead_processes_are_removed(tmp_path: Path) -> None
 
 def test_temporaries_are_named_with_the_pid(tmp_path: Path) -> None:
     with atomic_path(tmp_path / "r.json") as tmp:
-        match = atomic.TEMP_NAME.match(tmp.parent.name)
+        match = TEMP_NAME.match(tmp.parent.name)
         assert match is not None and int(match["pid"]) == os.getpid()
         assert tmp.parent.name.startswith(".r.json.") and tmp.name == "r.json"
         tmp.write_text("[]")

@@ -18,7 +18,7 @@ from contactcal.infer.bench.perturb import SPECK_DISC, offset, resolution, speck
 from contactcal.infer.bench.plots import plot_robustness
 from contactcal.infer.bench.robustness import (
     Sample,
-    load_sample,
+    load_samples,
     measure_suite,
     perturbed,
     ratio_interval,
@@ -116,7 +116,7 @@ def test_speck_bright_near_the_centre_and_in_the_reference_too(
         speck(frame, 1.5, np.random.default_rng(0), ring=ring)
     data = write_dataset(tmp_path / "d", fingers=1)
     row, ref = sample_rows(sessions_of(read_index(data)), 5)[2]
-    s = load_sample(row, ref)
+    s = load_samples([(row, ref)])[0]
     s = Sample(s.row, s.reference.copy(), s.reference, s.mask, s.ring)  # frame == reference
     by_name = {p.name: p for p in PERTURBATIONS}
     f, r, true = perturbed(by_name["window speck"], 0.4, s, (0, 0, 0, 0))
@@ -146,14 +146,14 @@ def test_suite_draws_the_same_speck_at_every_level(tmp_path: Path) -> None:
     data = write_dataset(tmp_path / "d", fingers=1)
     row, ref = sample_rows(sessions_of(read_index(data)), 5)[2]
     recorder = _Recorder()
-    measure_suite([load_sample(row, ref)], [recorder], seed=4)
+    measure_suite([load_samples([(row, ref)])[0]], [recorder], seed=4)
     frames = iter(recorder.frames)
     changed: dict[tuple[str, float], np.ndarray] = {}
     for p in PERTURBATIONS:
         for level in p.levels:
             frame = next(frames)
             if p.name in ("window speck", "dimmed sector") and level != p.baseline:
-                changed[(p.name, level)] = frame.astype(int) != load_sample(row, ref).frame
+                changed[(p.name, level)] = frame.astype(int) != load_samples([(row, ref)])[0].frame
     specks = [changed[("window speck", lv)] for lv in (0.1, 0.2, 0.4)]
     assert all(m.any() for m in specks)
     for weak, strong in itertools.pairwise(specks):
@@ -165,7 +165,7 @@ def test_suite_draws_the_same_speck_at_every_level(tmp_path: Path) -> None:
 def test_noise_reference_independent_others_same(tmp_path: Path) -> None:
     data = write_dataset(tmp_path / "d", fingers=1)
     row, ref = sample_rows(sessions_of(read_index(data)), 5)[2]  # the 8 kPa frame
-    s = load_sample(row, ref)
+    s = load_samples([(row, ref)])[0]
     s = Sample(s.row, s.reference.copy(), s.reference, s.mask, s.ring)  # frame == reference
     by_name = {p.name: p for p in PERTURBATIONS}
     frame, reference, _ = perturbed(by_name["noise"], 12.0, s, (0, 0, 0, 0))

@@ -2,10 +2,13 @@
 
 :mod:`contactcal.train.interval` (``interval``) and :mod:`contactcal.train.change_gate`
 (``min_change``) calibrate on validation renders, never on the model's training data. Before any
-frame is read, :func:`calibration_data` refuses:
+frame is read, :func:`calibration_folders` refuses (before the model is read):
 
 * a path that is no dataset folder (``--data D: ...``, as ``contactcal train`` says it);
 * a folder given twice (the same resolved path): its frames would count twice;
+
+and :func:`calibration_data`, given the model's metadata:
+
 * the model's training data, as far as the model records it. Its metadata's ``data_digest`` is
   :func:`~contactcal.train.digest.dataset_digest` of its training folders' ``index.csv`` files,
   concatenated in training order (a run's ``config.json`` ``data_digest``, copied by
@@ -27,44 +30,52 @@ from __future__ import annotations
 
 import json
 import os
-from collections.abc import Sequence
+from collections.abc import Mapping, Sequence
 from pathlib import Path
 from typing import Any
 
 from contactcal.infer.bench.dataset import check_dataset_folder, read_index
 from contactcal.infer.methods.unet.spec import CALIBRATION_DATA_KEY
 from contactcal.train.digest import dataset_digest
-from contactcal.train.restate import load_proto, metadata_of
 
 
-def calibration_data(
-    model: Path, data_dirs: Sequence[str | os.PathLike[str]]
-) -> tuple[list[Path], list[dict[str, Any]]]:
-    """Check ``data_dirs`` for calibrating ``model`` and describe them.
+def calibration_folders(data_dirs: Sequence[str | os.PathLike[str]]) -> list[Path]:
+    """The ``--data`` folders as paths, each a dataset folder and given once.
 
     Args:
-        model: the exported ``.onnx`` model to be calibrated.
         data_dirs: the ``--data`` folders (``contactcal synth`` layout), in the order given.
 
-    Returns:
-        ``(folders, record)``: the folders as paths, and per folder ``{"folder": name,
-        "index_sha256": hex, "frames": index rows}`` (what :func:`with_record` writes).
-
     Raises:
-        ValueError: a folder that is not a dataset, a folder given twice, or the model's training
-            data (the message names the folders and the option).
+        ValueError: a folder that is not a dataset, or a folder given twice (the message names
+            the folder and the option).
     """
     dirs = [Path(d) for d in data_dirs]
     for d in dirs:
         check_dataset_folder(d, "--data")
     _refuse_repeats(dirs)
+    return dirs
+
+
+def calibration_data(dirs: Sequence[Path], metadata: Mapping[str, str]) -> list[dict[str, Any]]:
+    """Refuse the model's training data among ``dirs`` and describe them.
+
+    Args:
+        dirs: :func:`calibration_folders`.
+        metadata: the metadata of the model to be calibrated (its ``data_digest``).
+
+    Returns:
+        Per folder ``{"folder": name, "index_sha256": hex, "frames": index rows}`` (what
+        :func:`with_record` writes).
+
+    Raises:
+        ValueError: the model's training data (the message names the folders and the option).
+    """
     frames = [len(read_index(d)) for d in dirs]
-    _refuse_training_data(dirs, metadata_of(load_proto(model)).get("data_digest", ""))
-    record = [
+    _refuse_training_data(dirs, metadata.get("data_digest", ""))
+    return [
         {"folder": d.resolve().name, "index_sha256": dataset_digest([d]), "frames": n}
         for d, n in zip(dirs, frames, strict=True)
     ]
-    return dirs, record
 
 
 def _refuse_repeats(dirs: Sequence[Path]) -> None:

@@ -37,10 +37,11 @@ from contactcal.infer.bench.perturb import speck
 from contactcal.infer.image.read import load_image
 from contactcal.infer.methods.unet.method import UnetMethod
 from contactcal.infer.methods.unet.ring import locate_ring
-from contactcal.train.calibration_data import calibration_data, with_record
+from contactcal.train.calibration_data import calibration_data, calibration_folders, with_record
 from contactcal.train.restate import (
     check_paths,
-    load_proto,
+    metadata_of,
+    read_model,
     restating_parser,
     run_restating,
     save_restated,
@@ -139,7 +140,17 @@ def collect_changes(
             names the option: ``--speck``, ``--draws``, ``--seed``).
     """
     _check_options(specks, draws, seed)
-    m = UnetMethod(model, change_gate=False)
+    return _changes(UnetMethod(model, change_gate=False), data_dirs, specks, draws, seed)
+
+
+def _changes(
+    m: UnetMethod,
+    data_dirs: Sequence[str | os.PathLike[str]],
+    specks: Sequence[float],
+    draws: int,
+    seed: int,
+) -> tuple[np.ndarray, np.ndarray, dict[str, int]]:
+    """:func:`collect_changes` through ``m`` (the gate off), the options checked."""
     cfg = m.segmenter.spec.preprocess
     rows: list[tuple[float, bool]] = []
     frames: dict[str, int] = {}
@@ -192,15 +203,18 @@ def gate_model(
 
     src, dst = check_paths(model, out)
     _check_options(specks, draws, seed)  # the cheap checks first: no model loaded for a typo
-    dirs, record = calibration_data(src, data_dirs)  # the folders before the model is read
-    base = UnetMethod(src).segmenter.spec
+    dirs = calibration_folders(data_dirs)  # the folders before the model is read
+    content, proto = read_model(src)  # once: the model measured is the model rewritten
+    record = calibration_data(dirs, metadata_of(proto))
+    m = UnetMethod(src, change_gate=False, content=content)
+    base = dataclasses.replace(m.segmenter.spec, min_change=m.model_min_change)
     if not base.uses_reference:
         raise ValueError(f"{src}: the change gate needs a model with a reference channel")
-    change, contact, frames = collect_changes(src, dirs, specks, draws, seed)
+    change, contact, frames = _changes(m, dirs, specks, draws, seed)
     t, summary = margin_threshold(change, contact)
     spec = dataclasses.replace(base, min_change=t)
     entry = with_record(spec.to_metadata()["min_change"], record)
-    save_restated(load_proto(src), {"min_change": entry}, spec, dst)
+    save_restated(proto, {"min_change": entry}, spec, dst)
     extra = {"specks": list(specks), "draws": draws, "seed": seed, "data": record}
     again = stale(["interval"] if t != base.min_change else [], dst)
     return {**summary, "frames": frames, **extra, "stale": again}

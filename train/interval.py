@@ -39,7 +39,11 @@ import numpy as np
 from contactcal.infer.bench.dataset import IndexRow, read_index
 from contactcal.infer.methods.unet.postprocess import Band, Segmentation, boundary_band
 from contactcal.infer.methods.unet.spec import REGIONS, IntervalSpec, ModelSpec
-from contactcal.train.calibration_data import calibration_data, with_record
+from contactcal.train.calibration_data import (
+    calibration_data,
+    calibration_folders,
+    with_record,
+)
 from contactcal.train.restate import (
     check_paths,
     load_proto,
@@ -243,7 +247,8 @@ def recalibrate_model(
     src, dst = check_paths(model, out)
     if region is not None and region not in REGIONS:
         raise ValueError(f"{src}: region must be one of {', '.join(REGIONS)}, got {region!r}")
-    dirs, record = calibration_data(src, data_dirs)
+    dirs = calibration_folders(data_dirs)
+    record = calibration_data(dirs, metadata_of(load_proto(src)))
     segs, truths, base = _segment_dataset(src, dirs, region)
     interval, summary = calibrate(segs, truths, base)
     spec = dataclasses.replace(base, interval=interval)

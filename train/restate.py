@@ -87,11 +87,22 @@ def load_proto(model: Path) -> Any:
     Raises:
         ValueError: the file cannot be read or is not an ONNX model (the message names it).
     """
+    return read_model(model)[1]
+
+
+def read_model(model: Path) -> tuple[bytes, Any]:
+    """The content of ``model`` and its ONNX ``ModelProto``, from one read of the file (a tool
+    that measures the model and rewrites it measures the model it writes).
+
+    Raises:
+        ValueError: the file cannot be read or is not an ONNX model (the message names it).
+    """
     import onnx
     from google.protobuf.message import DecodeError
 
     try:
-        return onnx.load(str(model))
+        content = model.read_bytes()
+        return content, onnx.load_from_string(content)
     except (DecodeError, OSError, ValueError) as exc:
         raise ValueError(
             f"{model}: not a readable ONNX model ({exc}); expected a .onnx file written by "

@@ -16,8 +16,8 @@ from pathlib import Path
 from typing import Any
 
 from contactcal.infer.errors import few
-from contactcal.infer.files.atomic import TEMP_NAME
 from contactcal.infer.files.destination import check_receiving_folder
+from contactcal.infer.files.temporaries import TEMP_NAME
 
 
 def read_run_info(run_dir: str | os.PathLike[str]) -> dict[str, Any]:

@@ -24,7 +24,7 @@ from contactcal.infer.bench.scoring import (
     outline_iou,
     session_revised,
 )
-from contactcal.infer.image.read import ImageFile, load_image
+from contactcal.infer.image.read import ImageFile, ImageSource, load_image
 from contactcal.infer.methods.base import Method
 from contactcal.infer.methods.registry import METHODS, make_method
 
@@ -37,6 +37,8 @@ def score_session(
     With ``use_reference=False`` the method gets no reference frame (as ``measure`` without
     ``--reference``); the frames are the same. With it, the first frame is measured against
     itself: its frames are marked ``reference`` (left out of the tables, kept for the onset).
+    The reference frame is read once: the method measures it as a frame in its own decode
+    (``Started.reference``, as ``measure`` does).
 
     Returns:
         One :class:`ScoredFrame` per frame, plus one ``"<name> (soft area)"`` frame per frame for
@@ -44,10 +46,12 @@ def score_session(
         rule)"`` frame per frame for methods that state an interval (:func:`session_ruled`).
     """
     reference = ImageFile.read(rows[0].frame) if use_reference else None
-    k = method.start([r.frame for r in rows], reference).reduction
+    files: list[ImageSource] = [r.frame for r in rows]
+    started = method.start(files if reference is None else [reference, *files[1:]], reference)
+    k, decoded = started.reduction, started.reference
     out: list[ScoredFrame] = []
     for i, r in enumerate(rows):
-        gray = load_image(r.frame, reduce=k)
+        gray = decoded if i == 0 and decoded is not None else load_image(r.frame, reduce=k)
         res = method.measure(gray)
         truth = _truth(r, (gray.shape[0] * k, gray.shape[1] * k))  # k divides the file's size
         scored = ScoredFrame(

@@ -24,6 +24,7 @@ import functools
 import os
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
+from pathlib import Path
 from typing import Any
 
 import numpy as np
@@ -86,10 +87,18 @@ def sample_rows(
     return [pool[int((i + 0.5) * len(pool) / n)] for i in range(n)]
 
 
-def load_sample(row: IndexRow, reference: IndexRow) -> Sample:
-    """Decode a frame, its mask and its session's reference; locate the reference's ring."""
-    ref = load_image(reference.frame)
-    return Sample(row, load_image(row.frame), ref, load_image(row.mask), locate_ring(ref))
+def load_samples(pairs: Sequence[tuple[IndexRow, IndexRow]]) -> list[Sample]:
+    """Decode each (frame, reference) pair's frame and mask; each session's reference is decoded
+    and its ring located once, shared by the session's samples."""
+    references: dict[Path, tuple[np.ndarray, RingFit]] = {}
+    samples = []
+    for row, reference in pairs:
+        if reference.frame not in references:
+            gray = load_image(reference.frame)
+            references[reference.frame] = (gray, locate_ring(gray))
+        ref, ring = references[reference.frame]
+        samples.append(Sample(row, load_image(row.frame), ref, load_image(row.mask), ring))
+    return samples
 
 
 def perturbed(
@@ -271,7 +280,7 @@ def run_robustness(
         ``perturbations`` (name, levels, labels, baseline, unit, reference handling), ``rows``
         (:func:`summary_rows`) and ``not_perturbed``.
     """
-    samples = [load_sample(r, ref) for r, ref in sample_rows(sessions, frames)]
+    samples = load_samples(sample_rows(sessions, frames))
     methods = [make_method(name, model, threads=1) for name in METHODS]
     scored = measure_suite(samples, methods, seed)
     return {

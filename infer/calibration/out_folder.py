@@ -15,7 +15,7 @@ from pathlib import Path
 
 from contactcal.infer.calibration.curve import MM2
 from contactcal.infer.calibration.record import HeldRecord, earlier_record_note, held_record
-from contactcal.infer.files.atomic import TEMP_NAME
+from contactcal.infer.files.temporaries import TEMP_NAME
 from contactcal.infer.video.preview_files import previews_in
 
 
@@ -150,7 +150,7 @@ def check_no_recording(out: Path, manifest: Path) -> None:
 
     Calibrating that recording's own ``frames/manifest.csv`` again into its folder is allowed:
     the calibration is then of those frames. Staging entries a killed run left in ``frames/``
-    (:data:`~contactcal.infer.files.atomic.TEMP_NAME`) are no recording.
+    (:data:`~contactcal.infer.files.temporaries.TEMP_NAME`) are no recording.
 
     Raises:
         ValueError: naming the folder and what it holds.

@@ -12,10 +12,9 @@ anything that is not a regular file (a device, a folder, a pipe):
 command-line option's value is named by that option (``--out OUT: ...``; ``options`` of
 :func:`run_outputs`).
 
-Staging folders are named ``.<name>.<pid>.<random>.tmp`` (``name``: the first output staged in
-that folder; ``pid``: the writing process). A process killed with ``kill -9`` leaves its staging
-folder behind; the next write into that folder removes the temporaries of processes that no
-longer run (:func:`remove_stale_temporaries`); those of running processes are kept.
+Staging folders are named by the writing process and the first output staged in them; those a
+killed process left are removed by the next write into their folder
+(:mod:`~contactcal.infer.files.temporaries`).
 """
 
 from __future__ import annotations
@@ -23,9 +22,7 @@ from __future__ import annotations
 import contextlib
 import errno
 import os
-import re
 import shutil
-import tempfile
 from collections.abc import Iterable, Iterator, Mapping
 from pathlib import Path
 from typing import IO, Any
@@ -34,45 +31,7 @@ from contactcal.infer.files.destination import OutputError, by_option, check_des
 from contactcal.infer.files.interrupt import deferred_interrupt
 from contactcal.infer.files.jsonable import json_text
 from contactcal.infer.files.stdout import StdoutError
-
-#: Names of this module's temporaries: ``.<name>.<pid>.<random>.tmp``.
-TEMP_NAME = re.compile(r"^\..+\.(?P<pid>[0-9]+)\.[A-Za-z0-9_]+\.tmp$")
-
-
-def _pid_running(pid: int) -> bool:
-    """Whether process ``pid`` exists (POSIX); elsewhere every pid counts as running."""
-    if pid == os.getpid():
-        return True
-    if os.name != "posix":
-        return True  # os.kill(pid, 0) would signal the process on Windows
-    try:
-        os.kill(pid, 0)
-    except ProcessLookupError:
-        return False
-    except PermissionError:
-        return True  # exists, owned by another user
-    return True
-
-
-def remove_stale_temporaries(folder: str | os.PathLike[str]) -> list[Path]:
-    """Remove the temporaries (:data:`TEMP_NAME`) of processes that no longer run in ``folder``.
-
-    Returns:
-        The removed paths.
-    """
-    removed: list[Path] = []
-    with contextlib.suppress(FileNotFoundError, NotADirectoryError):
-        for entry in os.scandir(folder):
-            match = TEMP_NAME.match(entry.name)
-            if match is None or _pid_running(int(match["pid"])):
-                continue
-            with contextlib.suppress(FileNotFoundError):  # another process removed it first
-                if entry.is_dir(follow_symlinks=False):
-                    shutil.rmtree(entry.path)
-                else:
-                    os.unlink(entry.path)
-                removed.append(Path(entry.path))
-    return removed
+from contactcal.infer.files.temporaries import make_staging_folder, remove_stale_temporaries
 
 
 class OutputSet:
@@ -133,9 +92,8 @@ class OutputSet:
         if stage is None:
             self._make_folder(final.parent)  # its receiving folder: check_destination
             remove_stale_temporaries(final.parent)
-            name = f".{final.name}.{os.getpid()}."
             try:
-                stage = Path(tempfile.mkdtemp(prefix=name, suffix=".tmp", dir=final.parent))
+                stage = make_staging_folder(final.parent, final.name)
             except OSError as exc:
                 raise OSError(
                     f"{final}: cannot write into its folder {final.parent} ({exc.strerror})"

@@ -124,15 +124,15 @@ def check_fresh_frames(frames_dir: Path) -> None:
     """Refuse a ``frames/`` folder that already holds files: an earlier recording's frames would
     stay beside this one's, outside its manifest.
 
-    The staging entries of a killed run (:data:`~contactcal.infer.files.atomic.TEMP_NAME`,
+    The staging entries of a killed run (:data:`~contactcal.infer.files.temporaries.TEMP_NAME`,
     their process gone) are no frames: they are removed first, as the next write into the
-    folder would (:func:`~contactcal.infer.files.atomic.remove_stale_temporaries`). Those of a
+    folder would (:func:`~contactcal.infer.files.temporaries.remove_stale_temporaries`). Those of a
     run still going are another recording into the same folder: refused, said so.
 
     Raises:
         ValueError: naming the folder and what to do.
     """
-    from contactcal.infer.files.atomic import TEMP_NAME, remove_stale_temporaries
+    from contactcal.infer.files.temporaries import TEMP_NAME, remove_stale_temporaries
 
     if not frames_dir.is_dir():
         return

@@ -13,7 +13,6 @@ import csv
 import io
 import os
 import shutil
-import tempfile
 import time
 from collections.abc import Callable
 from dataclasses import asdict
@@ -22,10 +21,11 @@ from typing import Any
 
 import numpy as np
 
-from contactcal.infer.files.atomic import remove_stale_temporaries, write_json, write_text
+from contactcal.infer.files.atomic import write_json, write_text
 from contactcal.infer.files.jsonable import jsonable
+from contactcal.infer.files.temporaries import make_staging_folder, remove_stale_temporaries
 from contactcal.infer.image.write import write_image
-from contactcal.synth.layout import INDEX_COLUMNS, frame_name, index_row
+from contactcal.synth.layout import INDEX_COLUMNS, creating_dataset_folder, frame_name, index_row
 from contactcal.synth.procedural.config import GeneratorConfig
 from contactcal.synth.procedural.frame import Frame, session_frames
 from contactcal.synth.procedural.session import Finger, finger_params
@@ -86,15 +86,16 @@ def build_dataset(
         ``fingers``, ``frames``, ``seconds`` and ``frames_per_s``.
 
     Raises:
-        ValueError: ``out_dir`` exists (the message names it).
+        ValueError: ``out_dir`` exists, or it or its staging folder cannot be created (the
+            message names it).
     """
     out = Path(out_dir)
     if out.exists() or out.is_symlink():
         raise ValueError(f"{out}: already exists; give a new --out folder (nothing was written)")
-    out.parent.mkdir(parents=True, exist_ok=True)
-    remove_stale_temporaries(out.parent)  # staging folders of killed runs
-    prefix = f".{out.name}.{os.getpid()}."
-    stage = Path(tempfile.mkdtemp(prefix=prefix, suffix=".tmp", dir=out.parent))
+    with creating_dataset_folder(out):
+        out.parent.mkdir(parents=True, exist_ok=True)
+        remove_stale_temporaries(out.parent)  # staging folders of killed runs
+        stage = make_staging_folder(out.parent, out.name)
     start = time.perf_counter()
     try:
         write_json(stage / "config.json", jsonable(asdict(config)))

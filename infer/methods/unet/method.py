@@ -66,6 +66,8 @@ class UnetMethod:
         change_gate: apply the model's change gate (metadata ``min_change``); False turns it
             off (``--no-change-gate``: for a rig whose contacts change the image less than the
             validation renders' did), which ``describe()`` records.
+        content: the model file's content, already read (see
+            :class:`~contactcal.infer.methods.unet.runner.OnnxSegmenter`); None reads it.
     """
 
     name = "unet"
@@ -76,8 +78,9 @@ class UnetMethod:
         threads: int = 1,
         outline: bool = False,
         change_gate: bool = True,
+        content: bytes | None = None,
     ) -> None:
-        self.segmenter = OnnxSegmenter(model, threads=threads)
+        self.segmenter = OnnxSegmenter(model, threads=threads, content=content)
         spec = self.segmenter.spec
         self.model_min_change = spec.min_change
         self.change_gate = change_gate and spec.min_change > 0.0

@@ -130,6 +130,16 @@ def _session(path: Path, data: bytes, opts: SessionOptions) -> InferenceSession:
         raise ModelError(f"{path}: not a loadable ONNX model ({exc})") from exc
 
 
+def _read_model(path: Path) -> bytes:
+    """The content of model file ``path``; ModelError (naming it) when missing or unreadable."""
+    if not path.is_file():
+        raise ModelError(f"{path}: no such model file")
+    try:
+        return path.read_bytes()
+    except OSError as exc:
+        raise ModelError(f"{path}: cannot read the model ({exc.strerror})") from None
+
+
 def sigmoid(logits: np.ndarray) -> np.ndarray:
     """``1 / (1 + exp(-clip(logits, ±30)))`` in float32: probabilities without overflow.
 
@@ -150,6 +160,8 @@ class OnnxSegmenter:
         path: ONNX file (default: the shipped ``models/contact_unet.onnx``).
         threads: intra-op threads (1 is the benchmarked default: the model is small, and
             calibration runs beside other work).
+        content: the model file's content, already read from ``path`` by the caller (a tool
+            that also rewrites the model); None reads it here.
 
     Raises:
         ModelError: missing, unloadable, without valid contactcal metadata, or with a graph
@@ -157,16 +169,17 @@ class OnnxSegmenter:
             checked on each run).
     """
 
-    def __init__(self, path: str | os.PathLike[str] | None = None, threads: int = 1) -> None:
+    def __init__(
+        self,
+        path: str | os.PathLike[str] | None = None,
+        threads: int = 1,
+        content: bytes | None = None,
+    ) -> None:
         import onnxruntime as ort
 
         self.path = Path(path) if path is not None else DEFAULT_MODEL
-        if not self.path.is_file():
-            raise ModelError(f"{self.path}: no such model file")
-        try:  # read once: both sessions and the recorded sha256 are of this content
-            data = self.path.read_bytes()
-        except OSError as exc:
-            raise ModelError(f"{self.path}: cannot read the model ({exc.strerror})") from None
+        # read once: both sessions and the recorded sha256 are of this content
+        data = _read_model(self.path) if content is None else content
         #: sha256 of the model content loaded (lower-case hex)
         self.sha256 = sha256_bytes(data)
         # A cheap unoptimised session reads the metadata; the one that runs is built with the
