@@ -4,6 +4,7 @@ same path) is neither half loaded nor recorded as the model that ran."""
 
 from __future__ import annotations
 
+import json
 import shutil
 from pathlib import Path
 
@@ -81,3 +82,31 @@ def test_the_change_gate_measures_and_rewrites_the_model_as_first_read(
         "min_change": meta["min_change"],
     }
     assert summary["min_change"] > 0.0
+
+
+def test_the_interval_measures_and_rewrites_the_model_as_first_read(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    onnx = pytest.importorskip("onnx")
+    from procedural import write_dataset
+
+    from contactcal.train.interval import recalibrate_model
+
+    data = write_dataset(tmp_path / "data", fingers=2)
+    model, out = tmp_path / "model.onnx", tmp_path / "recalibrated.onnx"
+    shutil.copyfile(DEFAULT_MODEL, model)
+    real = Path.read_bytes
+
+    def read_then_replace(self: Path) -> bytes:
+        content = real(self)
+        if self == model:  # a re-export into the same path, half done, right after each read
+            model.write_bytes(b"not a model any more")
+        return content
+
+    monkeypatch.setattr(Path, "read_bytes", read_then_replace)
+    summary = recalibrate_model(model, [data], out)  # once read again: a ValueError
+    new, src = onnx.load(str(out)), onnx.load(str(DEFAULT_MODEL))
+    assert new.graph.SerializeToString() == src.graph.SerializeToString()
+    meta = {p.key: p.value for p in new.metadata_props}
+    assert meta == {**{p.key: p.value for p in src.metadata_props}, "interval": meta["interval"]}
+    assert json.loads(meta["interval"]) == {**summary["interval"], "data": summary["data"]}

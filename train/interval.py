@@ -29,7 +29,6 @@ import dataclasses
 import json
 import math
 import os
-import tempfile
 from collections.abc import Sequence
 from pathlib import Path
 from typing import Any
@@ -46,8 +45,8 @@ from contactcal.train.calibration_data import (
 )
 from contactcal.train.restate import (
     check_paths,
-    load_proto,
     metadata_of,
+    read_model,
     restating_parser,
     run_restating,
     save_restated,
@@ -184,35 +183,34 @@ def calibrate_run(
 
 
 def _segment_dataset(
-    model: Path, data_dirs: Sequence[Path], region: str | None = None
+    model: Path, content: bytes, data_dirs: Sequence[Path], region: str | None = None
 ) -> tuple[list[Segmentation], list[float], ModelSpec]:
     """Every frame of the datasets through the deployment runner (each session's lowest-pressure
     frame is its reference; large frames shrunk as deployment shrinks them: ``session_inputs``),
     the true areas (in pixels of the shrunk frame), and the model's spec without its interval (the
-    model's own ``interval`` key, if any, is not used), with ``region`` when given. The model's
-    change gate (``min_change``) acts as deployed, so the interval is the gated decision's
-    (:func:`calibrate_run`, at export, has no gate yet)."""
+    model's own ``interval`` key, if any, is not used), with ``region`` when given. The model is
+    ``content``, the file ``model`` as read once by the caller. Its change gate (``min_change``)
+    acts as deployed, so the interval is the gated decision's (:func:`calibrate_run`, at export,
+    has no gate yet)."""
     import onnx
 
     from contactcal.infer.methods.unet.runner import OnnxSegmenter
     from contactcal.train.sessions import session_inputs
 
-    proto = load_proto(Path(model))
+    proto = onnx.load_from_string(content)  # a copy: the caller rewrites its own proto
     meta = metadata_of(proto)
     # Any valid interval lets the strict reader accept a model exported before intervals.
     meta["interval"] = json.dumps(dataclasses.asdict(IntervalSpec(LEVEL, 1e-6, 1 - 1e-6, 1.0, 1)))
     if region is not None:
         meta["region"] = region
     onnx.helper.set_model_props(proto, meta)
+    runner = OnnxSegmenter(model, content=proto.SerializeToString())
     segs, truths = [], []
-    with tempfile.TemporaryDirectory() as tmp:
-        onnx.save(proto, os.path.join(tmp, "model.onnx"))
-        runner = OnnxSegmenter(os.path.join(tmp, "model.onnx"))
-        for d in data_dirs:
-            for sess in session_inputs(read_index(d), runner.spec.preprocess).values():
-                for r in sess.rows:
-                    segs.append(runner.segment(sess.frame(r.frame), sess.reference))
-                    truths.append(r.area_px / sess.shrink**2)
+    for d in data_dirs:
+        for sess in session_inputs(read_index(d), runner.spec.preprocess).values():
+            for r in sess.rows:
+                segs.append(runner.segment(sess.frame(r.frame), sess.reference))
+                truths.append(r.area_px / sess.shrink**2)
     return segs, truths, dataclasses.replace(runner.spec, interval=None)
 
 
@@ -247,14 +245,15 @@ def recalibrate_model(
     src, dst = check_paths(model, out)
     if region is not None and region not in REGIONS:
         raise ValueError(f"{src}: region must be one of {', '.join(REGIONS)}, got {region!r}")
-    dirs = calibration_folders(data_dirs)
-    record = calibration_data(dirs, metadata_of(load_proto(src)))
-    segs, truths, base = _segment_dataset(src, dirs, region)
+    dirs = calibration_folders(data_dirs)  # the folders before the model is read
+    content, proto = read_model(src)  # once: the model measured is the model rewritten
+    record = calibration_data(dirs, metadata_of(proto))
+    segs, truths, base = _segment_dataset(src, content, dirs, region)
     interval, summary = calibrate(segs, truths, base)
     spec = dataclasses.replace(base, interval=interval)
     new = spec.to_metadata()
     updates = {"interval": with_record(new["interval"], record), "region": new["region"]}
-    save_restated(load_proto(src), updates, spec, dst)
+    save_restated(proto, updates, spec, dst)
     return {**summary, "region": spec.region, "data": record}
 
 
