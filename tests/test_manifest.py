@@ -286,3 +286,21 @@ def test_a_row_breaking_an_otherwise_rising_order_is_named(tmp_path: Path) -> No
 )
 def test_misplaced_rows_reference_values(levels: list[float], misplaced: list[int]) -> None:
     assert misplaced_rows(levels) == misplaced
+
+
+def test_a_jpeg_reference_width_is_read_from_its_header_alone(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    import cv2
+    import numpy as np
+
+    from contactcal.infer.image.read import ImageFile
+    from contactcal.infer.pipeline.manifest import reference_width
+
+    for name in ("a.jpg", "b.png"):
+        assert cv2.imwrite(str(tmp_path / name), np.zeros((30, 40), np.uint8))
+    path = tmp_path / "manifest.csv"
+    path.write_text("file,pressure_kpa\na.jpg,0\nb.png,1\n", encoding="utf-8")
+    session = read_session(path)
+    monkeypatch.setattr(ImageFile, "read", lambda *_: pytest.fail("the whole file read"))
+    assert reference_width(session, None) == 40
