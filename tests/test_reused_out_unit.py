@@ -137,3 +137,30 @@ def test_demo_without_a_rig_json_refuses_a_record_in_mm2(
     assert "put the rig.json it used beside the manifest" in printed.err
     assert "--mm-per-px it used" not in printed.err  # demo has no such option
     assert printed.out == "" and _snapshot(tmp_path) == before
+
+
+@pytest.mark.parametrize(
+    ("argv", "said"),
+    [
+        (["calibrate", "--rig", "rig dir/rig.json"], "--rig 'rig dir/rig.json'"),
+        (["calibrate", "--mm-per-px=0.05"], "--mm-per-px=0.05"),
+        (["calibrate", "--mm", "0.05"], "--mm-per-px 0.05"),  # abbreviations argparse took
+        (["calibrate", "--ri=r.json"], "--rig=r.json"),
+        (["calibrate", "--method", "classical"], None),  # no scale option
+        (["demo", "--m", "m.csv"], None),  # demo's --manifest: demo has no scale options
+    ],
+)
+def test_the_refusal_quotes_the_scale_options_as_the_record_gave_them(
+    argv: list[str], said: str | None, tmp_path: Path
+) -> None:
+    """Spelled out, whichever way the record's command line gave them."""
+    from contactcal.infer.calibration.out_folder import check_same_unit
+    from contactcal.infer.calibration.record import HeldRecord
+
+    path = tmp_path / "calibration.json"
+    data = {"area_unit": MM2, "argv": [*argv, "--out", "cal"]}
+    with pytest.raises(ValueError, match="holds a calibration in mm²") as err:
+        check_same_unit(HeldRecord(path, data), "no --rig", "give the --rig it used")
+    gave = f"(its command line gave {said})"
+    assert (gave in str(err.value)) is (said is not None), str(err.value)
+    assert (said is None) is ("(its command line gave" not in str(err.value))
