@@ -164,3 +164,26 @@ def test_the_refusal_quotes_the_scale_options_as_the_record_gave_them(
     gave = f"(its command line gave {said})"
     assert (gave in str(err.value)) is (said is not None), str(err.value)
     assert (said is None) is ("(its command line gave" not in str(err.value))
+
+
+def test_a_video_run_into_an_earlier_recording_is_told_that_first(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str], monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """Its record in mm² would be refused too, but giving the --rig the refusal asks for would
+    only meet the frames' refusal: no --out holding a recording takes another."""
+    from contactcal.infer.video import command
+
+    manifest, rig = _session(tmp_path)
+    out = tmp_path / "cal"
+    _held(manifest, out, "--rig", str(rig))
+    (out / "frames").mkdir()
+    shutil.copy(manifest.parent / "p00.0kpa.jpg", out / "frames")
+    capsys.readouterr()
+    monkeypatch.setattr(
+        command, "calibrate_video", lambda *a, **k: pytest.fail("the video run started")
+    )
+    video = ["--video", str(tmp_path / "v.mp4"), "--pressure-log", str(tmp_path / "log.csv")]
+    assert main(["calibrate", *video, "--device-id", "display-07", "--out", str(out)]) == 2
+    err = capsys.readouterr().err
+    one_line_naming(err, out / "frames")
+    assert "holds the frames of an earlier recording" in err and MM2 not in err
