@@ -137,3 +137,53 @@ def test_demo_without_a_rig_json_refuses_a_record_in_mm2(
     assert "put the rig.json it used beside the manifest" in printed.err
     assert "--mm-per-px it used" not in printed.err  # demo has no such option
     assert printed.out == "" and _snapshot(tmp_path) == before
+
+
+@pytest.mark.parametrize(
+    ("argv", "said"),
+    [
+        (["calibrate", "--rig", "rig dir/rig.json"], "--rig 'rig dir/rig.json'"),
+        (["calibrate", "--mm-per-px=0.05"], "--mm-per-px=0.05"),
+        (["calibrate", "--mm", "0.05"], "--mm-per-px 0.05"),  # abbreviations argparse took
+        (["calibrate", "--ri=r.json"], "--rig=r.json"),
+        (["calibrate", "--method", "classical"], None),  # no scale option
+        (["demo", "--m", "m.csv"], None),  # demo's --manifest: demo has no scale options
+    ],
+)
+def test_the_refusal_quotes_the_scale_options_as_the_record_gave_them(
+    argv: list[str], said: str | None, tmp_path: Path
+) -> None:
+    """Spelled out, whichever way the record's command line gave them."""
+    from contactcal.infer.calibration.out_folder import check_same_unit
+    from contactcal.infer.calibration.record import HeldRecord
+
+    path = tmp_path / "calibration.json"
+    data = {"area_unit": MM2, "argv": [*argv, "--out", "cal"]}
+    with pytest.raises(ValueError, match="holds a calibration in mm²") as err:
+        check_same_unit(HeldRecord(path, data), "no --rig", "give the --rig it used")
+    gave = f"(its command line gave {said})"
+    assert (gave in str(err.value)) is (said is not None), str(err.value)
+    assert (said is None) is ("(its command line gave" not in str(err.value))
+
+
+def test_a_video_run_into_an_earlier_recording_is_told_that_first(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str], monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """Its record in mm² would be refused too, but giving the --rig the refusal asks for would
+    only meet the frames' refusal: no --out holding a recording takes another."""
+    from contactcal.infer.video import command
+
+    manifest, rig = _session(tmp_path)
+    out = tmp_path / "cal"
+    _held(manifest, out, "--rig", str(rig))
+    (out / "frames").mkdir()
+    shutil.copy(manifest.parent / "p00.0kpa.jpg", out / "frames")
+    capsys.readouterr()
+    monkeypatch.setattr(
+        command, "calibrate_video", lambda *a, **k: pytest.fail("the video run started")
+    )
+    video = ["--video", str(tmp_path / "v.mp4"), "--pressure-log", str(tmp_path / "log.csv")]
+    assert main(["calibrate", *video, "--device-id", "display-07", "--out", str(out)]) == 2
+    err = capsys.readouterr().err
+    one_line_naming(err, out / "frames")
+    assert "holds the frames of an earlier recording" in err and MM2 not in err

@@ -109,7 +109,7 @@ def _cmd_calibrate(args: argparse.Namespace) -> int:
     )
     from contactcal.infer.pipeline.rig_note import rig_note
     from contactcal.infer.video.args import is_video_run
-    from contactcal.infer.video.command import calibrate_video
+    from contactcal.infer.video.command import calibrate_video, check_fresh_recording
 
     provenance = Provenance(argv=args.argv, device_id=args.device_id)  # refuses a bad id
     check_change_gate(args)
@@ -119,9 +119,12 @@ def _cmd_calibrate(args: argparse.Namespace) -> int:
     rig = read_rig(args, beside)
     measure = measure_options(args, rig)  # the run's scale, before the --out check needs it
     no_scale = None if measure.scale is not None else VIDEO_SCALE if video else MANIFEST_SCALE
-    # another display's record, one in mm² this run would make px, or an earlier recording's
-    # frames or preview: refused before any work (a video run's: check_fresh_recording)
+    # an earlier recording's frames or preview (first: no other fix lets a recording into that
+    # --out), another display's record, or one in mm² this run would make px: refused before
+    # any work
     manifest = None if video else args.manifest
+    if video:
+        check_fresh_recording(args.out)
     replaced = check_reused_out(args.out, args.device_id, manifest, no_scale)
     if video:  # --video / --camera: contactcal.infer.video.command
         return calibrate_video(args, measure, provenance, replaced)

@@ -129,18 +129,32 @@ def check_same_unit(held: HeldRecord | None, no_scale: str | None, scale_from: s
 SCALE_OPTIONS = ("--rig", "--mm-per-px")
 
 
+def _scale_option(arg: str) -> str | None:
+    """The scale option (:data:`SCALE_OPTIONS`) that ``arg`` (``--name`` or ``--name=value``)
+    gave, also as an abbreviation argparse accepted (``--mm 0.05``); None: none."""
+    name = arg.split("=", 1)[0]
+    if not name.startswith("--") or len(name) < 3:
+        return None
+    named = [o for o in SCALE_OPTIONS if o.startswith(name)]
+    return named[0] if len(named) == 1 else None
+
+
 def _scale_options(argv: object) -> str | None:
-    """The pixel scale options a held record's ``argv`` gave, quoted for a shell; None: it
-    recorded no command line, or one without them."""
-    if not isinstance(argv, list):
+    """The pixel scale options a held record's ``argv`` gave, spelled out and quoted for a
+    shell; None: it recorded no ``calibrate`` command line (``demo``'s has no such options, and
+    its abbreviations are of others: ``--m`` is its ``--manifest``), or one without them."""
+    if not isinstance(argv, list) or argv[:1] != ["calibrate"]:
         return None
     args = [str(a) for a in argv]
     given: list[str] = []
     for i, arg in enumerate(args):
-        if arg in SCALE_OPTIONS and i + 1 < len(args):
-            given += args[i : i + 2]
-        elif arg.startswith(tuple(f"{o}=" for o in SCALE_OPTIONS)):
-            given.append(arg)
+        option = _scale_option(arg)
+        if option is None:
+            continue
+        if "=" in arg:
+            given.append(f"{option}={arg.split('=', 1)[1]}")
+        elif i + 1 < len(args):
+            given += [option, args[i + 1]]
     return shlex.join(given) if given else None
 
 

@@ -168,6 +168,9 @@ def calibrate_video(
         provenance: the command line and the display's id, recorded.
         replaced: the note on an earlier calibration in ``--out`` this run replaces (printed
             last), or None.
+
+    The caller checked ``--out`` first (:func:`check_fresh_recording`, then
+    :func:`~contactcal.infer.calibration.out_folder.check_reused_out`).
     """
     from contactcal.infer.calibration.calibrate import calibrate_session
     from contactcal.infer.calibration.command import session_options
@@ -185,7 +188,6 @@ def calibrate_video(
         default.tolerance_kpa if args.tolerance_kpa is None else args.tolerance_kpa,
         default.settle_s if args.settle_s is None else args.settle_s,
     )
-    check_fresh_recording(args.out)
     protect = [args.video, args.pressure_log, args.model, args.rig]
     with run_outputs(protect, options={"--out": args.out}) as outs:
         ex = extract.Extractor(cfg, args.out / "frames", outs.stage)
