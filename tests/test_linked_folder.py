@@ -39,15 +39,19 @@ def _names(entries: list[dict[str, object]]) -> list[object]:
     return [e["file"] for e in entries]
 
 
-def test_calibrate_through_a_linked_folder_names_the_frames_as_listed(tmp_path: Path) -> None:
-    link = _linked(tmp_path, copy_session(tmp_path, NAMES))
-    out = tmp_path / "out"
-    argv = ["calibrate", str(link / "manifest.csv"), "--method", "classical"]
+def _calibrated_as_listed(folder: Path, out: Path) -> None:
+    """Calibrate ``folder``'s session into ``out``; its record names every frame as listed."""
+    argv = ["calibrate", str(folder / "manifest.csv"), "--method", "classical"]
     assert main([*argv, "--out", str(out)]) == 0
     record = json.loads((out / "calibration.json").read_text(encoding="utf-8"))
     assert _names(record["inputs"]["frames"]) == list(NAMES)
     assert _names(record["points"]) == list(NAMES)
     assert record["extra"]["reference_frame"] == NAMES[0]
+
+
+def test_calibrate_through_a_linked_folder_names_the_frames_as_listed(tmp_path: Path) -> None:
+    link = _linked(tmp_path, copy_session(tmp_path, NAMES))
+    _calibrated_as_listed(link, tmp_path / "out")
 
 
 def test_evaluate_through_a_linked_folder_names_the_frames_as_listed(tmp_path: Path) -> None:
@@ -152,10 +156,4 @@ def test_frames_are_named_against_the_folder_they_were_read_from(
 
     monkeypatch.setattr(manifest, "read_session", read_then_repoint)  # the command's read
     monkeypatch.setattr(calibrate, "read_session", read_then_repoint)  # calibrate_session's
-    out = tmp_path / "out"
-    argv = ["calibrate", str(link / "manifest.csv"), "--method", "classical"]
-    assert main([*argv, "--out", str(out)]) == 0
-    record = json.loads((out / "calibration.json").read_text(encoding="utf-8"))
-    assert _names(record["inputs"]["frames"]) == list(NAMES)
-    assert _names(record["points"]) == list(NAMES)
-    assert record["extra"]["reference_frame"] == NAMES[0]
+    _calibrated_as_listed(link, tmp_path / "out")

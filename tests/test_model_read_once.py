@@ -53,6 +53,23 @@ def test_a_model_that_cannot_be_read_is_one_model_error(
         UnetMethod(model)
 
 
+def _replaced_after_each_read(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> Path:
+    """A copy of the shipped model that turns to junk right after each ``read_bytes`` of it (a
+    re-export into the same path, half done)."""
+    model = tmp_path / "model.onnx"
+    shutil.copyfile(DEFAULT_MODEL, model)
+    real = Path.read_bytes
+
+    def read_then_replace(self: Path) -> bytes:
+        content = real(self)
+        if self == model:
+            model.write_bytes(b"not a model any more")
+        return content
+
+    monkeypatch.setattr(Path, "read_bytes", read_then_replace)
+    return model
+
+
 def test_the_change_gate_measures_and_rewrites_the_model_as_first_read(
     tmp_path: Path, monkeypatch: pytest.MonkeyPatch
 ) -> None:
@@ -62,17 +79,7 @@ def test_the_change_gate_measures_and_rewrites_the_model_as_first_read(
     from contactcal.train.change_gate import gate_model
 
     data = write_dataset(tmp_path / "data", fingers=2)
-    model, out = tmp_path / "model.onnx", tmp_path / "gated.onnx"
-    shutil.copyfile(DEFAULT_MODEL, model)
-    real = Path.read_bytes
-
-    def read_then_replace(self: Path) -> bytes:
-        content = real(self)
-        if self == model:  # a re-export into the same path, half done, right after each read
-            model.write_bytes(b"not a model any more")
-        return content
-
-    monkeypatch.setattr(Path, "read_bytes", read_then_replace)
+    model, out = _replaced_after_each_read(tmp_path, monkeypatch), tmp_path / "gated.onnx"
     summary = gate_model(model, [data], out, draws=1)  # once read again: a ModelError
     new, src = onnx.load(str(out)), onnx.load(str(DEFAULT_MODEL))
     assert new.graph.SerializeToString() == src.graph.SerializeToString()
@@ -93,17 +100,7 @@ def test_the_interval_measures_and_rewrites_the_model_as_first_read(
     from contactcal.train.interval import recalibrate_model
 
     data = write_dataset(tmp_path / "data", fingers=2)
-    model, out = tmp_path / "model.onnx", tmp_path / "recalibrated.onnx"
-    shutil.copyfile(DEFAULT_MODEL, model)
-    real = Path.read_bytes
-
-    def read_then_replace(self: Path) -> bytes:
-        content = real(self)
-        if self == model:  # a re-export into the same path, half done, right after each read
-            model.write_bytes(b"not a model any more")
-        return content
-
-    monkeypatch.setattr(Path, "read_bytes", read_then_replace)
+    model, out = _replaced_after_each_read(tmp_path, monkeypatch), tmp_path / "recalibrated.onnx"
     summary = recalibrate_model(model, [data], out)  # once read again: a ValueError
     new, src = onnx.load(str(out)), onnx.load(str(DEFAULT_MODEL))
     assert new.graph.SerializeToString() == src.graph.SerializeToString()
