@@ -130,13 +130,14 @@ TRAIN_MODULES = ("torch", "kornia", "onnx")
 
 
 def _check_dirs(dirs: list[Path], out: Path | None = None) -> None:
-    """Cheap path checks before torch is imported (clear message, exit 2 in the CLI); ``out``
+    """Cheap path checks before torch is imported (clear message, exit 2 in the CLI): dataset
+    folders, no procedural cross-check set (:func:`check_render_folders`); ``out``
     (a run folder) must neither be nor lie inside nor hold a dataset folder: its config.json
     and checkpoints would land among (or replace) the data's."""
-    from contactcal.infer.bench.dataset import check_dataset_folder
+    from contactcal.train.render_sets import check_render_folders
 
+    check_render_folders(dirs)
     for d in dirs:
-        check_dataset_folder(d, "--data")
         if out is not None and (
             out.resolve().is_relative_to(d.resolve()) or d.resolve().is_relative_to(out.resolve())
         ):
