@@ -1,11 +1,13 @@
 """Errors shared by the command-line tools, the check that names a missing extra, an error that
-names its option, and the listing of a few names in a message."""
+names its option, and the listing of a few names (or changed config keys) in a message."""
 
 from __future__ import annotations
 
 import importlib.util
+import json
 import os
-from collections.abc import Sequence
+from collections.abc import Mapping, Sequence
+from typing import Any
 
 
 class RunError(Exception):
@@ -66,3 +68,40 @@ def few(names: Sequence[str], limit: int = 3, sep: str = ", ") -> str:
     rest = len(names) - limit
     more = f"{sep.rstrip().rstrip(',')} and {rest} more" if rest > 0 else ""
     return sep.join(names[:limit]) + more
+
+
+def _flat(record: Mapping[str, Any], prefix: str = "") -> dict[str, Any]:
+    """``{"render": {"spp": 1}}`` → ``{"render.spp": 1}``."""
+    out: dict[str, Any] = {}
+    for key, value in record.items():
+        if isinstance(value, dict):
+            out.update(_flat(value, f"{prefix}{key}."))
+        else:
+            out[f"{prefix}{key}"] = value
+    return out
+
+
+_NONE = object()  # a key one of two configs lacks
+
+
+def _shown(value: Any) -> str:
+    """A config value in a message: JSON, at most 40 characters."""
+    text = "(none)" if value is _NONE else json.dumps(value)
+    return text if len(text) <= 40 else text[:39] + "…"
+
+
+def config_changes(old: Mapping[str, Any], new: Mapping[str, Any], limit: int = 4) -> str:
+    """The keys of two (nested) configs that differ, old → new, for a refused resume.
+
+    Args:
+        old: the recorded config (nested dicts).
+        new: this run's.
+        limit: keys named before the rest are counted.
+
+    Returns:
+        e.g. ``render.spp: 1 → 4; seed: 0 → 9`` (values as JSON, at most 40 characters).
+    """
+    was, now = _flat(old), _flat(new)
+    keys = sorted(k for k in was.keys() | now.keys() if was.get(k, _NONE) != now.get(k, _NONE))
+    shown = [f"{k}: {_shown(was.get(k, _NONE))} → {_shown(now.get(k, _NONE))}" for k in keys]
+    return few(shown, limit, "; ")

@@ -14,7 +14,7 @@ from dataclasses import asdict
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
-from contactcal.infer.errors import few
+from contactcal.infer.errors import config_changes, few
 from contactcal.infer.files.atomic import write_json
 from contactcal.infer.files.jsonable import jsonable
 from contactcal.infer.files.temporaries import TEMP_NAME
@@ -34,7 +34,6 @@ SYNTH_REVISION = max(REVISIONS)
 
 #: Keys of a frame's truth JSON that a run reads back (the rest are ``index.csv`` columns).
 FRAME_KEYS = ("finger", "pressure_kpa", "contact", "mm_per_px")
-MAX_CHANGES = 4  # config keys named when a resume is refused for a changed config
 
 
 def read_json(path: Path, expected: str) -> Any:
@@ -78,34 +77,6 @@ def read_frame_record(path: Path) -> dict[str, Any]:
 def config_record(config: DatasetConfig) -> dict[str, Any]:
     """What ``config.json`` holds for ``config`` (as read back from JSON)."""
     return json.loads(json.dumps({**jsonable(asdict(config)), "synth_revision": SYNTH_REVISION}))
-
-
-def _flat(record: dict[str, Any], prefix: str = "") -> dict[str, Any]:
-    """``{"render": {"spp": 1}}`` → ``{"render.spp": 1}``."""
-    out: dict[str, Any] = {}
-    for key, value in record.items():
-        if isinstance(value, dict):
-            out.update(_flat(value, f"{prefix}{key}."))
-        else:
-            out[f"{prefix}{key}"] = value
-    return out
-
-
-_NONE = object()  # a key one of two configs lacks
-
-
-def _shown(value: Any) -> str:
-    """A config value in a message: JSON, at most 40 characters."""
-    text = "(none)" if value is _NONE else json.dumps(value)
-    return text if len(text) <= 40 else text[:39] + "…"
-
-
-def config_changes(old: dict[str, Any], new: dict[str, Any]) -> str:
-    """The keys that differ, e.g. ``render.spp: 1 → 4; seed: 0 → 9`` (a few, then a count)."""
-    was, now = _flat(old), _flat(new)
-    keys = sorted(k for k in was.keys() | now.keys() if was.get(k, _NONE) != now.get(k, _NONE))
-    shown = [f"{k}: {_shown(was.get(k, _NONE))} → {_shown(now.get(k, _NONE))}" for k in keys]
-    return few(shown, MAX_CHANGES, "; ")
 
 
 def check_config_matches(root: Path, config: DatasetConfig) -> None:

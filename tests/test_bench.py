@@ -6,6 +6,7 @@ import csv
 import hashlib
 import json
 import math
+import shutil
 from dataclasses import replace as dataclasses_replace
 from pathlib import Path
 from typing import Any
@@ -449,6 +450,31 @@ def test_cli_rejects_a_bad_variant(tmp_path: Path, capsys: pytest.CaptureFixture
         argv = ["bench", "--data", str(data), "--out", str(tmp_path / "o")]
         assert main([*argv, "--variant", f"{label}=x.onnx"]) == 2
         assert f"label {label!r} may hold letters" in capsys.readouterr().err
+    assert not (tmp_path / "o").exists()
+
+
+def test_cli_rejects_a_variant_that_is_the_model(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """A --variant with --model's content (or another variant's) would score it twice."""
+    from contactcal.infer.methods.unet.runner import DEFAULT_MODEL
+
+    data, copy = write_dataset(tmp_path / "data"), tmp_path / "copy.onnx"
+    shutil.copyfile(DEFAULT_MODEL, copy)
+    argv = ["bench", "--data", str(data), "--out", str(tmp_path / "o")]
+    cases = (
+        ([f"x={copy}"], f"--variant x={copy}: the same model as --model {DEFAULT_MODEL}"),
+        (["--model", str(copy), f"x={DEFAULT_MODEL}"], f"as --model {copy} (identical"),
+    )
+    for extra, says in cases:
+        model, variant = extra[:-1], extra[-1]
+        assert main([*argv, *model, "--variant", variant]) == 2
+        (err,) = capsys.readouterr().err.strip().splitlines()
+        assert says in err and "expected another model" in err, err
+    int8 = tmp_path / "int8.onnx"
+    int8.write_bytes(copy.read_bytes() + b"\0")  # other content, as any other file
+    assert main([*argv, "--variant", f"a={int8}", "--variant", f"b={int8}"]) == 2
+    assert f"--variant b={int8}: the same model as --variant a={int8}" in capsys.readouterr().err
     assert not (tmp_path / "o").exists()
 
 

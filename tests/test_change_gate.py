@@ -157,6 +157,24 @@ def test_gate_model_writes_the_threshold_and_refuses_bad_paths(tmp_path: Path) -
     assert not (tmp_path / "x.txt").exists()
 
 
+def test_data_without_a_region_in_contact_names_data_and_model(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """No kept region in a contact frame (an untrained model): one line naming both."""
+    pytest.importorskip("onnx")
+    from procedural import write_dataset
+
+    from contactcal.train import change_gate
+
+    data, out = write_dataset(tmp_path / "data", fingers=2), tmp_path / "gated.onnx"
+    none = (np.array([0.1]), np.array([False]), {"0.0": 1})  # a region, in no contact frame
+    monkeypatch.setattr(change_gate, "_changes", lambda *args: none)
+    assert change_gate.main([str(DEFAULT_MODEL), "--data", str(data), "--out", str(out)]) == 2
+    (err,) = capsys.readouterr().err.strip().splitlines()
+    assert f"--data {data}: {DEFAULT_MODEL}: no region in a frame in contact" in err, err
+    assert "expected frames in contact that the model segments" in err and not out.exists()
+
+
 @pytest.mark.parametrize(
     ("option", "value", "expected"),
     [

@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import dataclasses
 import json
+import shutil
 from pathlib import Path
 
 import numpy as np
@@ -182,6 +183,24 @@ def test_cli_a_failed_export_check_is_one_line_and_writes_nothing(
     assert len(err) == 1, err
     assert "ONNX output differs from torch max |diff| 0.3; nothing was written" in err[0]
     assert list(tmp_path.iterdir()) == []
+
+
+@pytest.mark.slow
+def test_cli_export_of_an_unfinished_run_warns(
+    run_dir: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """A run without val_bins.csv (stopped, or still training) exports, with one warning line."""
+    from contactcal.infer.cli import main
+
+    assert main(["export", str(run_dir), "--out", str(tmp_path / "done.onnx")]) == 0
+    assert capsys.readouterr().err == ""  # finished: no warning
+    run = tmp_path / "run"
+    shutil.copytree(run_dir, run)
+    (run / "val_bins.csv").unlink()
+    assert main(["export", str(run), "--out", str(tmp_path / "m.onnx")]) == 0
+    (err,) = capsys.readouterr().err.strip().splitlines()
+    assert err.startswith(f"warning: {run}: an unfinished run (no val_bins.csv"), err
+    assert "--resume the run to its last epoch" in err and (tmp_path / "m.onnx").is_file()
 
 
 @pytest.mark.slow

@@ -17,6 +17,7 @@ from contactcal.infer.bench.crosscheck import SIDE_KEYS
 from contactcal.infer.bench.dataset import read_index
 from contactcal.infer.bench.run import run_bench
 from contactcal.infer.cli import main
+from contactcal.infer.methods.unet.runner import DEFAULT_MODEL
 from contactcal.infer.pipeline.manifest import read_manifest
 from contactcal.infer.pipeline.scale import load_rig_config
 from contactcal.synth.layout import parse_pressures
@@ -25,6 +26,7 @@ from contactcal.synth.procedural.contact import area_law_mm2
 from contactcal.synth.procedural.dataset import build_dataset
 from contactcal.synth.procedural.frame import session_frames
 from contactcal.synth.procedural.session import finger_params
+from contactcal.train import change_gate, interval
 
 PACKAGE = Path(__file__).resolve().parents[1] / "synth" / "procedural"
 PRESSURES = (0.0, 2.0, 4.0, 8.0, 14.0)
@@ -176,6 +178,25 @@ def test_cli(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
     said = f"--out {afile / 'x'}: {afile}: is not a folder; cannot write outputs into it"
     assert err == f"contactcal: error: {said}", err
     assert afile.read_text() == "kept"
+
+
+def test_never_trained_or_tuned_on(
+    dataset: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """train, quantize and the restating tools refuse a procedural set (bench scores it)."""
+    model, out = str(DEFAULT_MODEL), tmp_path / "out.onnx"
+    runs = {
+        "train": lambda d: main(["train", "--data", d, "--out", str(tmp_path / "run")]),
+        "quantize": lambda d: main(["quantize", model, "--data", d, "--out", str(out)]),
+        "interval": lambda d: interval.main([model, "--data", d, "--out", str(out)]),
+        "change_gate": lambda d: change_gate.main([model, "--data", d, "--out", str(out)]),
+    }
+    for name, run in runs.items():
+        assert run(str(dataset)) == 2, name
+        (err,) = capsys.readouterr().err.strip().splitlines()
+        assert f"--data {dataset}: a cross-check set written by `contactcal procedural`" in err
+        assert "expected a dataset written by `contactcal synth`" in err, name
+    assert not out.exists() and not (tmp_path / "run").exists()
 
 
 def test_bench_crosscheck(dataset: Path, tmp_path: Path) -> None:

@@ -15,11 +15,11 @@ import pytest
 pytest.importorskip("mitsuba")
 
 from contactcal.infer.cli import main
+from contactcal.infer.errors import config_changes
 from contactcal.synth.dataset import DatasetConfig, build_dataset, render_finger
 from contactcal.synth.dataset_folder import (
     check_config_matches,
     check_out_folder,
-    config_changes,
     earlier_runs,
     write_run_record,
 )

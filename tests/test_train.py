@@ -22,7 +22,7 @@ from contactcal.infer.methods.unet.crop import CropBox  # noqa: E402
 from contactcal.infer.methods.unet.prepare import network_to_unit, unit_to_network  # noqa: E402
 from contactcal.infer.methods.unet.spec import ModelSpec  # noqa: E402
 from contactcal.train.augment import AugmentConfig, Augmenter, blur_kernel_size  # noqa: E402
-from contactcal.train.checkpoint import config_diff, config_from_dict, config_to_dict  # noqa: E402
+from contactcal.train.checkpoint import config_from_dict, config_to_dict  # noqa: E402
 from contactcal.train.commands import add_parsers, build_config  # noqa: E402
 from contactcal.train.config import TrainConfig  # noqa: E402
 from contactcal.train.data import build_cache  # noqa: E402
@@ -216,8 +216,7 @@ def test_a_run_stopped_in_its_first_epoch_leaves_nothing(
 def test_config_round_trip() -> None:
     cfg = tiny_config().resolved()
     back = config_from_dict(TrainConfig, config_to_dict(cfg))
-    assert back == cfg and config_diff(back, cfg) == []
-    assert config_diff(cfg, tiny_config(seed=5).resolved()) == ["seed"]
+    assert back == cfg
     with pytest.raises(ValueError, match="unknown"):
         config_from_dict(TrainConfig, {"nope": 1})
 

@@ -140,7 +140,14 @@ def test_resume_leaves_a_finished_run_as_it_is(
     assert {p.name: (p.stat().st_ino, p.stat().st_mtime_ns) for p in run.iterdir()} == stats
     # finished or not, --resume with another config is refused (it cannot extend a run)
     assert main([*argv, "--resume", "--epochs", "3"]) == 2
-    assert "--resume with a different config (epochs)" in capsys.readouterr().err
+    err = capsys.readouterr().err
+    one_line_naming(err, run)
+    assert "--resume with a different config (epochs: 1 → 3); expected the run's own" in err
+    other = write_dataset(tmp_path / "other", fingers=3, seed=1)  # other data, same config
+    assert main(["train", "--data", str(other), "--out", str(run), *TINY, "--resume"]) == 2
+    err = capsys.readouterr().err
+    one_line_naming(err, run)
+    assert f"expected the run's own dataset folders, unchanged: pass --data {d}" in err
     assert _snapshot(run) == before
     # killed right after its last epoch's last.pt (a 1-epoch run: config.json not yet written)
     for name in ("config.json", "metrics.csv", "curves.png", "val_bins.csv"):

@@ -4,7 +4,9 @@
 (``min_change``) calibrate on validation renders, never on the model's training data. Before any
 frame is read, :func:`calibration_folders` refuses (before the model is read):
 
-* a path that is no dataset folder (``--data D: ...``, as ``contactcal train`` says it);
+* a path that is no dataset folder, or a ``contactcal procedural`` cross-check set (``--data D:
+  ...``, as ``contactcal train`` says it:
+  :func:`~contactcal.train.render_sets.check_render_folders`);
 * a folder given twice (the same resolved path): its frames would count twice;
 
 and :func:`calibration_data`, given the model's metadata:
@@ -34,9 +36,10 @@ from collections.abc import Mapping, Sequence
 from pathlib import Path
 from typing import Any
 
-from contactcal.infer.bench.dataset import check_dataset_folder, read_index
+from contactcal.infer.bench.dataset import read_index
 from contactcal.infer.methods.unet.spec import CALIBRATION_DATA_KEY
 from contactcal.train.digest import dataset_digest
+from contactcal.train.render_sets import check_render_folders
 
 
 def calibration_folders(data_dirs: Sequence[str | os.PathLike[str]]) -> list[Path]:
@@ -46,12 +49,12 @@ def calibration_folders(data_dirs: Sequence[str | os.PathLike[str]]) -> list[Pat
         data_dirs: the ``--data`` folders (``contactcal synth`` layout), in the order given.
 
     Raises:
-        ValueError: a folder that is not a dataset, or a folder given twice (the message names
+        ValueError: a folder that is not a dataset or is a procedural cross-check set, or a
+            folder given twice (the message names
             the folder and the option).
     """
     dirs = [Path(d) for d in data_dirs]
-    for d in dirs:
-        check_dataset_folder(d, "--data")
+    check_render_folders(dirs)
     _refuse_repeats(dirs)
     return dirs
 

@@ -73,7 +73,10 @@ def margin_threshold(change: np.ndarray, contact: np.ndarray) -> tuple[float, di
     if change.shape != contact.shape or not np.all(np.isfinite(change)):
         raise ValueError(f"expected finite changes, one per region; got shape {change.shape}")
     if not contact.any():
-        raise ValueError("no region in a frame in contact: calibrate on frames with contact")
+        raise ValueError(
+            "no region in a frame in contact (data without contact, or a model that segments "
+            "none of it); expected frames in contact that the model segments"
+        )
     hi = float(change[contact].min())
     t = hi / MARGIN
     false = change[~contact]
@@ -211,7 +214,10 @@ def gate_model(
     if not base.uses_reference:
         raise ValueError(f"{src}: the change gate needs a model with a reference channel")
     change, contact, frames = _changes(m, dirs, specks, draws, seed)
-    t, summary = margin_threshold(change, contact)
+    try:
+        t, summary = margin_threshold(change, contact)
+    except ValueError as exc:  # named: which data, which model
+        raise ValueError(f"--data {' '.join(map(str, dirs))}: {src}: {exc}") from None
     spec = dataclasses.replace(base, min_change=t)
     entry = with_record(spec.to_metadata()["min_change"], record)
     save_restated(proto, {"min_change": entry}, spec, dst)

@@ -55,22 +55,6 @@ def config_from_dict(cls: type[C], data: dict[str, Any], where: str = "config") 
         raise ValueError(f"{where}: {exc}") from exc
 
 
-def config_diff(a: Any, b: Any) -> list[str]:
-    """Dotted names of the fields where two configs of the same type differ."""
-    da, db = config_to_dict(a), config_to_dict(b)
-    out: list[str] = []
-
-    def walk(x: Any, y: Any, prefix: str) -> None:
-        if isinstance(x, dict) and isinstance(y, dict):
-            for k in sorted(set(x) | set(y)):
-                walk(x.get(k), y.get(k), f"{prefix}{k}.")
-        elif x != y:
-            out.append(prefix.rstrip("."))
-
-    walk(da, db, "")
-    return out
-
-
 def rng_state() -> dict[str, Any]:
     """torch's global CPU (and CUDA) generator states (weight init; augmentation has its own)."""
     state: dict[str, Any] = {"torch": torch.get_rng_state()}

@@ -7,6 +7,7 @@ deployment CLI stays fast and works without the ``train`` extra installed.
 from __future__ import annotations
 
 import argparse
+import sys
 from pathlib import Path
 from typing import Any
 
@@ -130,13 +131,14 @@ TRAIN_MODULES = ("torch", "kornia", "onnx")
 
 
 def _check_dirs(dirs: list[Path], out: Path | None = None) -> None:
-    """Cheap path checks before torch is imported (clear message, exit 2 in the CLI); ``out``
+    """Cheap path checks before torch is imported (clear message, exit 2 in the CLI): dataset
+    folders, no procedural cross-check set (:func:`check_render_folders`); ``out``
     (a run folder) must neither be nor lie inside nor hold a dataset folder: its config.json
     and checkpoints would land among (or replace) the data's."""
-    from contactcal.infer.bench.dataset import check_dataset_folder
+    from contactcal.train.render_sets import check_render_folders
 
+    check_render_folders(dirs)
     for d in dirs:
-        check_dataset_folder(d, "--data")
         if out is not None and (
             out.resolve().is_relative_to(d.resolve()) or d.resolve().is_relative_to(out.resolve())
         ):
@@ -191,6 +193,7 @@ def _cmd_export(args: argparse.Namespace) -> int:
     from contactcal.infer.files.stdout import printing_after
     from contactcal.train.export import export_onnx
     from contactcal.train.export_check import ExportCheckError
+    from contactcal.train.resume import is_finished
 
     min_area = None
     if args.tune_min_area:
@@ -202,9 +205,22 @@ def _cmd_export(args: argparse.Namespace) -> int:
         path = export_onnx(args.run_dir, args.out, opset=args.opset, min_contact_area_px=min_area)
     except ExportCheckError as exc:  # the export's own checks (checker, parity, decisions, ...)
         raise RunError(f"export: {' '.join(str(exc).split())}; nothing was written") from exc
-    with printing_after([path]):
+    warning = None if is_finished(args.run_dir) else _unfinished_warning(args.run_dir, path)
+    with printing_after([path], [warning]):
         print(f"wrote {path}")
+    if warning is not None:
+        print(warning, file=sys.stderr)
     return 0
+
+
+def _unfinished_warning(run_dir: Path, model: Path) -> str:
+    """The warning of an export from a run without ``val_bins.csv`` (written after its last
+    epoch): stopped, or still training, its ``best.pt`` is the best epoch so far."""
+    return (
+        f"warning: {run_dir}: an unfinished run (no val_bins.csv, written after its last epoch: "
+        f"it was stopped, or is still training); {model} is its best.pt so far (best_epoch in "
+        "its metadata): --resume the run to its last epoch and export again for the run's model"
+    )
 
 
 def _cmd_quantize(args: argparse.Namespace) -> int:

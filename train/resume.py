@@ -10,7 +10,8 @@ from __future__ import annotations
 from pathlib import Path
 from typing import Any
 
-from contactcal.train.checkpoint import config_diff, load_checkpoint
+from contactcal.infer.errors import config_changes
+from contactcal.train.checkpoint import config_to_dict, load_checkpoint
 from contactcal.train.config import TrainConfig, saved_train_config
 from contactcal.train.run_folder import read_run_info
 from contactcal.train.split import Split, check_same_split, recorded_split
@@ -56,18 +57,27 @@ def resume_checkpoint(
     """
     ckpt = load_checkpoint(out / "last.pt")
     saved = saved_train_config(ckpt["config"], str(out / "last.pt"))
-    diff = [k for k in config_diff(saved, cfg) if k not in ("device", "num_threads")]
-    if diff:
-        raise ValueError(f"{out}: --resume with a different config ({', '.join(diff)})")
+    was, now = _resumed_settings(saved), _resumed_settings(cfg)
+    if was != now:
+        raise ValueError(
+            f"{out}: --resume with a different config ({config_changes(was, now)}); expected "
+            "the run's own settings: leave those options out (a resume takes the saved "
+            "values), or start a new run in another --out"
+        )
+    # absent only if killed before its first config.json
+    info = read_run_info(out) if (out / "config.json").is_file() else None
     if ckpt["data_digest"] != digests[0]:
-        raise ValueError(f"{out}: --resume with different data (index.csv digest changed)")
+        given = "" if info is None else f": pass --data {' '.join(info['data_dirs'])}"
+        raise ValueError(
+            f"{out}: --resume with different data (the --data folders' index.csv digest is not "
+            f"the run's data_digest); expected the run's own dataset folders, unchanged{given}"
+        )
     if "augment_rng" not in ckpt:
         raise ValueError(
             f"{out / 'last.pt'}: written by an older contactcal (no augmentation generator "
             "state), cannot be resumed exactly; start a new run"
         )
-    if (out / "config.json").is_file():  # absent only if killed before its first config.json
-        info = read_run_info(out)
+    if info is not None:
         if info.get("render_digest", digests[1]) != digests[1]:
             raise ValueError(
                 f"{out}: --resume with data rendered otherwise (the folders' config.json digest "
@@ -83,3 +93,11 @@ def resume_checkpoint(
             "cannot be resumed exactly: start a new run)",
         )
     return ckpt
+
+
+def _resumed_settings(cfg: TrainConfig) -> dict[str, Any]:
+    """``cfg`` as a dict, less what a resume may change (the device and torch's threads)."""
+    settings = config_to_dict(cfg)
+    for key in ("device", "num_threads"):
+        settings.pop(key)
+    return settings

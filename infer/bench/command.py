@@ -78,6 +78,7 @@ def _cmd_bench(args: argparse.Namespace) -> int:
         labels = [label for label, _ in variants]
         twice = sorted({x for x in labels if labels.count(x) > 1})
         raise ValueError(f"--variant: label(s) {', '.join(twice)} given twice; expected one each")
+    _check_distinct_models(args.model, variants)
     cfg = BenchConfig(
         repeats=args.repeats,
         timing_frames=args.timing_frames,
@@ -155,6 +156,27 @@ def _variant(text: str) -> tuple[str, str]:
     if not Path(path).is_file():
         raise ValueError(f"--variant {text!r}: {path}: no such model file")
     return label, path
+
+
+def _check_distinct_models(model: Path | None, variants: tuple[tuple[str, str], ...]) -> None:
+    """Refuse a ``--variant`` whose file holds the content of ``--model`` (the shipped model
+    without it) or of an earlier variant: its rows would repeat that model's under another
+    label (a mistyped INT8 path would read as an INT8 model that loses nothing)."""
+    from contactcal.infer.files.digest import sha256_file
+    from contactcal.infer.methods.unet.runner import DEFAULT_MODEL
+
+    model_file = DEFAULT_MODEL if model is None else model
+    if not variants or not model_file.is_file():  # a missing --model is named by the run
+        return
+    seen = {sha256_file(model_file): f"--model {model_file}"}
+    for label, path in variants:
+        name = f"--variant {label}={path}"
+        same = seen.setdefault(sha256_file(path), name)
+        if same != name:
+            raise ValueError(
+                f"{name}: the same model as {same} (identical content); expected another "
+                "model, e.g. the INT8 one `contactcal quantize` wrote"
+            )
 
 
 def _robustness_frames(args: argparse.Namespace) -> int:
