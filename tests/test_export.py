@@ -189,7 +189,8 @@ def test_cli_a_failed_export_check_is_one_line_and_writes_nothing(
 def test_cli_export_of_an_unfinished_run_warns(
     run_dir: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str]
 ) -> None:
-    """A run without val_bins.csv (stopped, or still training) exports, with one warning line."""
+    """A run without val_bins.csv (stopped, or still training) exports, with one warning line; a
+    finished run whose last.pt was deleted, without."""
     from contactcal.infer.cli import main
 
     assert main(["export", str(run_dir), "--out", str(tmp_path / "done.onnx")]) == 0
@@ -201,6 +202,11 @@ def test_cli_export_of_an_unfinished_run_warns(
     (err,) = capsys.readouterr().err.strip().splitlines()
     assert err.startswith(f"warning: {run}: an unfinished run (no val_bins.csv"), err
     assert "--resume the run to its last epoch" in err and (tmp_path / "m.onnx").is_file()
+    kept = tmp_path / "kept"  # finished, its last.pt deleted (only best.pt kept): no warning
+    shutil.copytree(run_dir, kept)
+    (kept / "last.pt").unlink()
+    assert main(["export", str(kept), "--out", str(tmp_path / "k.onnx")]) == 0
+    assert capsys.readouterr().err == "" and (tmp_path / "k.onnx").is_file()
 
 
 @pytest.mark.slow

@@ -193,7 +193,7 @@ def _cmd_export(args: argparse.Namespace) -> int:
     from contactcal.infer.files.stdout import printing_after
     from contactcal.train.export import export_onnx
     from contactcal.train.export_check import ExportCheckError
-    from contactcal.train.resume import is_finished
+    from contactcal.train.resume import ran_to_end
 
     min_area = None
     if args.tune_min_area:
@@ -205,7 +205,7 @@ def _cmd_export(args: argparse.Namespace) -> int:
         path = export_onnx(args.run_dir, args.out, opset=args.opset, min_contact_area_px=min_area)
     except ExportCheckError as exc:  # the export's own checks (checker, parity, decisions, ...)
         raise RunError(f"export: {' '.join(str(exc).split())}; nothing was written") from exc
-    warning = None if is_finished(args.run_dir) else _unfinished_warning(args.run_dir, path)
+    warning = None if ran_to_end(args.run_dir) else _unfinished_warning(args.run_dir, path)
     with printing_after([path], [warning]):
         print(f"wrote {path}")
     if warning is not None:

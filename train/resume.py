@@ -17,10 +17,16 @@ from contactcal.train.run_folder import read_run_info
 from contactcal.train.split import Split, check_same_split, recorded_split
 
 
+def ran_to_end(out: Path) -> bool:
+    """Whether the run in ``out`` ran to its last epoch: it holds ``val_bins.csv``, written after
+    it (whether or not its ``last.pt`` was kept; ``export`` needs only ``best.pt``)."""
+    return (out / "val_bins.csv").is_file()
+
+
 def is_finished(out: Path) -> bool:
-    """Whether ``out`` holds a finished run: ``last.pt`` and ``val_bins.csv``, written after its
-    last epoch (``train --resume`` checks it as any run, then leaves it as it is)."""
-    return (out / "last.pt").is_file() and (out / "val_bins.csv").is_file()
+    """Whether ``out`` holds a finished run to check: ``last.pt``, and :func:`ran_to_end`
+    (``train --resume`` checks it as any run, then leaves it as it is)."""
+    return (out / "last.pt").is_file() and ran_to_end(out)
 
 
 def finished_summary(out: Path, ckpt: dict[str, Any]) -> dict[str, Any]:
