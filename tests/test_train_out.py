@@ -149,6 +149,14 @@ def test_resume_leaves_a_finished_run_as_it_is(
     one_line_naming(err, run)
     assert f"expected the run's own dataset folders, unchanged: pass --data {d}" in err
     assert _snapshot(run) == before
+    recorded = (run / "config.json").read_text()
+    for damaged in ({"data_dirs": None}, {"data_dirs": [1]}):  # named, not a traceback
+        (run / "config.json").write_text(json.dumps({**json.loads(recorded), **damaged}))
+        assert main(["train", "--data", str(other), "--out", str(run), *TINY, "--resume"]) == 2
+        err = capsys.readouterr().err
+        one_line_naming(err, run / "config.json")
+        assert "expected split and data_dirs as `contactcal train` records them" in err
+    (run / "config.json").write_text(recorded)
     # killed right after its last epoch's last.pt (a 1-epoch run: config.json not yet written)
     for name in ("config.json", "metrics.csv", "curves.png", "val_bins.csv"):
         (run / name).unlink()

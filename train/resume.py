@@ -72,6 +72,8 @@ def resume_checkpoint(
         )
     # absent only if killed before its first config.json
     info = read_run_info(out) if (out / "config.json").is_file() else None
+    # checked first: the messages below name its data_dirs
+    recorded = None if info is None else recorded_split(info, out / "config.json")
     if ckpt["data_digest"] != digests[0]:
         given = "" if info is None else f": pass --data {' '.join(info['data_dirs'])}"
         raise ValueError(
@@ -83,7 +85,7 @@ def resume_checkpoint(
             f"{out / 'last.pt'}: written by an older contactcal (no augmentation generator "
             "state), cannot be resumed exactly; start a new run"
         )
-    if info is not None:
+    if info is not None and recorded is not None:
         if info.get("render_digest", digests[1]) != digests[1]:
             raise ValueError(
                 f"{out}: --resume with data rendered otherwise (the folders' config.json digest "
@@ -91,7 +93,7 @@ def resume_checkpoint(
                 "expected the run's own renders: put them back, or start a new run"
             )
         check_same_split(
-            recorded_split(info, out / "config.json"),
+            recorded,
             split,
             f"{out}: the split of this --resume's --data",
             f"expected the run's own dataset folders: pass --data {' '.join(info['data_dirs'])} "
