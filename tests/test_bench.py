@@ -463,7 +463,7 @@ def test_cli_rejects_a_variant_that_is_the_model(
     shutil.copyfile(DEFAULT_MODEL, copy)
     argv = ["bench", "--data", str(data), "--out", str(tmp_path / "o")]
     cases = (
-        ([f"x={copy}"], f"--variant x={copy}: the same model as --model {DEFAULT_MODEL}"),
+        ([f"x={copy}"], f"x={copy}: the same model as the shipped model {DEFAULT_MODEL}, which"),
         (["--model", str(copy), f"x={DEFAULT_MODEL}"], f"as --model {copy} (identical"),
     )
     for extra, says in cases:

@@ -168,7 +168,8 @@ def _check_distinct_models(model: Path | None, variants: tuple[tuple[str, str], 
     model_file = DEFAULT_MODEL if model is None else model
     if not variants or not model_file.is_file():  # a missing --model is named by the run
         return
-    seen = {sha256_file(model_file): f"--model {model_file}"}
+    shipped = f"the shipped model {model_file}, which bench scores without --model"
+    seen = {sha256_file(model_file): shipped if model is None else f"--model {model_file}"}
     for label, path in variants:
         name = f"--variant {label}={path}"
         same = seen.setdefault(sha256_file(path), name)
