@@ -90,13 +90,13 @@ def _shown(value: Any) -> str:
     return text if len(text) <= 40 else text[:39] + "…"
 
 
-def config_changes(old: Mapping[str, Any], new: Mapping[str, Any], limit: int = 4) -> str:
+def config_changes(old: Mapping[str, Any], new: Mapping[str, Any], limit: int | None = 4) -> str:
     """The keys of two (nested) configs that differ, old → new, for a refused resume.
 
     Args:
         old: the recorded config (nested dicts).
         new: this run's.
-        limit: keys named before the rest are counted.
+        limit: keys named before the rest are counted (None: every key named).
 
     Returns:
         e.g. ``render.spp: 1 → 4; seed: 0 → 9`` (values as JSON, at most 40 characters).
@@ -104,4 +104,4 @@ def config_changes(old: Mapping[str, Any], new: Mapping[str, Any], limit: int = 
     was, now = _flat(old), _flat(new)
     keys = sorted(k for k in was.keys() | now.keys() if was.get(k, _NONE) != now.get(k, _NONE))
     shown = [f"{k}: {_shown(was.get(k, _NONE))} → {_shown(now.get(k, _NONE))}" for k in keys]
-    return few(shown, limit, "; ")
+    return few(shown, len(shown) if limit is None else limit, "; ")

@@ -160,6 +160,13 @@ def test_resume_leaves_a_finished_run_as_it_is(
     # killed right after its last epoch's last.pt (a 1-epoch run: config.json not yet written)
     for name in ("config.json", "metrics.csv", "curves.png", "val_bins.csv"):
         (run / name).unlink()
+    before_resume = _snapshot(run)  # no config.json to take the saved settings from
+    assert main(["train", "--data", str(d), "--out", str(run), "--quiet", "--resume"]) == 2
+    err = capsys.readouterr().err
+    one_line_naming(err, run)
+    assert "(batch_size: 4 → 16; epochs: 1 → 40; input_size: 32 → 256; " in err
+    assert "more" not in err and "expected the run's own settings: give them as options" in err
+    assert _snapshot(run) == before_resume
     assert main([*argv, "--resume"]) == 0
     after = _snapshot(run)
     assert set(after) == set(before) and after["metrics.csv"] == before["metrics.csv"]

@@ -63,13 +63,7 @@ def resume_checkpoint(
     """
     ckpt = load_checkpoint(out / "last.pt")
     saved = saved_train_config(ckpt["config"], str(out / "last.pt"))
-    was, now = _resumed_settings(saved), _resumed_settings(cfg)
-    if was != now:
-        raise ValueError(
-            f"{out}: --resume with a different config ({config_changes(was, now)}); expected "
-            "the run's own settings: leave those options out (a resume takes the saved "
-            "values), or start a new run in another --out"
-        )
+    _check_settings(out, saved, cfg)
     # absent only if killed before its first config.json
     info = read_run_info(out) if (out / "config.json").is_file() else None
     # checked first: the messages below name its data_dirs
@@ -101,6 +95,29 @@ def resume_checkpoint(
             "cannot be resumed exactly: start a new run)",
         )
     return ckpt
+
+
+def _check_settings(out: Path, saved: TrainConfig, cfg: TrainConfig) -> None:
+    """Refuse settings other than the run's ``saved`` ones (its ``last.pt``'s), naming each,
+    saved → given. Options left out take the saved values from the run's ``config.json``; a run
+    stopped before it was written has none to take them from, so every setting is named there,
+    to be given again."""
+    was, now = _resumed_settings(saved), _resumed_settings(cfg)
+    if was == now:
+        return
+    if (out / "config.json").is_file():
+        changes = config_changes(was, now)
+        remedy = "leave those options out (a resume takes the saved values)"
+    else:
+        changes = config_changes(was, now, limit=None)
+        remedy = (
+            "give them as options (this run was stopped before its config.json, which a resume "
+            "takes them from, was written)"
+        )
+    raise ValueError(
+        f"{out}: --resume with a different config ({changes}); expected the run's own settings: "
+        f"{remedy}, or start a new run in another --out"
+    )
 
 
 def _resumed_settings(cfg: TrainConfig) -> dict[str, Any]:
