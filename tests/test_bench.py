@@ -453,6 +453,30 @@ def test_cli_rejects_a_bad_variant(tmp_path: Path, capsys: pytest.CaptureFixture
     assert not (tmp_path / "o").exists()
 
 
+def test_cli_names_the_option_of_an_unusable_model(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """A missing or unloadable --model or --variant model is named with its option, before the
+    work; a variant labelled as a method (rows ``unet[unet]``) is refused."""
+    data = write_dataset(tmp_path / "data")
+    index, missing = data / "index.csv", tmp_path / "missing.onnx"
+    argv = ["bench", "--data", str(data), "--out", str(tmp_path / "o")]
+    cases = (
+        (["--model", str(missing)], f"--model {missing}: no such model file"),
+        (["--model", str(index)], f"--model {index}: not a loadable ONNX model ("),
+        (["--variant", f"x={missing}"], f"--variant x={missing}: no such model file"),
+        (["--variant", f"x={index}"], f"--variant x={index}: not a loadable ONNX model ("),
+        (["--variant", f"unet={index}"], f"--variant unet={index}: label 'unet' is a method's"),
+        (["--variant", f"classical={index}"], f"--variant classical={index}: label 'classical'"),
+    )
+    for extra, says in cases:
+        assert main([*argv, *extra]) == 2
+        (err,) = capsys.readouterr().err.strip().splitlines()
+        assert err.startswith(f"contactcal: error: {says}"), err
+    assert f"unet[classical]); expected a label naming the variant, e.g. int8={index}" in err
+    assert not (tmp_path / "o").exists()
+
+
 def test_cli_rejects_a_variant_that_is_the_model(
     tmp_path: Path, capsys: pytest.CaptureFixture[str]
 ) -> None:
@@ -472,7 +496,8 @@ def test_cli_rejects_a_variant_that_is_the_model(
         (err,) = capsys.readouterr().err.strip().splitlines()
         assert says in err and "expected another model" in err, err
     int8 = tmp_path / "int8.onnx"
-    int8.write_bytes(copy.read_bytes() + b"\0")  # other content, as any other file
+    # other content, a loadable model: a doc_string (field 6) appended, the last value wins
+    int8.write_bytes(copy.read_bytes() + b"\x32\x01x")
     assert main([*argv, "--variant", f"a={int8}", "--variant", f"b={int8}"]) == 2
     assert f"--variant b={int8}: the same model as --variant a={int8}" in capsys.readouterr().err
     assert not (tmp_path / "o").exists()

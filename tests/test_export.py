@@ -194,7 +194,8 @@ def test_cli_export_of_an_unfinished_run_warns(
     from contactcal.infer.cli import main
 
     assert main(["export", str(run_dir), "--out", str(tmp_path / "done.onnx")]) == 0
-    assert capsys.readouterr().err == ""  # finished: no warning
+    out, err = capsys.readouterr()
+    assert err == "" and "replaced" not in out  # finished: no warning; nothing replaced
     run = tmp_path / "run"
     shutil.copytree(run_dir, run)
     (run / "val_bins.csv").unlink()
@@ -207,6 +208,24 @@ def test_cli_export_of_an_unfinished_run_warns(
     (kept / "last.pt").unlink()
     assert main(["export", str(kept), "--out", str(tmp_path / "k.onnx")]) == 0
     assert capsys.readouterr().err == "" and (tmp_path / "k.onnx").is_file()
+
+
+@pytest.mark.slow
+def test_cli_export_says_which_model_it_replaced(
+    run_dir: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """An --out that held a file is replaced with a note naming it and its content's sha256."""
+    from contactcal.infer.cli import main
+    from contactcal.infer.files.digest import sha256_bytes
+
+    out = tmp_path / "m.onnx"
+    out.write_bytes(b"an earlier model")
+    assert main(["export", str(run_dir), "--out", str(out)]) == 0
+    wrote, note = capsys.readouterr().out.strip().splitlines()
+    held = sha256_bytes(b"an earlier model")[:12]
+    assert wrote == f"wrote {out}"
+    assert note == f"note: replaced {out} (sha256 {held}); give each run its own --out to keep both"
+    assert onnx.load(str(out)).graph.node  # the new model
 
 
 @pytest.mark.slow

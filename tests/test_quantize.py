@@ -13,6 +13,7 @@ pytest.importorskip("onnx")
 
 from contactcal.infer.bench.dataset import spread
 from contactcal.infer.cli import main
+from contactcal.infer.files.digest import sha256_bytes
 from contactcal.infer.methods.unet.runner import DEFAULT_MODEL, OnnxSegmenter
 from contactcal.train import quantize
 from contactcal.train.quantize import quantize_model
@@ -54,10 +55,28 @@ def test_refuses_an_int8_model_and_writes_nothing(
     assert main(argv) == 0
     out, err = capsys.readouterr()
     assert err == "" and out.startswith(f"wrote {q}: calibrated on 2 frames; on 2 others")
+    assert "replaced" not in out  # nothing was there to replace
     assert not [r.getMessage() for r in caplog.records]  # onnxruntime's advice held back
     with pytest.raises(ValueError, match="already quantized"):
         quantize_model(q, tmp_path / "qq.onnx", [data], frames=2)
     assert not (tmp_path / "qq.onnx").exists()
+
+
+def test_cli_says_which_model_it_replaced(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """An --out that held a file is replaced with a note naming it and its content's sha256."""
+    data = _example_dataset(tmp_path / "data")
+    q = tmp_path / "int8.onnx"
+    q.write_bytes(b"an earlier INT8 model")
+    argv = ["quantize", str(DEFAULT_MODEL), "--out", str(q), "--data", str(data), "--frames", "2"]
+    assert main(argv) == 0
+    out, err = capsys.readouterr()
+    first, note = out.strip().splitlines()
+    assert err == "" and first.startswith(f"wrote {q}: calibrated on 2 frames")
+    held = sha256_bytes(b"an earlier INT8 model")[:12]
+    assert note == f"note: replaced {q} (sha256 {held}); give each run its own --out to keep both"
+    assert q.read_bytes() != b"an earlier INT8 model"
 
 
 def test_cli_refuses_an_output_that_is_not_a_model_before_the_work(

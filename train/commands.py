@@ -186,9 +186,10 @@ def _cmd_export(args: argparse.Namespace) -> int:
     require_extra("export", "train", TRAIN_MODULES)
     if args.opset not in OPSETS:
         raise ValueError(f"--opset must be {OPSETS[0]}-{OPSETS[-1]}, got {args.opset}")
-    from contactcal.train.restate import check_model_out
+    from contactcal.train.restate import check_model_out, earlier_model_note
 
     check_model_out(args.out, [args.run_dir / "best.pt", args.run_dir / "config.json"])
+    replaced = earlier_model_note(args.out)
     from contactcal.infer.errors import RunError
     from contactcal.infer.files.stdout import printing_after
     from contactcal.train.export import export_onnx
@@ -206,8 +207,10 @@ def _cmd_export(args: argparse.Namespace) -> int:
     except ExportCheckError as exc:  # the export's own checks (checker, parity, decisions, ...)
         raise RunError(f"export: {' '.join(str(exc).split())}; nothing was written") from exc
     warning = None if ran_to_end(args.run_dir) else _unfinished_warning(args.run_dir, path)
-    with printing_after([path], [warning]):
+    with printing_after([path], [warning, replaced]):
         print(f"wrote {path}")
+        if replaced is not None:
+            print(replaced)
     if warning is not None:
         print(warning, file=sys.stderr)
     return 0
@@ -228,19 +231,22 @@ def _cmd_quantize(args: argparse.Namespace) -> int:
     _check_dirs(list(args.data))
     if args.frames < 1:
         raise ValueError(f"--frames must be >= 1, got {args.frames}")
-    from contactcal.train.restate import check_model_out
+    from contactcal.train.restate import check_model_out, earlier_model_note
 
     check_model_out(args.out, [args.model])
+    replaced = earlier_model_note(args.out)
     from contactcal.infer.files.stdout import printing_after
     from contactcal.train.quantize import quantize_model
 
     check = quantize_model(args.model, args.out, args.data, args.frames)
     ratio = check["median_area_ratio"]
     ratio_text = "no frame where both see contact" if ratio is None else f"{ratio:.4f}"
-    with printing_after([args.out]):
+    with printing_after([args.out], [replaced]):
         print(
             f"wrote {args.out}: calibrated on {check['frames']:.0f} frames; on "
             f"{check['check_frames']:.0f} others the INT8 model makes the float model's contact "
             f"decision in {100 * check['contact_agreement']:.1f} %, median area ratio {ratio_text}"
         )
+        if replaced is not None:
+            print(replaced)
     return 0

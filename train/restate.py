@@ -21,6 +21,8 @@ from typing import Any
 from contactcal.infer.errors import option_error
 from contactcal.infer.files.atomic import atomic_open
 from contactcal.infer.files.destination import check_destination
+from contactcal.infer.files.digest import sha256_file
+from contactcal.infer.files.replaced import replaced_file_note
 from contactcal.infer.methods.unet.spec import ModelSpec, read_spec
 
 #: Each calibrated metadata entry: what it is, and the tool that calibrates it; in the order to
@@ -67,6 +69,20 @@ def check_model_out(out: Path, protect: Collection[Path]) -> None:
         check_destination(out, protect)
     except ValueError as exc:
         raise option_error("--out", out, exc) from None
+
+
+def earlier_model_note(out: Path) -> str | None:
+    """The note naming the model a command's ``--out`` replaces, with the start of its sha256
+    (call it before the command writes ``out``); None when there is none yet."""
+    return replaced_file_note(out, _model_held)
+
+
+def _model_held(out: Path) -> str:
+    """The start of the sha256 of the model file ``out`` (its content before the run)."""
+    try:
+        return f"sha256 {sha256_file(out)[:12]}"
+    except OSError as exc:
+        return f"unreadable: {exc.strerror}"
 
 
 def check_paths(model: str | os.PathLike[str], out: str | os.PathLike[str]) -> tuple[Path, Path]:

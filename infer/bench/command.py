@@ -32,7 +32,8 @@ def add_parsers(sub: argparse._SubParsersAction) -> None:
         default=[],
         metavar="LABEL=MODEL",
         help="a further U-Net model scored and timed beside --model as unet[LABEL] "
-        "(e.g. int8=models/contact_unet_int8.onnx; LABEL of letters, digits, . _ + -); repeatable",
+        "(e.g. int8=models/contact_unet_int8.onnx; LABEL of letters, digits, . _ + -, not a "
+        "method name); repeatable",
     )
     b.add_argument(
         "--no-reference",
@@ -78,6 +79,7 @@ def _cmd_bench(args: argparse.Namespace) -> int:
         labels = [label for label, _ in variants]
         twice = sorted({x for x in labels if labels.count(x) > 1})
         raise ValueError(f"--variant: label(s) {', '.join(twice)} given twice; expected one each")
+    _check_models(args.model, variants)
     _check_distinct_models(args.model, variants)
     cfg = BenchConfig(
         repeats=args.repeats,
@@ -144,7 +146,10 @@ _LABEL = re.compile(r"[A-Za-z0-9._+-]{1,40}")
 
 
 def _variant(text: str) -> tuple[str, str]:
-    """``LABEL=MODEL`` → ``(label, path)``; the file must exist."""
+    """``LABEL=MODEL`` → ``(label, path)``: a label of the allowed characters, not a method's
+    name (its rows would read ``unet[unet]``); the file is checked by :func:`_check_models`."""
+    from contactcal.infer.methods.registry import METHODS
+
     label, sep, path = text.partition("=")
     if not sep or not label or not path:
         raise ValueError(f"--variant {text!r}: expected LABEL=MODEL.onnx, e.g. int8=m_int8.onnx")
@@ -153,9 +158,29 @@ def _variant(text: str) -> tuple[str, str]:
             f"--variant {text!r}: label {label!r} may hold letters, digits and . _ + - only (it "
             "names the report's table rows and plot labels, where | or a space breaks them)"
         )
-    if not Path(path).is_file():
-        raise ValueError(f"--variant {text!r}: {path}: no such model file")
+    if label.lower() in METHODS:
+        raise ValueError(
+            f"--variant {text}: label {label!r} is a method's name (its rows would read "
+            f"unet[{label}]); expected a label naming the variant, e.g. int8={path}"
+        )
     return label, path
+
+
+def _check_models(model: Path | None, variants: tuple[tuple[str, str], ...]) -> None:
+    """Load ``--model`` (when given) and each ``--variant``'s model before the work: a missing
+    or unusable file is refused with its option named (``--variant LABEL=PATH: ...``)."""
+    from contactcal.infer.errors import option_error
+    from contactcal.infer.methods.unet.runner import OnnxSegmenter
+    from contactcal.infer.methods.unet.spec import ModelError
+
+    named = [] if model is None else [("--model", model, model)]
+    named += [("--variant", f"{label}={path}", Path(path)) for label, path in variants]
+    for option, value, path in named:
+        try:
+            OnnxSegmenter(path)
+        except ModelError as exc:  # its message starts with the path, named once by the value
+            said = ModelError(str(exc).removeprefix(f"{path}: "))
+            raise option_error(option, value, said) from None
 
 
 def _check_distinct_models(model: Path | None, variants: tuple[tuple[str, str], ...]) -> None:
@@ -166,7 +191,7 @@ def _check_distinct_models(model: Path | None, variants: tuple[tuple[str, str], 
     from contactcal.infer.methods.unet.runner import DEFAULT_MODEL
 
     model_file = DEFAULT_MODEL if model is None else model
-    if not variants or not model_file.is_file():  # a missing --model is named by the run
+    if not variants:
         return
     shipped = f"the shipped model {model_file}, which bench scores without --model"
     seen = {sha256_file(model_file): shipped if model is None else f"--model {model_file}"}

@@ -127,25 +127,22 @@ def _stage_results(outs: OutputSet, out: Path) -> Path:
 
 
 def earlier_results_note(out: Path) -> str | None:
-    """A line naming the file ``measure --out`` replaces (None: there is none yet).
+    """A line naming the file ``measure --out`` replaces and how many results it held (None:
+    there is none yet; :func:`~contactcal.infer.files.replaced.replaced_file_note`)."""
+    from contactcal.infer.files.replaced import replaced_file_note
 
-    Args:
-        out: the run's results file, before the run.
+    return replaced_file_note(out, _results_held)
 
-    Returns:
-        ``None`` when ``out`` is not a file, else a one-line note naming it and how many results
-        it held ("not a results list" when it is not one).
-    """
+
+def _results_held(out: Path) -> str:
+    """How many results the file ``out`` holds ("not a results list" when it is not one)."""
     import json
 
-    if not out.is_file():
-        return None
     try:
         old = json.loads(out.read_text(encoding="utf-8"))
-        held = f"{len(old)} result(s)" if isinstance(old, list) else "not a results list"
     except (OSError, ValueError):
-        held = "unreadable as results"
-    return f"note: replaced {out} ({held}); give each run its own --out to keep both"
+        return "unreadable as results"
+    return f"{len(old)} result(s)" if isinstance(old, list) else "not a results list"
 
 
 def _cmd_demo(args: argparse.Namespace) -> int:
