@@ -64,8 +64,8 @@ def test_procedural_and_quantize_name_their_written_outputs(
     assert _closed_run(argv, monkeypatch, capsys).endswith(f"{WRITTEN}{_whole(out)}")
     pytest.importorskip("onnx")
     q = tmp_path / "q.onnx"
-    d = write_dataset(tmp_path / "d", fingers=2)  # a procedural set is refused as --data
-    argv = ["quantize", str(DEFAULT_MODEL), "--out", str(q), "--data", str(d), "--frames", "2"]
+    d = write_dataset(tmp_path / "d", fingers=4)  # a procedural set is refused as --data
+    argv = ["quantize", str(DEFAULT_MODEL), "--out", str(q), "--data", str(d), "--frames", "4"]
     assert _closed_run(argv, monkeypatch, capsys).endswith(f"{WRITTEN}{_whole(q)}")
 
 
