@@ -29,7 +29,7 @@ from contactcal.infer.evaluate.score import frame_records, onset_summary, score_
 from contactcal.infer.evaluate.window import check_label_area, find_window
 from contactcal.infer.files.atomic import OutputSet, run_outputs, write_synced
 from contactcal.infer.files.jsonable import json_text
-from contactcal.infer.image.read import ImageFile
+from contactcal.infer.image.read import ImageFile, source_size
 from contactcal.infer.methods.registry import METHODS
 from contactcal.infer.pipeline.manifest import (
     Frame,
@@ -112,7 +112,7 @@ def _label_masks(
     window = find_window(reference, bit_depth)
     masks = []
     for lab in labs:
-        size = read[lab.frame].size(bit_depth)
+        size = source_size(read[lab.frame], bit_depth)
         mask = label_mask(lab, size)
         check_label_area(lab, mask, size, window)
         masks.append(mask)

@@ -239,23 +239,6 @@ class ImageFile:
         gray = to_gray_u8(img, name=str(p), bgr=True)
         return gray if jpeg else reduce_area(gray, reduce)
 
-    def size(self, bit_depth: int | None = None) -> tuple[int, int]:
-        """``(width, height)`` of the content as :meth:`decode` reads it: a JPEG's from its
-        header (no pixel decoded), another format's (or a JPEG whose header does not state it)
-        decoded.
-
-        Raises:
-            ImageError: as :meth:`decode`.
-        """
-        if self.path.suffix.lower() in (".jpg", ".jpeg"):
-            try:
-                h, w = jpeg_size(self.path, self.data)
-                return w, h
-            except ImageError:
-                pass  # a height left to a DNL segment: OpenCV decodes it, as decode does below
-        h, w = self.decode(bit_depth=bit_depth).shape
-        return w, h
-
 
 #: An image file to read: its path (read when needed), or its content read already.
 ImageSource = str | os.PathLike[str] | ImageFile
@@ -277,3 +260,21 @@ def source_jpeg_size(source: ImageSource) -> tuple[int, int]:
     if isinstance(source, ImageFile):
         return jpeg_size(source.path, source.data)
     return jpeg_size(source)
+
+
+def source_size(source: ImageSource, bit_depth: int | None = None) -> tuple[int, int]:
+    """``(width, height)`` of ``source`` as its decode reads it: a JPEG's from its header (of
+    the content read already, else of the file: only the header read; no pixel decoded),
+    another format's (or a JPEG whose header does not state it) decoded.
+
+    Raises:
+        ImageError: as :meth:`ImageFile.decode`.
+    """
+    if source_path(source).suffix.lower() in (".jpg", ".jpeg"):
+        try:
+            h, w = source_jpeg_size(source)
+            return w, h
+        except ImageError:
+            pass  # a height left to a DNL segment, or a bad file: decoded (or refused) below
+    h, w = source_content(source).decode(bit_depth=bit_depth).shape
+    return w, h

@@ -133,24 +133,16 @@ def beside_manifest(path: str | os.PathLike[str], name: str = "rig.json") -> Pat
 def reference_width(session: Session, bit_depth: int | None) -> int:
     """Width (px) of the reference frame of ``session`` (the manifest as the run read it, not
     read again), which its frames share (a run refuses others), as
-    :meth:`~contactcal.infer.image.read.ImageFile.size` reads it: a JPEG's from its header alone
+    :func:`~contactcal.infer.image.read.source_size` reads it: a JPEG's from its header alone
     (the file is not read whole), another format's (or a JPEG whose header does not state it)
     decoded.
 
     Raises:
         ImageError: as a run reading that frame would (a JPEG's image data is left to the run).
     """
-    from contactcal.infer.image.gray import ImageError
-    from contactcal.infer.image.jpeg import jpeg_size
-    from contactcal.infer.image.read import ImageFile
+    from contactcal.infer.image.read import source_size
 
-    file = session.frames[0].file
-    if Path(file).suffix.lower() in (".jpg", ".jpeg"):
-        try:
-            return jpeg_size(file)[1]
-        except ImageError:
-            pass  # a height left to a DNL segment, or a bad file: read and refused as a run does
-    return ImageFile.read(file).size(bit_depth)[0]
+    return source_size(session.frames[0].file, bit_depth)[0]
 
 
 def read_manifest(
