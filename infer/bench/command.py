@@ -79,8 +79,7 @@ def _cmd_bench(args: argparse.Namespace) -> int:
         labels = [label for label, _ in variants]
         twice = sorted({x for x in labels if labels.count(x) > 1})
         raise ValueError(f"--variant: label(s) {', '.join(twice)} given twice; expected one each")
-    _check_models(args.model, variants)
-    _check_distinct_models(args.model, variants)
+    _check_distinct_models(args.model, variants, _check_models(args.model, variants))
     cfg = BenchConfig(
         repeats=args.repeats,
         timing_frames=args.timing_frames,
@@ -166,27 +165,33 @@ def _variant(text: str) -> tuple[str, str]:
     return label, path
 
 
-def _check_models(model: Path | None, variants: tuple[tuple[str, str], ...]) -> None:
+def _check_models(model: Path | None, variants: tuple[tuple[str, str], ...]) -> dict[Path, str]:
     """Load ``--model`` (when given) and each ``--variant``'s model before the work: a missing
-    or unusable file is refused with its option named (``--variant LABEL=PATH: ...``)."""
+    or unusable file is refused with its option named (``--variant LABEL=PATH: ...``); returns
+    each file's sha256 as loaded."""
     from contactcal.infer.errors import option_error
     from contactcal.infer.methods.unet.runner import OnnxSegmenter
     from contactcal.infer.methods.unet.spec import ModelError
 
     named = [] if model is None else [("--model", model, model)]
     named += [("--variant", f"{label}={path}", Path(path)) for label, path in variants]
+    digests = {}
     for option, value, path in named:
         try:
-            OnnxSegmenter(path)
+            digests[path] = OnnxSegmenter(path).sha256
         except ModelError as exc:  # its message starts with the path, named once by the value
             said = ModelError(str(exc).removeprefix(f"{path}: "))
             raise option_error(option, value, said) from None
+    return digests
 
 
-def _check_distinct_models(model: Path | None, variants: tuple[tuple[str, str], ...]) -> None:
+def _check_distinct_models(
+    model: Path | None, variants: tuple[tuple[str, str], ...], digests: dict[Path, str]
+) -> None:
     """Refuse a ``--variant`` whose file holds the content of ``--model`` (the shipped model
     without it) or of an earlier variant: its rows would repeat that model's under another
-    label (a mistyped INT8 path would read as an INT8 model that loses nothing)."""
+    label (a mistyped INT8 path would read as an INT8 model that loses nothing). ``digests``:
+    the sha256 of each file :func:`_check_models` loaded."""
     from contactcal.infer.files.digest import sha256_file
     from contactcal.infer.methods.unet.runner import DEFAULT_MODEL
 
@@ -194,10 +199,11 @@ def _check_distinct_models(model: Path | None, variants: tuple[tuple[str, str], 
     if not variants:
         return
     shipped = f"the shipped model {model_file}, which bench scores without --model"
-    seen = {sha256_file(model_file): shipped if model is None else f"--model {model_file}"}
+    first = digests[model] if model is not None else sha256_file(model_file)
+    seen = {first: shipped if model is None else f"--model {model_file}"}
     for label, path in variants:
         name = f"--variant {label}={path}"
-        same = seen.setdefault(sha256_file(path), name)
+        same = seen.setdefault(digests[Path(path)], name)
         if same != name:
             raise ValueError(
                 f"{name}: the same model as {same} (identical content); expected another "
