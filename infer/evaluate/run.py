@@ -29,7 +29,7 @@ from contactcal.infer.evaluate.score import frame_records, onset_summary, score_
 from contactcal.infer.evaluate.window import check_label_area, find_window
 from contactcal.infer.files.atomic import OutputSet, run_outputs, write_synced
 from contactcal.infer.files.jsonable import json_text
-from contactcal.infer.image.read import ImageFile, source_size
+from contactcal.infer.image.read import ImageFile, read_contents, source_size
 from contactcal.infer.methods.registry import METHODS
 from contactcal.infer.pipeline.manifest import (
     Frame,
@@ -82,8 +82,7 @@ def _read_frames(frames: list[Frame], labelled: list[Frame]) -> dict[Path, Image
     """The content of the reference (the manifest's first frame) and of each labelled frame,
     each file read once: the labels' checks, the measurements of every method and the
     record's digests all come from it."""
-    files = dict.fromkeys([frames[0].file, *(f.file for f in labelled)])
-    return {p: ImageFile.read(p) for p in files}
+    return read_contents([frames[0].file, *(f.file for f in labelled)])
 
 
 def _measure(

@@ -16,6 +16,7 @@ maximum exceeds :data:`LOW_BITS_MAX`; otherwise it is an error.
 from __future__ import annotations
 
 import os
+from collections.abc import Iterable
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -242,6 +243,16 @@ class ImageFile:
 
 #: An image file to read: its path (read when needed), or its content read already.
 ImageSource = str | os.PathLike[str] | ImageFile
+
+
+def read_contents(files: Iterable[Path]) -> dict[Path, ImageFile]:
+    """The content of each of ``files``, each file read once (:meth:`ImageFile.read`; a file
+    listed twice is read once), for a run whose steps must all use the same content.
+
+    Raises:
+        ImageError: as :func:`read_file_bytes`.
+    """
+    return {p: ImageFile.read(p) for p in dict.fromkeys(files)}
 
 
 def source_content(source: ImageSource) -> ImageFile:

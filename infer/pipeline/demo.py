@@ -17,12 +17,13 @@ from contactcal.infer.calibration.calibrate import (
 from contactcal.infer.calibration.provenance import Provenance
 from contactcal.infer.calibration.record import CALIBRATION_FILES
 from contactcal.infer.files.atomic import OutputSet, run_outputs, write_synced
+from contactcal.infer.image.read import read_contents
 from contactcal.infer.image.write import write_image
 from contactcal.infer.methods.registry import METHODS
 from contactcal.infer.pipeline.args import NO_SCALE_NOTE
 from contactcal.infer.pipeline.boundary import rig_boundary
 from contactcal.infer.pipeline.examples import example_manifest
-from contactcal.infer.pipeline.manifest import beside_manifest
+from contactcal.infer.pipeline.manifest import beside_manifest, read_session
 from contactcal.infer.pipeline.options import MeasureOptions
 from contactcal.infer.pipeline.overlay import draw_overlay, measured_frame, montage
 from contactcal.infer.pipeline.scale import read_rig_json, rig_scale
@@ -67,6 +68,9 @@ def run_demo(
 
     Writes ``<out>/<method>/{calibration.json, calibration.csv, curve.png}``, a side-by-side
     overlay montage ``<out>/overlay_montage.png`` and ``<out>/summary.txt``, all or nothing.
+    The manifest and each frame are read once: every method measures the same content, each
+    record names its sha256, and the montage is drawn on it (a file replaced during the run
+    is measured, recorded and drawn as it was read).
 
     Args:
         out_dir: the output folder.
@@ -85,17 +89,28 @@ def run_demo(
     out = Path(out_dir)
     manifest = Path(manifest) if manifest is not None else example_manifest()
     measure = demo_measure(manifest) if measure is None else measure
+    options = options if options is not None else SessionOptions()
+    session = read_session(manifest, options.step_tolerance_kpa)
+    frames = session.frames
+    read = read_contents(f.file for f in frames)  # for both methods and the montage
     recorded = Provenance(argv=None if argv is None else list(argv))
     reports: dict[str, CalibrationReport] = {}
     lines = [f"session: {manifest}"]
     with run_outputs(join=outputs) as outs:
         for method in METHODS:
             rep = calibrate_session(
-                manifest, out / method, method, measure, options, recorded, outputs=outs
+                manifest,
+                out / method,
+                method,
+                measure,
+                options,
+                recorded,
+                outputs=outs,
+                session=session,
+                contents=read,
             )
             reports[method] = rep
             lines += [f"\n== {method} → {out / method}", rep.table]
-        frames = next(iter(reports.values())).frames
         pressures = [f.pressure_kpa for f in frames]
         picks = sorted({int(np.argmin(np.abs(np.subtract(pressures, p)))) for p in MONTAGE_KPA})
         tiles = []
@@ -103,7 +118,7 @@ def run_demo(
             at = {name: rep.measured[i] for name, rep in reports.items()}
             contours = {name: m.result.contour for name, m in at.items()}
             title = f"{frames[i].pressure_kpa:g} kPa"
-            gray = measured_frame(frames[i].file, at, measure.bit_depth)  # the content measured
+            gray = measured_frame(read[frames[i].file], at, measure.bit_depth)
             tiles.append(draw_overlay(gray, contours, title))
         write_image(outs.stage(out / MONTAGE), montage(tiles, columns=3))
         lines.append(f"\noverlays: {out / MONTAGE}")

@@ -12,7 +12,7 @@ import numpy as np
 
 from contactcal.infer.files.atomic import OutputSet, run_outputs
 from contactcal.infer.image.gray import ImageError
-from contactcal.infer.image.read import ImageFile
+from contactcal.infer.image.read import ImageSource, source_content, source_path
 from contactcal.infer.image.write import write_image
 from contactcal.infer.pipeline.measure import Measured
 
@@ -99,15 +99,15 @@ def overlay_names(files: Sequence[str | os.PathLike[str]]) -> list[str]:
 
 
 def measured_frame(
-    file: Path, measured: Mapping[str, Measured], bit_depth: int | None = None
+    source: ImageSource, measured: Mapping[str, Measured], bit_depth: int | None = None
 ) -> np.ndarray:
-    """``file`` decoded at full size to draw outlines on, read again and refused unless its
-    content is the one every method measured (a frame replaced since would be drawn on with
-    another content's outlines).
+    """``source`` decoded at full size to draw outlines on, refused unless its content is the
+    one every method measured (a frame replaced since would be drawn on with another content's
+    outlines).
 
     Args:
-        file: the frame.
-        measured: method name → its measurement of ``file``, with the digest of the content
+        source: the frame: its file (read again here), or the content the methods measured.
+        measured: method name → its measurement of ``source``, with the digest of the content
             measured (``digest=True``).
         bit_depth: significant bits of a 16-bit frame, as measured (None: from the file).
 
@@ -118,7 +118,7 @@ def measured_frame(
         ImageError: the file's content is not the one measured (naming it and the method).
         ValueError: a measurement without its digest (a caller's error, not bad input).
     """
-    content = ImageFile.read(file)
+    content, file = source_content(source), source_path(source)
     sha = content.sha256()
     for name, m in measured.items():
         if m.sha256 is None:
