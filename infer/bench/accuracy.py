@@ -8,10 +8,9 @@ accuracy here *is* its reduced-resolution accuracy (the speed table times it at 
 
 from __future__ import annotations
 
-import os
 from collections.abc import Mapping, Sequence
 from dataclasses import asdict, fields, replace
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
@@ -26,7 +25,10 @@ from contactcal.infer.bench.scoring import (
 )
 from contactcal.infer.image.read import ImageFile, ImageSource, load_image
 from contactcal.infer.methods.base import Method
-from contactcal.infer.methods.registry import METHODS, make_method
+from contactcal.infer.methods.registry import METHODS
+
+if TYPE_CHECKING:
+    from contactcal.infer.bench.models import BenchModel
 
 
 def score_session(
@@ -137,40 +139,32 @@ def _renamed(frame: ScoredFrame, method: str, area_px: float) -> ScoredFrame:
 
 def evaluate(
     sessions: Mapping[str, Sequence[IndexRow]],
-    model: str | os.PathLike[str] | None,
+    models: Sequence[BenchModel],
     use_reference: bool = True,
-    variants: Sequence[tuple[str, str]] = (),
 ) -> list[ScoredFrame]:
     """Measure every frame of every session with every method (:func:`bench_methods`), one
     thread."""
     frames: list[ScoredFrame] = []
-    for name, method in bench_methods(model, variants):
+    for name, method in bench_methods(models):
         for rows in sessions.values():
             frames.extend(score_session(method, name, rows, use_reference))
     return frames
 
 
-def bench_methods(
-    model: str | os.PathLike[str] | None, variants: Sequence[tuple[str, str]] = ()
-) -> list[tuple[str, Method]]:
-    """``(name, method)`` of every method scored, one thread: ``METHODS`` (the U-Net from
-    ``model``, None: the shipped one), then the ``variants`` ``(label, path)`` as
-    ``unet[label]``."""
-    methods = [(name, make_method(name, model, threads=1, outline=True)) for name in METHODS]
-    methods += [
-        (variant_name(label), make_method("unet", path, 1, outline=True))
-        for label, path in variants
-    ]
-    return methods
+def bench_methods(models: Sequence[BenchModel]) -> list[tuple[str, Method]]:
+    """``(name, method)`` of every method scored, one thread, each U-Net built from its model's
+    content as read (:func:`~contactcal.infer.bench.models.load_models`): ``METHODS`` (the
+    U-Net of ``models[0]``), then the variants ``models[1:]`` as ``unet[label]``."""
+    main, *variants = models
+    methods = [(name, main.method(name, outline=True)) for name in METHODS]
+    return methods + [(v.name, v.method(outline=True)) for v in variants]
 
 
-def no_reference_modes(
-    model: str | os.PathLike[str] | None, variants: Sequence[tuple[str, str]] = ()
-) -> dict[str, str]:
+def no_reference_modes(models: Sequence[BenchModel]) -> dict[str, str]:
     """What each method does without a reference frame (its ``NO_REFERENCE`` note, as
     ``measure`` prints it: for a U-Net, the model's own mode, blank placeholder or the frame
     itself), by method name."""
-    return {name: method.NO_REFERENCE for name, method in bench_methods(model, variants)}
+    return {name: method.NO_REFERENCE for name, method in bench_methods(models)}
 
 
 def variant_name(label: str) -> str:

@@ -6,7 +6,10 @@ import argparse
 import re
 import sys
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
+
+if TYPE_CHECKING:
+    from contactcal.infer.bench.models import BenchModel
 
 #: Frames the robustness suite samples when ``--robustness-frames`` is not given.
 DEFAULT_ROBUSTNESS_FRAMES = 40
@@ -60,6 +63,7 @@ def add_parsers(sub: argparse._SubParsersAction) -> None:
 def _cmd_bench(args: argparse.Namespace) -> int:
     from contactcal.infer.bench.config import BenchConfig
     from contactcal.infer.bench.dataset import check_dataset_folder
+    from contactcal.infer.bench.models import load_models
     from contactcal.infer.bench.report import REPORT_FILES, ROBUSTNESS_FILES
     from contactcal.infer.bench.run import run_bench
     from contactcal.infer.files.atomic import run_outputs
@@ -79,7 +83,8 @@ def _cmd_bench(args: argparse.Namespace) -> int:
         labels = [label for label, _ in variants]
         twice = sorted({x for x in labels if labels.count(x) > 1})
         raise ValueError(f"--variant: label(s) {', '.join(twice)} given twice; expected one each")
-    _check_distinct_models(args.model, variants, _check_models(args.model, variants))
+    models = load_models(args.model, variants)  # each file read once, for the whole run
+    _check_distinct_models(models)
     cfg = BenchConfig(
         repeats=args.repeats,
         timing_frames=args.timing_frames,
@@ -97,7 +102,7 @@ def _cmd_bench(args: argparse.Namespace) -> int:
     writes = [n for n in REPORT_FILES if args.robustness or n not in ROBUSTNESS_FILES]
     replaced = replaced_note(args.out, writes, "report")
     with run_outputs(options={"--out": args.out}) as outs:
-        res = run_bench(args.data, args.out, model, cfg, args.crosscheck, outs)
+        res = run_bench(args.data, args.out, model, cfg, args.crosscheck, outs, models)
     with printing_after([args.out], [replaced]):
         _print_summary(res, args.out)
         if replaced is not None:
@@ -146,7 +151,8 @@ _LABEL = re.compile(r"[A-Za-z0-9._+-]{1,40}")
 
 def _variant(text: str) -> tuple[str, str]:
     """``LABEL=MODEL`` → ``(label, path)``: a label of the allowed characters, not a method's
-    name (its rows would read ``unet[unet]``); the file is checked by :func:`_check_models`."""
+    name (its rows would read ``unet[unet]``); the file is checked by
+    :func:`~contactcal.infer.bench.models.load_models`."""
     from contactcal.infer.methods.registry import METHODS
 
     label, sep, path = text.partition("=")
@@ -165,50 +171,19 @@ def _variant(text: str) -> tuple[str, str]:
     return label, path
 
 
-def _check_models(model: Path | None, variants: tuple[tuple[str, str], ...]) -> dict[Path, str]:
-    """Load ``--model`` (when given) and each ``--variant``'s model before the work: a missing
-    or unusable file is refused with its option named (``--variant LABEL=PATH: ...``); returns
-    each file's sha256 as loaded."""
-    from contactcal.infer.errors import option_error
-    from contactcal.infer.methods.unet.runner import OnnxSegmenter
-    from contactcal.infer.methods.unet.spec import ModelError
-
-    named = [] if model is None else [("--model", model, model)]
-    named += [("--variant", f"{label}={path}", Path(path)) for label, path in variants]
-    digests = {}
-    for option, value, path in named:
-        try:
-            digests[path] = OnnxSegmenter(path).sha256
-        except ModelError as exc:  # its message starts with the path, named once by the value
-            said = ModelError(str(exc).removeprefix(f"{path}: "))
-            raise option_error(option, value, said) from None
-    return digests
-
-
-def _check_distinct_models(
-    model: Path | None, variants: tuple[tuple[str, str], ...], digests: dict[Path, str]
-) -> None:
+def _check_distinct_models(models: list[BenchModel]) -> None:
     """Refuse a ``--variant`` whose file holds the content of ``--model`` (the shipped model
     without it) or of an earlier variant: its rows would repeat that model's under another
-    label (a mistyped INT8 path would read as an INT8 model that loses nothing). ``digests``:
-    the sha256 of each file :func:`_check_models` loaded."""
-    from contactcal.infer.files.digest import sha256_file
-    from contactcal.infer.methods.unet.runner import DEFAULT_MODEL
-
-    model_file = DEFAULT_MODEL if model is None else model
-    if not variants:
-        return
-    shipped = f"the shipped model {model_file}, which bench scores without --model"
-    first = digests[model] if model is not None else sha256_file(model_file)
-    seen = {first: shipped if model is None else f"--model {model_file}"}
-    for label, path in variants:
-        name = f"--variant {label}={path}"
-        same = seen.setdefault(digests[Path(path)], name)
-        if same != name:
+    label (a mistyped INT8 path would read as an INT8 model that loses nothing). ``models``:
+    as :func:`~contactcal.infer.bench.models.load_models` read them (their sha256)."""
+    seen: dict[str, str] = {}  # sha256 → the model first seen with it
+    for m in models:
+        if m.sha256 in seen:
             raise ValueError(
-                f"{name}: the same model as {same} (identical content); expected another "
-                "model, e.g. the INT8 one `contactcal quantize` wrote"
+                f"{m.given}: the same model as {seen[m.sha256]} (identical content); expected "
+                "another model, e.g. the INT8 one `contactcal quantize` wrote"
             )
+        seen[m.sha256] = m.given
 
 
 def _robustness_frames(args: argparse.Namespace) -> int:

@@ -15,6 +15,7 @@ from typing import Any
 from contactcal.infer.bench.accuracy import evaluate, to_record
 from contactcal.infer.bench.dataset import IndexRow, read_index, sessions_of
 from contactcal.infer.bench.markdown import md_table
+from contactcal.infer.bench.models import BenchModel
 from contactcal.infer.bench.onset import ONSET_COLUMNS, onset_errors, onset_shown
 from contactcal.infer.bench.report import BIN_COLUMNS, HARD_COLUMNS, accuracy_tables
 from contactcal.infer.bench.scoring import (
@@ -58,12 +59,12 @@ def score_dataset(
     label: str,
     folder: str | os.PathLike[str],
     sessions: Mapping[str, Sequence[IndexRow]],
-    model: str | os.PathLike[str] | None,
+    models: Sequence[BenchModel],
     bins: Sequence[tuple[float, float]],
     use_reference: bool = True,
-    variants: Sequence[tuple[str, str]] = (),
 ) -> tuple[dict[str, Any], list[ScoredFrame]]:
-    """Score every method on one cross-check dataset (with or without reference frames).
+    """Score every method on one cross-check dataset (with or without reference frames), the
+    U-Nets built from ``models`` as read once (:func:`~contactcal.infer.bench.models.load_models`).
 
     Returns:
         Its results (``label``, ``data``, ``sessions``, ``frames``, ``records``, ``onset``,
@@ -71,7 +72,7 @@ def score_dataset(
         results, less timing)
         and the scored frames.
     """
-    frames = evaluate(sessions, model, use_reference, variants)
+    frames = evaluate(sessions, models, use_reference)
     onset = onset_errors(frames)
     results = {
         "label": label,

@@ -21,7 +21,6 @@ contact, i.e. below the onset, reported as no contact).
 from __future__ import annotations
 
 import functools
-import os
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 from pathlib import Path
@@ -30,11 +29,12 @@ from typing import Any
 import numpy as np
 
 from contactcal.infer.bench.dataset import IndexRow
+from contactcal.infer.bench.models import BenchModel
 from contactcal.infer.bench.scoring import ScoredFrame, bin_row
 from contactcal.infer.bench.suite import PERTURBATIONS, REFERENCE_MODES, Perturbation
 from contactcal.infer.image.read import load_image
 from contactcal.infer.methods.base import Method
-from contactcal.infer.methods.registry import METHODS, make_method
+from contactcal.infer.methods.registry import METHODS
 from contactcal.infer.methods.unet.ring import RingFit, locate_ring
 
 #: Errors are summarised over contact frames at or above this pressure, kPa.
@@ -261,7 +261,7 @@ def summary_rows(
 
 def run_robustness(
     sessions: Mapping[str, Sequence[IndexRow]],
-    model: str | os.PathLike[str] | None,
+    model: BenchModel,
     frames: int,
     seed: int = 0,
     not_perturbed: Sequence[str] = (),
@@ -270,7 +270,8 @@ def run_robustness(
 
     Args:
         sessions: rows per session, sorted by pressure (the first is the reference).
-        model: the U-Net's ONNX model (None: the shipped one).
+        model: the U-Net's model as read once
+            (:func:`~contactcal.infer.bench.models.load_models`).
         frames: frames to sample.
         seed: seed of the random perturbations.
         not_perturbed: the methods of the run the suite leaves out (``--variant`` models).
@@ -281,7 +282,7 @@ def run_robustness(
         (:func:`summary_rows`) and ``not_perturbed``.
     """
     samples = load_samples(sample_rows(sessions, frames))
-    methods = [make_method(name, model, threads=1) for name in METHODS]
+    methods = [model.method(name) for name in METHODS]
     scored = measure_suite(samples, methods, seed)
     return {
         "frames": [str(s.row.frame) for s in samples],

@@ -18,7 +18,6 @@ from contactcal.infer.bench.accuracy import (
     evaluate,
     no_reference_modes,
     to_record,
-    variant_name,
 )
 from contactcal.infer.bench.config import SESSION_REFERENCE, BenchConfig
 from contactcal.infer.bench.crosscheck import (
@@ -29,6 +28,7 @@ from contactcal.infer.bench.crosscheck import (
     side_by_side,
 )
 from contactcal.infer.bench.dataset import IndexRow, check_distinct, read_index, sessions_of
+from contactcal.infer.bench.models import BenchModel, load_models
 from contactcal.infer.bench.onset import onset_errors
 from contactcal.infer.bench.preflight import check_datasets
 from contactcal.infer.bench.report import write_report
@@ -36,8 +36,6 @@ from contactcal.infer.bench.robustness import run_robustness
 from contactcal.infer.bench.scoring import ScoredFrame
 from contactcal.infer.bench.timing import timing
 from contactcal.infer.files.atomic import OutputSet
-from contactcal.infer.files.digest import sha256_file
-from contactcal.infer.methods.unet.runner import DEFAULT_MODEL
 
 
 def run_bench(
@@ -47,6 +45,7 @@ def run_bench(
     config: BenchConfig | None = None,
     crosscheck: Sequence[str | os.PathLike[str]] = (),
     outputs: OutputSet | None = None,
+    models: Sequence[BenchModel] | None = None,
 ) -> dict[str, Any]:
     """Run the accuracy and speed benchmarks; write ``report.md``, ``results.json`` and plots.
 
@@ -59,6 +58,10 @@ def run_bench(
             ``data`` (:mod:`~contactcal.infer.bench.crosscheck`).
         outputs: the enclosing run's outputs to stage the report into (None: this call is the
             run).
+        models: ``model`` and ``config.variants`` as
+            :func:`~contactcal.infer.bench.models.load_models` read them (the CLI reads them
+            among its checks); None reads them here, before any work. Every U-Net scored or
+            timed, and ``models``' sha256, is of that one read of each file.
 
     Returns:
         The content of ``results.json``: header keys (with ``use_reference=False`` also
@@ -73,25 +76,27 @@ def run_bench(
         (:func:`~contactcal.infer.bench.robustness.run_robustness`).
 
     Raises:
-        ValueError: unusable dataset folder (the message names the file), or a cross-check
-            folder that is ``data`` or another cross-check folder, or a session without a 0 kPa
+        ValueError: a missing or unusable model file (its option named), an unusable dataset
+            folder (the message names the file), or a cross-check folder that is ``data`` or
+            another cross-check folder, or a session without a 0 kPa
             reference frame, or a frame or mask file that is not a readable image, a mask of
             another size than its frame, or a frame of another size than its reference
             (:func:`~contactcal.infer.bench.preflight.check_datasets`).
     """
     config = config or BenchConfig()
+    models = load_models(model, config.variants) if models is None else models
     names = [f"--data {data}", *(f"--crosscheck {c}" for c in crosscheck)]
     check_distinct([data, *crosscheck], names)  # a copy would be scored as "<name>#2"
     sessions = sessions_of(read_index(data))
     others = [read_sessions(c) for c in crosscheck]
     check_datasets(sessions, others, config)  # every folder checked before any work
-    frames = evaluate(sessions, model, config.use_reference, config.variants)
+    frames = evaluate(sessions, models, config.use_reference)
     onset = onset_errors(frames)
     results: dict[str, Any] = {
         "data": str(Path(data).resolve()),
         "model": "shipped" if model is None else os.fspath(model),
         "reference": SESSION_REFERENCE if config.use_reference else "none",
-        "models": model_digests(model, config.variants),
+        "models": model_digests(models),
         "sessions": len(sessions),
         "frames": sum(len(v) for v in sessions.values()),
         "config": {
@@ -101,33 +106,30 @@ def run_bench(
         },
         "records": [to_record(f) for f in frames],
         "onset": onset,
-        "timing": timing(sessions, model, config),
+        "timing": timing(sessions, models, config),
     }
     if not config.use_reference:  # which mode ran (a U-Net's blank placeholder or the frame)
-        results["no_reference"] = no_reference_modes(model, config.variants)
+        results["no_reference"] = no_reference_modes(models)
     if config.robustness_frames:
         results["robustness"] = run_robustness(
             sessions,
-            model,
+            models[0],
             config.robustness_frames,
             config.seed,
-            [variant_name(label) for label, _ in config.variants],
+            [m.name for m in models[1:]],
         )
     extra = ""
     if crosscheck:
-        extra = _crosscheck(results, data, frames, crosscheck, others, model, config)
+        extra = _crosscheck(results, data, frames, crosscheck, others, models, config)
     write_report(out_dir, results, frames, config.bins, extra, outputs)
     return results
 
 
-def model_digests(
-    model: str | os.PathLike[str] | None, variants: Sequence[tuple[str, str]]
-) -> dict[str, dict[str, str]]:
+def model_digests(models: Sequence[BenchModel]) -> dict[str, dict[str, str]]:
     """Which files were measured: ``{"unet" | "unet[label]": {"path", "sha256"}}``, the
-    method names of the records (the shipped model's path is the installed file's)."""
-    files = {"unet": DEFAULT_MODEL if model is None else Path(model)}
-    files |= {variant_name(label): Path(path) for label, path in variants}
-    return {k: {"path": os.fspath(v), "sha256": sha256_file(v)} for k, v in files.items()}
+    method names of the records (the shipped model's path is the installed file's), each
+    sha256 of the content read once and scored."""
+    return {m.name: {"path": os.fspath(m.path), "sha256": m.sha256} for m in models}
 
 
 def _crosscheck(
@@ -136,7 +138,7 @@ def _crosscheck(
     frames: list[ScoredFrame],
     folders: Sequence[str | os.PathLike[str]],
     sessions: list[dict[str, list[IndexRow]]],
-    model: str | os.PathLike[str] | None,
+    models: Sequence[BenchModel],
     config: BenchConfig,
 ) -> str:
     """Score each cross-check set; add ``crosscheck`` and ``side_by_side`` to ``results``.
@@ -149,7 +151,7 @@ def _crosscheck(
     results["crosscheck"] = []
     for name, folder, sess in zip(names[1:], folders, sessions, strict=True):
         res, scored[name] = score_dataset(
-            name, folder, sess, model, config.bins, config.use_reference, config.variants
+            name, folder, sess, models, config.bins, config.use_reference
         )
         results["crosscheck"].append(res)
     results["side_by_side"] = side_by_side(scored, config.bins)

@@ -9,7 +9,6 @@ otherwise spread the classical routine's full-resolution filters over every core
 
 from __future__ import annotations
 
-import os
 import statistics
 import tempfile
 import time
@@ -23,12 +22,13 @@ import numpy as np
 
 from contactcal.infer.bench.config import BenchConfig
 from contactcal.infer.bench.dataset import IndexRow, spread
+from contactcal.infer.bench.models import BenchModel
 from contactcal.infer.image.cv_threads import opencv_threads
 from contactcal.infer.image.read import load_image
 from contactcal.infer.image.write import write_image
 from contactcal.infer.methods.base import Method
 from contactcal.infer.methods.classical import ClassicalConfig, ClassicalMethod
-from contactcal.infer.methods.unet.method import UnetMethod
+from contactcal.infer.methods.unet.runner import OnnxSegmenter
 
 #: Pressures of the timed frames, kPa (mid-range: a contact patch of typical size).
 TIMED_KPA = (6.0, 16.0)
@@ -98,26 +98,35 @@ def write_timing_frames(
 
 
 def timed_configs(
-    model: str | os.PathLike[str] | None, frames: TimingFrames, config: BenchConfig
+    models: Sequence[BenchModel], frames: TimingFrames, config: BenchConfig
 ) -> list[Timed]:
-    """The classical routine at each work scale, the U-Net at each thread count, full decode
-    and (where ``start`` chooses one) the reduced JPEG decode of ``measure``/``calibrate``."""
+    """The classical routine at each work scale, then each U-Net model (:func:`unet_configs`):
+    ``models[0]`` at each of ``config.threads``, the variants ``models[1:]`` at one thread, like
+    the error table's scoring."""
     out = []
     for s in config.classical_scales:
         name = "classical" if s == 1.0 else f"classical@{s:g}"
         out.append(Timed(name, 1, ClassicalMethod(ClassicalConfig(work_scale=s)), 1))
-    # The reduction `measure`/`calibrate` would choose for these files.
-    k = UnetMethod(model).start(frames.files[".jpg"], None).reduction
-    for t in config.threads:
-        out.append(Timed("unet", t, UnetMethod(model, threads=t), 1))
+    for i, model in enumerate(models):
+        out += unet_configs(model, config.threads if i == 0 else (1,), frames)
+    return out
+
+
+def unet_configs(model: BenchModel, threads: Sequence[int], frames: TimingFrames) -> list[Timed]:
+    """``model``'s U-Net at each thread count: full decode and, where ``start`` chooses one for
+    these files, the reduced JPEG decode of ``measure``/``calibrate``.
+
+    One method per thread count, built from the content read once, times both of its
+    configurations (:func:`time_config` sets the reference first, which resets what the other
+    left; each median leaves out a warm-up run) and, at one thread, finds that reduction.
+    """
+    methods = {t: model.method(threads=t) for t in {1, *threads}}
+    k = methods[1].start(frames.files[".jpg"], None).reduction
+    out = []
+    for t in threads:
+        out.append(Timed(model.name, t, methods[t], 1))
         if k > 1:
-            out.append(Timed(f"unet+reduced-decode 1/{k}", t, UnetMethod(model, threads=t), k))
-    for label, path in config.variants:  # one thread, like the error table's scoring
-        name = f"unet[{label}]"
-        out.append(Timed(name, 1, UnetMethod(path, threads=1), 1))
-        kv = UnetMethod(path).start(frames.files[".jpg"], None).reduction
-        if kv > 1:
-            out.append(Timed(f"{name}+reduced-decode 1/{kv}", 1, UnetMethod(path, threads=1), kv))
+            out.append(Timed(f"{model.name}+reduced-decode 1/{k}", t, methods[t], k))
     return out
 
 
@@ -156,9 +165,9 @@ def time_config(c: Timed, frames: TimingFrames, repeats: int) -> dict[str, Any]:
     return rec
 
 
-def time_network(model: str | os.PathLike[str] | None, repeats: int) -> dict[str, Any]:
+def time_network(model: BenchModel, repeats: int) -> dict[str, Any]:
     """Median ms of the U-Net's network alone (onnxruntime, one thread) on a zero input."""
-    net = UnetMethod(model, threads=1).segmenter
+    net = OnnxSegmenter(model.path, content=model.content)
     side = net.spec.preprocess.input_size
     x = np.zeros((1, net.spec.channels, side, side), np.float32)
 
@@ -176,16 +185,18 @@ def time_network(model: str | os.PathLike[str] | None, repeats: int) -> dict[str
 
 def timing(
     sessions: Mapping[str, Sequence[IndexRow]],
-    model: str | os.PathLike[str] | None,
+    models: Sequence[BenchModel],
     config: BenchConfig,
 ) -> list[dict[str, Any]]:
-    """Median ms/frame at ``config.full_size`` per configuration (see :func:`time_config`)."""
+    """Median ms/frame at ``config.full_size`` per configuration (see :func:`time_config`), the
+    U-Nets built from ``models`` as read once (:func:`~contactcal.infer.bench.models.load_models`);
+    then the network alone of ``models[0]`` (:func:`time_network`)."""
     picks, reference = pick_frames(sessions, config.timing_frames)
     with tempfile.TemporaryDirectory() as tmp:
         frames = write_timing_frames(Path(tmp), picks, reference, config.full_size)
         out = []
-        for c in timed_configs(model, frames, config):
+        for c in timed_configs(models, frames, config):
             with opencv_threads(c.threads):  # OpenCV's threads too, not only onnxruntime's
                 out.append(time_config(c, frames, config.repeats))
-    out.append(time_network(model, config.repeats))
+    out.append(time_network(models[0], config.repeats))
     return out

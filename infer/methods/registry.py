@@ -17,6 +17,7 @@ def make_method(
     threads: int = 1,
     outline: bool = False,
     change_gate: bool = True,
+    content: bytes | None = None,
 ) -> Method:
     """Build a method by name.
 
@@ -28,6 +29,8 @@ def make_method(
             warp per frame). The classical ellipse outline is always given.
         change_gate: apply the U-Net model's change gate (``min_change``); False measures every
             kept region as contact (``--no-change-gate``), recorded in ``describe()``.
+        content: for ``"unet"``, the model file's content already read (see
+            :class:`~contactcal.infer.methods.unet.runner.OnnxSegmenter`); None reads it.
 
     Raises:
         ValueError: unknown method name; ``ModelError`` for an unusable model file.
@@ -37,5 +40,5 @@ def make_method(
     if name == "unet":
         from contactcal.infer.methods.unet.method import UnetMethod
 
-        return UnetMethod(model, threads, outline, change_gate)
+        return UnetMethod(model, threads, outline, change_gate, content)
     raise ValueError(f"unknown method {name!r}; expected one of {', '.join(METHODS)}")

@@ -130,8 +130,9 @@ def _session(path: Path, data: bytes, opts: SessionOptions) -> InferenceSession:
         raise ModelError(f"{path}: not a loadable ONNX model ({exc})") from exc
 
 
-def _read_model(path: Path) -> bytes:
-    """The content of model file ``path``; ModelError (naming it) when missing or unreadable."""
+def read_model(path: Path) -> bytes:
+    """The content of model file ``path``, read once for everything built from it (pass it as
+    :class:`OnnxSegmenter`'s ``content``); ModelError (naming it) when missing or unreadable."""
     if not path.is_file():
         raise ModelError(f"{path}: no such model file")
     try:
@@ -179,7 +180,7 @@ class OnnxSegmenter:
 
         self.path = Path(path) if path is not None else DEFAULT_MODEL
         # read once: both sessions and the recorded sha256 are of this content
-        data = _read_model(self.path) if content is None else content
+        data = read_model(self.path) if content is None else content
         #: sha256 of the model content loaded (lower-case hex)
         self.sha256 = sha256_bytes(data)
         # A cheap unoptimised session reads the metadata; the one that runs is built with the
