@@ -177,22 +177,51 @@ def _overlay_run(command: str, s: Path, out: Path) -> list[str]:
     return ["demo", "--manifest", manifest_csv, "--out", str(out / "demo")]
 
 
-@pytest.mark.parametrize("command", ["measure", "calibrate"])  # demo: read once (above)
-def test_overlays_are_drawn_only_on_the_content_measured(
-    tmp_path: Path,
-    monkeypatch: pytest.MonkeyPatch,
-    capsys: pytest.CaptureFixture[str],
-    command: str,
+@pytest.mark.parametrize("command", ["measure", "calibrate"])
+def test_overlays_open_each_frame_once_and_draw_the_content_measured(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch, command: str
 ) -> None:
+    """``--overlay`` measures one content with both methods and draws on it: each frame (and
+    ``measure``'s reference) is read once, though replaced after that read, and ``calibrate``'s
+    record names that content's sha256 (each frame was read for the measurement, again for the
+    other method's outlines and again to draw on, and the frame replaced in between stopped the
+    run)."""
     s = copy_session(tmp_path, NAMES)
     out = tmp_path / "out"
     out.mkdir()
-    _replaced_after_reading(monkeypatch, set(NAMES))  # each read gets other content
-    assert main(_overlay_run(command, s, out)) == 2
-    err = capsys.readouterr().err
-    assert err.count("\n") == 1 and "changed after it was measured" in err, err
-    assert any(f"{s / name}: its content" in err for name in NAMES), err
-    assert list(out.iterdir()) == []  # nothing written
+    got = _replaced_after_reading(monkeypatch, set(NAMES))  # each read gets other content
+    with _counting() as opened:
+        assert main(_overlay_run(command, s, out)) == 0
+    assert {name: opened[name] for name in NAMES} == dict.fromkeys(NAMES, 1)
+    drawn = NAMES if command == "calibrate" else NAMES[1:]
+    assert len(list((out / "ov").glob("*_overlay.png"))) == len(drawn)
+    if command == "calibrate":
+        inputs = json.loads((out / "cal" / "calibration.json").read_text(encoding="utf-8"))
+        recorded = {e["file"]: e["sha256"] for e in inputs["inputs"]["frames"]}
+        assert recorded == {n: _sha(got[n][0]) for n in NAMES}
+
+
+def test_measure_without_overlay_reads_each_frame_as_it_is_measured(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """Without ``--overlay`` nothing is held: each frame is read when it is measured (after
+    the frame before it was decoded), not all read up front."""
+    s = copy_session(tmp_path, NAMES)
+    events: list[str] = []
+
+    def logged(original: Callable[..., Any], what: str) -> Callable[..., Any]:
+        def wrapped(first: Any, *args: Any, **kwargs: Any) -> Any:
+            events.append(f"{what} {Path(getattr(first, 'path', first)).name}")
+            return original(first, *args, **kwargs)
+
+        return wrapped
+
+    monkeypatch.setattr(read, "read_file_bytes", logged(read.read_file_bytes, "read"))
+    monkeypatch.setattr(read.ImageFile, "decode", logged(read.ImageFile.decode, "decode"))
+    argv = ["measure", *(str(s / n) for n in NAMES[1:]), "--reference", str(s / NAMES[0])]
+    assert main([*argv, "--method", "classical", "--out", str(tmp_path / "r.json")]) == 0
+    frames = [e for e in events if e.split()[1] in NAMES[1:]]
+    assert frames == [f"{what} {n}" for n in NAMES[1:] for what in ("read", "decode")], events
 
 
 @pytest.mark.parametrize("command", ["measure", "calibrate", "demo"])

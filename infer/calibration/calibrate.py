@@ -34,7 +34,7 @@ from contactcal.infer.calibration.steps import (
 )
 from contactcal.infer.calibration.table import format_table
 from contactcal.infer.files.atomic import OutputSet, run_outputs
-from contactcal.infer.image.read import ImageFile
+from contactcal.infer.image.read import ImageFile, sources_of
 from contactcal.infer.pipeline.manifest import (
     Frame,
     Session,
@@ -147,8 +147,9 @@ def calibrate_session(
             (:func:`~contactcal.infer.pipeline.manifest.read_session`; the command shares its
             one read with its rig note), not read again; None: read here.
         contents: each frame's content as the caller read it (``demo``'s one read for both
-            methods: :func:`~contactcal.infer.image.read.read_contents`), measured and
-            recorded, not read again; None: each frame read here, when it is measured.
+            methods, ``calibrate --overlay``'s for the outlines and the drawing too:
+            :func:`~contactcal.infer.image.read.read_contents`), measured and recorded, not
+            read again; None: each frame read here, when it is measured.
 
     Returns:
         The :class:`CalibrationReport` (table, measurements, curve, written files).
@@ -167,7 +168,7 @@ def calibrate_session(
     check_sweep_unit(manifest, session.frames)
     frames, files = session.frames, [f.file for f in session.frames]
     method = measure.method(method_name)
-    sources = files if contents is None else [contents[p] for p in files]
+    sources = sources_of(files, contents)
     measured = measure.measure(sources, method, sources[0], digest=True)
     points = _points(session.folder, frames, measured, measure.scale)
     where = Path(manifest_as if manifest_as is not None else manifest)  # not a staging path

@@ -17,6 +17,7 @@ from contactcal.infer.pipeline.args import (
     check_output_folder,
     measure_options,
     method_args,
+    overlay_contents,
     overlay_runs,
     read_rig,
     run_inputs,
@@ -101,6 +102,7 @@ def _cmd_calibrate(args: argparse.Namespace) -> int:
     from contactcal.infer.calibration.record import CALIBRATION_FILES
     from contactcal.infer.files.atomic import run_outputs
     from contactcal.infer.files.stdout import printing_after
+    from contactcal.infer.image.read import sources_of
     from contactcal.infer.pipeline.manifest import beside_manifest, read_session, reference_width
     from contactcal.infer.pipeline.overlay import (
         earlier_overlays_note,
@@ -139,6 +141,7 @@ def _cmd_calibrate(args: argparse.Namespace) -> int:
     written: list[Path] = []
     named = {"--out": args.out, "--overlay": args.overlay}
     with run_outputs(run_inputs(args), options=named) as outs:
+        read = overlay_contents(args, [f.file for f in session.frames])  # None: no --overlay
         rep = calibrate_session(
             args.manifest,
             args.out,
@@ -148,13 +151,14 @@ def _cmd_calibrate(args: argparse.Namespace) -> int:
             provenance,
             outputs=outs,
             session=session,
+            contents=read,
         )
-        if args.overlay is not None:
-            files = [f.file for f in rep.frames]
-            runs = overlay_runs(args, measure, rep.measured, files, files[0])
+        if read is not None:
+            frames = sources_of([f.file for f in rep.frames], read)
+            runs = overlay_runs(args, measure, rep.measured, frames, frames[0])
             titles = [f"{f.pressure_kpa:g} kPa, {f.phase}" for f in rep.frames]
             written = write_overlays(
-                runs, args.overlay, titles, outputs=outs, bit_depth=args.bit_depth
+                runs, read, args.overlay, titles, outputs=outs, bit_depth=args.bit_depth
             )
     overlays = [] if args.overlay is None else [args.overlay]
     with printing_after([args.out, *overlays], [set_aside, replaced]):

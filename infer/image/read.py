@@ -16,7 +16,7 @@ maximum exceeds :data:`LOW_BITS_MAX`; otherwise it is an error.
 from __future__ import annotations
 
 import os
-from collections.abc import Iterable
+from collections.abc import Iterable, Mapping, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -253,6 +253,15 @@ def read_contents(files: Iterable[Path]) -> dict[Path, ImageFile]:
         ImageError: as :func:`read_file_bytes`.
     """
     return {p: ImageFile.read(p) for p in dict.fromkeys(files)}
+
+
+def sources_of(
+    files: Sequence[Path], contents: Mapping[Path, ImageFile] | None
+) -> list[ImageSource]:
+    """``files`` as a run measures them: their contents as read already (``contents``, of
+    :func:`read_contents`: every step then uses the same content), or with None the paths
+    (each file read when it is measured, none held)."""
+    return list(files) if contents is None else [contents[p] for p in files]
 
 
 def source_content(source: ImageSource) -> ImageFile:

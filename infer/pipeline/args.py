@@ -10,6 +10,9 @@ from typing import TYPE_CHECKING, Any, NamedTuple
 from contactcal.infer.methods.registry import METHODS
 
 if TYPE_CHECKING:
+    from collections.abc import Iterable, Sequence
+
+    from contactcal.infer.image.read import ImageFile, ImageSource
     from contactcal.infer.pipeline.boundary import BoundaryOffset
     from contactcal.infer.pipeline.measure import Measured
     from contactcal.infer.pipeline.options import MeasureOptions
@@ -260,16 +263,32 @@ def run_inputs(args: argparse.Namespace) -> list[Path]:
     return [p for p in (getattr(args, n, None) for n in names) if p is not None]
 
 
+def overlay_contents(
+    args: argparse.Namespace, files: Iterable[Path | None]
+) -> dict[Path, ImageFile] | None:
+    """With ``--overlay``: the content of each of ``files`` (the frames and the reference; None:
+    no reference), each file read once (:func:`~contactcal.infer.image.read.read_contents`),
+    for the run's measurement, every method's outlines and the drawing, so that all are of
+    one content (a frame replaced during the run is taken as it was read). Without it None:
+    each frame is read when it is measured, none held."""
+    from contactcal.infer.image.read import read_contents
+
+    if args.overlay is None:
+        return None
+    return read_contents(p for p in files if p is not None)
+
+
 def overlay_runs(
     args: argparse.Namespace,
     options: MeasureOptions,
     primary: list[Measured],
-    files: list[Path],
-    reference: Path | None,
+    files: Sequence[ImageSource],
+    reference: ImageSource | None,
 ) -> dict[str, list[Measured]]:
     """Measurements of every method for the overlays (the primary run, measured with its
     digests, is reused; the others only draw outlines, so they get no scale or boundary
-    offset), each with the digest of the content measured
+    offset) of ``files`` against ``reference`` (the contents the primary run measured:
+    :func:`overlay_contents`), each with the digest of the content measured
     (:func:`~contactcal.infer.pipeline.overlay.measured_frame` checks it)."""
     from dataclasses import replace
 

@@ -16,6 +16,7 @@ from contactcal.infer.pipeline.args import (
     check_output_folder,
     measure_options,
     method_args,
+    overlay_contents,
     overlay_runs,
     read_rig,
     run_inputs,
@@ -50,7 +51,7 @@ def _cmd_measure(args: argparse.Namespace) -> int:
     from contactcal.infer.files.atomic import run_outputs, write_synced
     from contactcal.infer.files.jsonable import json_text
     from contactcal.infer.files.stdout import printing_after
-    from contactcal.infer.image.read import SUPPORTED_SUFFIXES
+    from contactcal.infer.image.read import SUPPORTED_SUFFIXES, sources_of
     from contactcal.infer.pipeline.measure import note_self_reference
     from contactcal.infer.pipeline.overlay import (
         earlier_overlays_note,
@@ -85,8 +86,10 @@ def _cmd_measure(args: argparse.Namespace) -> int:
         json_path = None if to_stdout else _stage_results(outs, args.out)  # before the work
         options = measure_options(args, read_rig(args))
         method = options.method(args.method)
-        overlay = args.overlay is not None  # its frames are checked to be the ones measured
-        measured = options.measure(args.images, method, args.reference, digest=overlay)
+        read = overlay_contents(args, [*args.images, args.reference])  # None: no --overlay
+        images = sources_of(args.images, read)
+        reference = None if args.reference is None else sources_of([args.reference], read)[0]
+        measured = options.measure(images, method, reference, digest=read is not None)
         measured, warnings = note_self_reference(measured, args.reference)
         # device_id: the display measured, per object (the output stays a list of objects).
         rows = [{**m.to_json(method.name), "device_id": args.device_id} for m in measured]
@@ -94,9 +97,10 @@ def _cmd_measure(args: argparse.Namespace) -> int:
         if json_path is not None:
             write_synced(json_path, text)
         written: list[Path] = []
-        if overlay:
-            runs = overlay_runs(args, options, measured, args.images, args.reference)
-            written = write_overlays(runs, args.overlay, outputs=outs, bit_depth=args.bit_depth)
+        if read is not None:
+            runs = overlay_runs(args, options, measured, images, reference)
+            bits = args.bit_depth
+            written = write_overlays(runs, read, args.overlay, outputs=outs, bit_depth=bits)
     overlays = [] if args.overlay is None else [args.overlay]
     with printing_after([*([] if to_stdout else [args.out]), *overlays], [replaced]):
         if to_stdout:

@@ -11,8 +11,7 @@ import cv2
 import numpy as np
 
 from contactcal.infer.files.atomic import OutputSet, run_outputs
-from contactcal.infer.image.gray import ImageError
-from contactcal.infer.image.read import ImageSource, source_content, source_path
+from contactcal.infer.image.read import ImageFile
 from contactcal.infer.image.write import write_image
 from contactcal.infer.pipeline.measure import Measured
 
@@ -99,15 +98,15 @@ def overlay_names(files: Sequence[str | os.PathLike[str]]) -> list[str]:
 
 
 def measured_frame(
-    source: ImageSource, measured: Mapping[str, Measured], bit_depth: int | None = None
+    content: ImageFile, measured: Mapping[str, Measured], bit_depth: int | None = None
 ) -> np.ndarray:
-    """``source`` decoded at full size to draw outlines on, refused unless its content is the
-    one every method measured (a frame replaced since would be drawn on with another content's
-    outlines).
+    """``content`` decoded at full size to draw outlines on, refused unless it is the content
+    every method measured (drawn on, another content would carry outlines not its own).
 
     Args:
-        source: the frame: its file (read again here), or the content the methods measured.
-        measured: method name → its measurement of ``source``, with the digest of the content
+        content: the frame as the run read it once for every method
+            (:func:`~contactcal.infer.pipeline.args.overlay_contents`): not read again.
+        measured: method name → its measurement of ``content``, with the digest of the content
             measured (``digest=True``).
         bit_depth: significant bits of a 16-bit frame, as measured (None: from the file).
 
@@ -115,25 +114,24 @@ def measured_frame(
         ``(H, W) uint8`` frame.
 
     Raises:
-        ImageError: the file's content is not the one measured (naming it and the method).
-        ValueError: a measurement without its digest (a caller's error, not bad input).
+        ValueError: a measurement without its digest, or of another content (a caller's error,
+            not bad input: the run measures and draws one content).
     """
-    content, file = source_content(source), source_path(source)
-    sha = content.sha256()
+    sha, file = content.sha256(), content.path
     for name, m in measured.items():
         if m.sha256 is None:
             raise ValueError(f"{name}: {file} was measured without its digest (digest=True)")
         if m.sha256 != sha:
-            raise ImageError(
-                f"{file}: its content changed after it was measured (sha256 {m.sha256[:12]}… "
-                f"measured by {name}, {sha[:12]}… read to draw its outlines); run again once "
-                "the session's files are final"
+            raise ValueError(
+                f"{name}: {file} was measured as the content with sha256 {m.sha256[:12]}…, "
+                f"not the one given to draw on ({sha[:12]}…)"
             )
     return content.decode(bit_depth=bit_depth)
 
 
 def write_overlays(
     runs: dict[str, list[Measured]],
+    contents: Mapping[Path, ImageFile],
     out_dir: str | os.PathLike[str],
     titles: Sequence[str] | None = None,
     outputs: OutputSet | None = None,
@@ -147,6 +145,8 @@ def write_overlays(
         runs: method name → its measurements of the same files (same order), with their
             digests: each frame is drawn on only as the content every method measured
             (:func:`measured_frame`).
+        contents: each frame's content as the run read it once, measured by every method
+            (:func:`~contactcal.infer.pipeline.args.overlay_contents`): drawn on, not read again.
         out_dir: folder for the overlays.
         titles: per-file caption (e.g. ``"8.0 kPa"``); default the file name.
         outputs: the enclosing run's outputs to stage into (None: this call is the run).
@@ -161,7 +161,7 @@ def write_overlays(
     with run_outputs([m.file for m in first], join=outputs) as outs:
         for k, m in enumerate(first):
             at = {name: ms[k] for name, ms in runs.items()}
-            gray = measured_frame(m.file, at, bit_depth)
+            gray = measured_frame(contents[m.file], at, bit_depth)
             contours = {name: mk.result.contour for name, mk in at.items()}
             title = titles[k] if titles is not None else m.file.name
             write_image(outs.stage(paths[k]), draw_overlay(gray, contours, title))
