@@ -169,9 +169,8 @@ def _check_models(model: Path | None, variants: tuple[tuple[str, str], ...]) -> 
     """Load ``--model`` (when given) and each ``--variant``'s model before the work: a missing
     or unusable file is refused with its option named (``--variant LABEL=PATH: ...``); returns
     each file's sha256 as loaded."""
-    from contactcal.infer.errors import option_error
     from contactcal.infer.methods.unet.runner import OnnxSegmenter
-    from contactcal.infer.methods.unet.spec import ModelError
+    from contactcal.infer.methods.unet.spec import ModelError, by_model_option
 
     named = [] if model is None else [("--model", model, model)]
     named += [("--variant", f"{label}={path}", Path(path)) for label, path in variants]
@@ -179,9 +178,8 @@ def _check_models(model: Path | None, variants: tuple[tuple[str, str], ...]) -> 
     for option, value, path in named:
         try:
             digests[path] = OnnxSegmenter(path).sha256
-        except ModelError as exc:  # its message starts with the path, named once by the value
-            said = ModelError(str(exc).removeprefix(f"{path}: "))
-            raise option_error(option, value, said) from None
+        except ModelError as exc:
+            raise by_model_option(option, value, path, exc) from None
     return digests
 
 
