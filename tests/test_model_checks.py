@@ -206,3 +206,43 @@ def test_deployed_session_runs_the_input_shape_it_is_fed() -> None:
     want = free.run(None, {free.get_inputs()[0].name: x})[0]
     assert got.shape == want.shape == (1, 1, s, s)
     np.testing.assert_allclose(got, want, atol=STATIC_DIMS_ATOL, rtol=0)
+
+
+EXAMPLE = FRAME.parent
+
+
+@pytest.mark.parametrize(
+    "argv",
+    [
+        ["measure", str(FRAME), "--reference", str(EXAMPLE / "p00.0kpa.jpg"), "--out", "out.json"],
+        ["calibrate", str(EXAMPLE / "manifest.csv"), "--out", "out"],
+        [
+            "evaluate",
+            str(EXAMPLE / "manifest.csv"),
+            "--labels",
+            str(EXAMPLE / "masks"),
+            "--out",
+            "out",
+        ],
+    ],
+    ids=["measure", "calibrate", "evaluate"],
+)
+def test_an_unusable_model_is_named_by_its_option(
+    argv: list[str],
+    tmp_path: Path,
+    capsys: pytest.CaptureFixture[str],
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    """A missing --model, or one that is not a model, names the option as typed (as bench and
+    every --out refusal do), not only the file."""
+    monkeypatch.chdir(tmp_path)
+    Path("notes.onnx").write_text("not a model\n")
+    cases = (
+        ("missing.onnx", "no such model file"),
+        ("notes.onnx", "not a loadable ONNX model ("),
+    )
+    for model, says in cases:
+        assert main([*argv, "--model", model]) == 2
+        (err,) = capsys.readouterr().err.strip().splitlines()
+        assert err.startswith(f"contactcal: error: --model {model}: {says}"), err
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["notes.onnx"]  # nothing written

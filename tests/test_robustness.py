@@ -21,9 +21,9 @@ from contactcal.infer.bench.robustness import (
     load_samples,
     measure_suite,
     perturbed,
-    ratio_interval,
     sample_rows,
 )
+from contactcal.infer.bench.robustness_summary import ratio_interval
 from contactcal.infer.bench.run import run_bench
 from contactcal.infer.bench.scoring import ScoredFrame
 from contactcal.infer.bench.suite import PERTURBATIONS, Perturbation

@@ -7,6 +7,7 @@ is by --resume."""
 from __future__ import annotations
 
 import json
+import shlex
 import subprocess
 import sys
 from pathlib import Path
@@ -124,8 +125,9 @@ def test_resume_leaves_a_finished_run_as_it_is(
     tmp_path: Path, capsys: pytest.CaptureFixture[str]
 ) -> None:
     """A finished run (val_bins.csv written) is not resumed: said so, every file unchanged. A
-    run killed after its last last.pt, before the files that follow, is completed."""
-    d = write_dataset(tmp_path / "d", fingers=3)
+    run killed after its last last.pt, before the files that follow, is completed. The --data
+    that a resume with other data is told to pass is quoted for a shell (a space in a name)."""
+    d = write_dataset(tmp_path / "my data", fingers=3)
     run = tmp_path / "run"
     argv = ["train", "--data", str(d), "--out", str(run), *TINY]
     assert main(argv) == 0
@@ -147,7 +149,8 @@ def test_resume_leaves_a_finished_run_as_it_is(
     assert main(["train", "--data", str(other), "--out", str(run), *TINY, "--resume"]) == 2
     err = capsys.readouterr().err
     one_line_naming(err, run)
-    assert f"expected the run's own dataset folders, unchanged: pass --data {d}" in err
+    said = f"expected the run's own dataset folders, unchanged: pass --data {shlex.quote(str(d))}"
+    assert said in err
     assert _snapshot(run) == before
     recorded = (run / "config.json").read_text()
     for damaged in ({"data_dirs": None}, {"data_dirs": [1]}):  # named, not a traceback

@@ -162,25 +162,29 @@ def restating_parser(prog: str, description: str) -> argparse.ArgumentParser:
     return ap
 
 
-def run_restating(restate: Callable[[], dict[str, Any]], out: Path) -> int:
+def run_restating(restate: Callable[[], dict[str, Any]], out: str | os.PathLike[str]) -> int:
     """Run a restating tool: print its summary (standard JSON) and 0, or one error line and 2
     (nothing written; or, where standard output failed after ``out`` was written, saying so and
-    repeating the warning); a summary's ``stale`` (:func:`stale`) is also a warning line on
-    stderr.
+    repeating the notes); an earlier model that ``out`` held is named after the ``wrote`` line
+    (:func:`earlier_model_note`), and a summary's ``stale`` (:func:`stale`) is also a warning
+    line on stderr.
 
     Args:
         restate: writes ``out`` and returns the summary (raises ``ValueError`` / ``OSError``).
-        out: the file it writes, for the last line.
+        out: the file it writes, for the last lines.
     """
     from contactcal.infer.files.stdout import named_stdout, printing_after
 
+    replaced = earlier_model_note(Path(out))  # before the run writes it; said once written
     try:
         with named_stdout():  # a closed pipe: one line, as the CLI's (no traceback)
             summary = restate()
             warning = f"warning: {out}: {summary['stale']}" if summary.get("stale") else None
-            with printing_after([out], [warning]):
+            with printing_after([out], [warning, replaced]):
                 print(json.dumps(summary, indent=1, allow_nan=False))
                 print(f"wrote {out}")
+                if replaced is not None:
+                    print(replaced)
     except (ValueError, OSError) as exc:
         print(f"error: {exc}", file=sys.stderr)
         return 2

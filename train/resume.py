@@ -7,6 +7,7 @@ before the training stack is imported).
 
 from __future__ import annotations
 
+import shlex
 from pathlib import Path
 from typing import Any
 
@@ -69,7 +70,7 @@ def resume_checkpoint(
     # checked first: the messages below name its data_dirs
     recorded = None if info is None else recorded_split(info, out / "config.json")
     if ckpt["data_digest"] != digests[0]:
-        given = "" if info is None else f": pass --data {' '.join(info['data_dirs'])}"
+        given = "" if info is None else f": pass {_data_option(info)}"
         raise ValueError(
             f"{out}: --resume with different data (the --data folders' index.csv digest is not "
             f"the run's data_digest); expected the run's own dataset folders, unchanged{given}"
@@ -90,11 +91,17 @@ def resume_checkpoint(
             recorded,
             split,
             f"{out}: the split of this --resume's --data",
-            f"expected the run's own dataset folders: pass --data {' '.join(info['data_dirs'])} "
+            f"expected the run's own dataset folders: pass {_data_option(info)} "
             "(any spelling; a run whose split an older contactcal recorded on other spellings "
             "cannot be resumed exactly: start a new run)",
         )
     return ckpt
+
+
+def _data_option(info: dict[str, Any]) -> str:
+    """``--data DIR...`` with the run's dataset folders (its ``config.json``'s ``data_dirs``),
+    quoted for a shell (a folder with a space in its name is one argument)."""
+    return shlex.join(["--data", *info["data_dirs"]])
 
 
 def _check_settings(out: Path, saved: TrainConfig, cfg: TrainConfig) -> None:

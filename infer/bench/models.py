@@ -14,11 +14,10 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 from contactcal.infer.bench.accuracy import variant_name
-from contactcal.infer.errors import option_error
 from contactcal.infer.methods.base import Method
 from contactcal.infer.methods.registry import make_method
 from contactcal.infer.methods.unet.runner import DEFAULT_MODEL, OnnxSegmenter, read_model
-from contactcal.infer.methods.unet.spec import ModelError
+from contactcal.infer.methods.unet.spec import ModelError, by_model_option
 
 
 @dataclass(frozen=True)
@@ -65,10 +64,9 @@ def load_models(
         try:
             content = read_model(path)
             sha256 = OnnxSegmenter(path, content=content).sha256
-        except ModelError as exc:  # its message starts with the path, named once by the value
+        except ModelError as exc:
             if option is None:
                 raise
-            said = ModelError(str(exc).removeprefix(f"{path}: "))
-            raise option_error(*option, said) from None
+            raise by_model_option(*option, path, exc) from None
         out.append(BenchModel(name, path, given, content, sha256))
     return out

@@ -26,7 +26,10 @@ from contactcal.infer.pipeline.args import (
 from contactcal.infer.pipeline.readings import DEFAULT_STEP_TOLERANCE_KPA, check_tolerance
 
 if TYPE_CHECKING:
-    from contactcal.infer.calibration.calibrate import SessionOptions
+    from contactcal.infer.calibration.calibrate import CalibrationReport, SessionOptions
+    from contactcal.infer.calibration.provenance import Provenance
+    from contactcal.infer.pipeline.manifest import Session
+    from contactcal.infer.pipeline.options import MeasureOptions
 
 
 def add_parsers(sub: argparse._SubParsersAction) -> None:
@@ -96,19 +99,15 @@ def session_options(args: argparse.Namespace) -> SessionOptions:
 
 
 def _cmd_calibrate(args: argparse.Namespace) -> int:
-    from contactcal.infer.calibration.calibrate import calibrate_session
+    """``contactcal calibrate``: every check that needs no frame first, then a manifest's
+    still frames here, or a recording (:func:`~contactcal.infer.video.command.calibrate_video`).
+    """
     from contactcal.infer.calibration.out_folder import check_reused_out
     from contactcal.infer.calibration.provenance import Provenance
     from contactcal.infer.calibration.record import CALIBRATION_FILES
-    from contactcal.infer.files.atomic import run_outputs
     from contactcal.infer.files.stdout import printing_after
-    from contactcal.infer.image.read import sources_of
     from contactcal.infer.pipeline.manifest import beside_manifest, read_session, reference_width
-    from contactcal.infer.pipeline.overlay import (
-        earlier_overlays_note,
-        overlay_names,
-        write_overlays,
-    )
+    from contactcal.infer.pipeline.overlay import earlier_overlays_note, overlay_names
     from contactcal.infer.pipeline.rig_note import rig_note
     from contactcal.infer.video.args import is_video_run
     from contactcal.infer.video.command import calibrate_video, check_fresh_recording
@@ -138,6 +137,36 @@ def _cmd_calibrate(args: argparse.Namespace) -> int:
         args, measure, beside, rig, lambda: reference_width(session, args.bit_depth)
     )
     provenance = replace(provenance, rig_note=set_aside)  # recorded: extra.rig_note
+    rep, written = _write_outputs(args, measure, options, provenance, session)
+    overlays = [] if args.overlay is None else [args.overlay]
+    with printing_after([args.out, *overlays], [set_aside, replaced]):
+        print(rep.table)
+        if no_scale is not None:
+            print(NO_SCALE_NOTE.format(looked=no_scale))
+        for note in (set_aside, replaced, earlier_overlays_note(written)):
+            if note is not None:
+                print(note)
+    return 0
+
+
+def _write_outputs(
+    args: argparse.Namespace,
+    measure: MeasureOptions,
+    options: SessionOptions,
+    provenance: Provenance,
+    session: Session,
+) -> tuple[CalibrationReport, list[Path]]:
+    """Calibrate the manifest's ``session`` into ``--out`` and draw its overlays into
+    ``--overlay`` (when given), all or nothing: staged together, moved into place together.
+
+    Returns:
+        The calibration's report and the overlays written (none without ``--overlay``).
+    """
+    from contactcal.infer.calibration.calibrate import calibrate_session
+    from contactcal.infer.files.atomic import run_outputs
+    from contactcal.infer.image.read import sources_of
+    from contactcal.infer.pipeline.overlay import write_overlays
+
     written: list[Path] = []
     named = {"--out": args.out, "--overlay": args.overlay}
     with run_outputs(run_inputs(args), options=named) as outs:
@@ -160,12 +189,4 @@ def _cmd_calibrate(args: argparse.Namespace) -> int:
             written = write_overlays(
                 runs, read, args.overlay, titles, outputs=outs, bit_depth=args.bit_depth
             )
-    overlays = [] if args.overlay is None else [args.overlay]
-    with printing_after([args.out, *overlays], [set_aside, replaced]):
-        print(rep.table)
-        if no_scale is not None:
-            print(NO_SCALE_NOTE.format(looked=no_scale))
-        for note in (set_aside, replaced, earlier_overlays_note(written)):
-            if note is not None:
-                print(note)
-    return 0
+    return rep, written

@@ -41,7 +41,7 @@ from contactcal.infer.calibration.phases import (
     parse_phase,
     phases_from_order,
 )
-from contactcal.infer.errors import few
+from contactcal.infer.pipeline.manifest_files import MAX_LISTED, check_files
 from contactcal.infer.pipeline.manifest_rows import (
     GAUGE_ZERO_NOISE_KPA,
     HEADER,
@@ -92,8 +92,6 @@ __all__ = [
     "reference_width",
     "sweep_top_warning",
 ]
-
-_MAX_LISTED = 5
 
 
 @dataclass(frozen=True)
@@ -209,7 +207,7 @@ def read_session(
     merged = f"readings less than {step_tolerance_kpa:g} kPa apart are one step"
     hint = "" if pooled is None else f" ({merged}: --step-tolerance-kpa)"
     frames = _number_steps(where, frames, hint)
-    _check_files(where, frames, folder)
+    check_files(where, frames, folder)
     return Session(frames, source, sha256, folder, pooled, at_rest, out_of_order)
 
 
@@ -263,40 +261,8 @@ def _number_steps(where: str, frames: list[Frame], hint: str = "") -> list[Frame
             raise ManifestError(
                 f"{where}: the {phase} pass has {len(mine)} frame(s) at {len(levels)} pressure; "
                 f"a calibration needs >= 2 pressure steps per pass (including the 0 kPa "
-                f"reference); rows {', '.join(str(f.row) for f in mine[:_MAX_LISTED])}; give "
+                f"reference); rows {', '.join(str(f.row) for f in mine[:MAX_LISTED])}; give "
                 f"each row its pass in a 'phase' column (loading/unloading){hint}"
             )
         out += [with_changes(f, step=levels.index(f.pressure_kpa)) for f in mine]
     return out
-
-
-def _check_files(where: str, frames: list[Frame], base: Path) -> None:
-    """Reject missing image files and one image on two rows."""
-    missing = [f for f in sorted(frames, key=lambda f: f.row) if not f.file.is_file()]
-    if missing:
-        listed = few(
-            [f"row {f.row}: {f.file}{' (a folder)' if f.file.is_dir() else ''}" for f in missing],
-            _MAX_LISTED,
-            "; ",
-        )
-        windows = any("\\" in str(f.file) for f in missing) and os.sep != "\\"
-        hint = " (written with '\\' as on Windows? use '/' between folders)" if windows else ""
-        raise ManifestError(
-            f"{where}: {len(missing)} image file(s) not found: {listed}; relative paths "
-            f"are resolved against the manifest's folder {base}{hint}"
-        )
-    _check_distinct_files(where, frames)
-
-
-def _check_distinct_files(where: str, frames: list[Frame]) -> None:
-    """Reject one image on two rows (same file after resolving links, or a hard link to it)."""
-    seen: dict[tuple[int, int], Frame] = {}
-    for f in sorted(frames, key=lambda f: f.row):
-        st = f.file.stat()
-        first = seen.setdefault((st.st_dev, st.st_ino), f)
-        if first is not f:
-            raise ManifestError(
-                f"{where}: rows {first.row} ({first.file}) and {f.row} ({f.file}) are the same "
-                "image file; expected each image on one row (a step may hold several images): list "
-                "each frame once"
-            )

@@ -54,12 +54,19 @@ class MeasureOptions:
             outline: overrides :attr:`outline` (None: keep it).
 
         Raises:
-            ValueError: unknown method; ``ModelError``: an unusable model file.
+            ValueError: unknown method; an unusable :attr:`model` file, named as the option
+                that gave it (``--model MODEL: ...``); ``ModelError``: an unusable shipped model.
         """
         from contactcal.infer.methods.registry import make_method
+        from contactcal.infer.methods.unet.spec import ModelError, by_model_option
 
         keep = self.outline if outline is None else outline
-        return make_method(name, self.model, self.threads, keep, change_gate=self.change_gate)
+        try:
+            return make_method(name, self.model, self.threads, keep, change_gate=self.change_gate)
+        except ModelError as exc:
+            if self.model is None:
+                raise
+            raise by_model_option("--model", self.model, self.model, exc) from None
 
     def measure(
         self,

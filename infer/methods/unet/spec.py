@@ -11,16 +11,27 @@ from __future__ import annotations
 import dataclasses
 import json
 import math
+import os
 from collections.abc import Mapping
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
+from contactcal.infer.errors import option_error
 from contactcal.infer.methods.unet.config import PreprocessConfig
 
 
 class ModelError(ValueError):
     """A model file that cannot be used; the message names the file."""
+
+
+def by_model_option(
+    option: str, value: object, path: str | os.PathLike[str], exc: ModelError
+) -> ValueError:
+    """``exc``, a refusal of the model file ``path``, led by the option that gave it, the path
+    named once, by the value as typed: ``--model m.onnx: no such model file``,
+    ``--variant int8=m.onnx: ...`` (:func:`~contactcal.infer.errors.option_error`)."""
+    return option_error(option, value, ModelError(str(exc).removeprefix(f"{path}: ")))
 
 
 #: Metadata keys that define the pre- and post-processing (all required).
