@@ -28,10 +28,7 @@ from contactcal.synth.dataset_folder import SYNTH_REVISION as SYNTH_REVISION  # 
 from contactcal.synth.dataset_folder import (
     check_config_matches,
     check_out_folder,
-    earlier_runs,
     read_frame_record,
-    run_record_path,
-    write_run_record,
 )
 from contactcal.synth.layout import (
     INDEX_COLUMNS,
@@ -41,6 +38,7 @@ from contactcal.synth.layout import (
     index_row,
 )
 from contactcal.synth.randomize import SessionParams, sample_session
+from contactcal.synth.run_record import ShardRuns, run_record_path
 from contactcal.synth.session import FrameOutput, RenderConfig, render_session
 from contactcal.synth.variant import choose_variant
 
@@ -115,6 +113,16 @@ def stop_if_orphaned(parent_pid: int | None) -> None:
         raise SystemExit(f"synth worker {os.getpid()}: parent {parent_pid} is gone; stopping")
 
 
+def truth_path(root: Path, finger: int, pressure_kpa: float) -> Path:
+    """The truth JSON of a frame, written last: the frame is finished when it exists."""
+    return root / f"finger_{finger:04d}" / "frames" / f"{frame_name(pressure_kpa)}.json"
+
+
+def shard_frames(root: Path, config: DatasetConfig, fingers: list[int]) -> int:
+    """The finished frames of ``fingers`` on disk (their rows in ``index.csv``, rebuilt)."""
+    return sum(truth_path(root, f, p).is_file() for f in fingers for p in config.pressures_kpa)
+
+
 def render_finger(
     out_dir: str, config: DatasetConfig, finger: int, parent_pid: int | None = None
 ) -> int:
@@ -134,7 +142,7 @@ def render_finger(
         remove_stale_temporaries(sub)  # left by a killed run; a resumed run starts clean
     params = session_params(config, finger)
     pressures = sorted(config.pressures_kpa)
-    truth_paths = [folder / "frames" / f"{frame_name(p)}.json" for p in pressures]
+    truth_paths = [truth_path(root, finger, p) for p in pressures]
     skip = [t.is_file() for t in truth_paths]
     for t in (t for t, done in zip(truth_paths, skip, strict=True) if done):
         read_frame_record(t)  # a damaged one is refused before any render
@@ -215,22 +223,25 @@ def build_dataset(
         shard: ``(i, n)``: render the fingers ``f % n == i``.
         progress: show a progress bar.
         run_args: the command line, to keep the shard's run record ``run_shard{i}of{n}.json``
-            (:func:`~contactcal.synth.dataset_folder.write_run_record`); None writes none.
+            (:mod:`~contactcal.synth.run_record`, written before the first render and again
+            at the end); None writes none.
 
     Returns:
         ``fingers`` (this shard's), ``frames_rendered`` (by this run) and, with ``run_args``,
-        ``run_record_written`` (False: the record of the run that rendered the frames is kept).
+        ``run_record_written`` (False: every frame was there and the record, whose latest run
+        finished, is kept as the record of the runs that rendered them).
     """
     root = Path(out_dir)
     config, fingers = _open_folder(root, config, shard)
-    record_path = run_record_path(root, shard)
-    earlier = earlier_runs(record_path) if run_args is not None else []
+    runs = None
+    if run_args is not None:  # before the renders: a killed run stays on record
+        frames = (shard_frames(root, config, fingers), len(fingers) * len(config.pressures_kpa))
+        runs = ShardRuns.begin(run_record_path(root, shard), run_args, len(fingers), frames)
     made = _render_fingers(root, config, fingers, workers, shard if progress else None)
     write_index(root)
     stats: dict[str, Any] = {"fingers": len(fingers), "frames_rendered": made}
-    if run_args is not None:
-        written = write_run_record(record_path, {"args": run_args, **stats}, earlier)
-        stats["run_record_written"] = written
+    if runs is not None:
+        stats["run_record_written"] = runs.end(made, shard_frames(root, config, fingers))
     return stats
 
 

@@ -1,9 +1,9 @@
 """The files of a ``contactcal synth`` dataset folder that a run reads back, each checked.
 
-A resumed run reads ``config.json`` (refused unless it is this config), the finished frames'
-truth JSON and its shard's run record; a damaged or foreign file is refused in one line naming
-it and what was expected. :func:`check_out_folder` refuses an ``--out`` that would mix the
-dataset with other files.
+A resumed run reads ``config.json`` (refused unless it is this config) and the finished frames'
+truth JSON (and its shard's run record, :mod:`~contactcal.synth.run_record`); a damaged or
+foreign file is refused in one line naming it and what was expected. :func:`check_out_folder`
+refuses an ``--out`` that would mix the dataset with other files.
 """
 
 from __future__ import annotations
@@ -165,42 +165,3 @@ def check_out_folder(root: Path) -> None:
             f"--out {root}: holds other files ({few(other)}) and no config.json; "
             "expected a new or empty folder, or a synth dataset to resume; render into a new --out"
         )
-
-
-def run_record_path(root: Path, shard: tuple[int, int]) -> Path:
-    """The record of the runs of shard ``(i, n)``: ``run_shard{i}of{n}.json``."""
-    return root / f"run_shard{shard[0]}of{shard[1]}.json"
-
-
-def earlier_runs(path: Path) -> list[dict[str, Any]]:
-    """The records in ``path`` of the earlier runs that rendered frames, oldest first.
-
-    Raises:
-        ValueError: ``path`` is damaged (read before the renders, so nothing is rendered).
-    """
-    if not path.is_file():
-        return []
-    expected = (
-        "the run record a `contactcal synth` run wrote; remove it (it records only the earlier "
-        "runs' arguments and frame counts) and run again"
-    )
-    record = read_json(path, expected)
-    earlier = record.pop("earlier_runs", []) if isinstance(record, dict) else None
-    if not isinstance(earlier, list) or not all(isinstance(r, dict) for r in earlier):
-        raise ValueError(f"{path}: not a run record (a JSON object); expected {expected}")
-    return [r for r in (*earlier, record) if r.get("frames_rendered")]
-
-
-def write_run_record(path: Path, record: dict[str, Any], earlier: list[dict[str, Any]]) -> bool:
-    """Keep the record of the runs that rendered the shard's frames; returns whether it wrote.
-
-    The file holds the latest run that rendered frames (its ``args``, ``fingers`` and
-    ``frames_rendered``) with the earlier ones that did under ``earlier_runs``, oldest first, so
-    a resumed shard's counts add up. A run that renders nothing (every frame present) leaves
-    the file as it is: a re-run of a finished shard does not replace the record of the run that
-    rendered it. Where there is no record yet, it writes its own.
-    """
-    if not record["frames_rendered"] and path.is_file():
-        return False
-    write_json(path, {**record, "earlier_runs": earlier} if earlier else record)
-    return True

@@ -1,5 +1,6 @@
 """``contactcal synth`` into an existing folder: damaged files, a changed config, a folder of
-other files, the run record. The folders are written by hand: nothing is rendered."""
+other files, the run record of interrupted and resumed runs. The folders are written by hand:
+nothing is rendered."""
 
 from __future__ import annotations
 
@@ -17,13 +18,9 @@ pytest.importorskip("mitsuba")
 from contactcal.infer.cli import main
 from contactcal.infer.errors import config_changes
 from contactcal.synth.dataset import DatasetConfig, build_dataset, render_finger
-from contactcal.synth.dataset_folder import (
-    check_config_matches,
-    check_out_folder,
-    earlier_runs,
-    write_run_record,
-)
+from contactcal.synth.dataset_folder import check_config_matches, check_out_folder
 from contactcal.synth.layout import frame_name
+from contactcal.synth.run_record import ShardRuns, read_runs
 from contactcal.synth.session import RenderConfig
 from contactcal.synth.variant import choose_variant
 
@@ -41,13 +38,23 @@ def _finished(root: Path, config: DatasetConfig = CONFIG) -> Path:
     root.mkdir()
     render = dataclasses.replace(config.render, variant=variant)
     check_config_matches(root, dataclasses.replace(config, render=render))
-    for f in range(config.fingers):
-        frames = root / f"finger_{f:04d}" / "frames"
-        frames.mkdir(parents=True)
-        for p in config.pressures_kpa:
-            truth = {"finger": f, "pressure_kpa": p, "contact": int(p > 0), "mm_per_px": 0.1}
-            (frames / f"{frame_name(p)}.json").write_text(json.dumps(truth))
+    _write_frames(root, config, range(config.fingers))
     return root
+
+
+def _write_frames(root: Path, config: DatasetConfig, fingers: range | list[int]) -> int:
+    """Write the missing frame records of ``fingers`` as a render would; returns how many."""
+    made = 0
+    for f in fingers:
+        frames = root / f"finger_{f:04d}" / "frames"
+        frames.mkdir(parents=True, exist_ok=True)
+        for p in config.pressures_kpa:
+            path = frames / f"{frame_name(p)}.json"
+            if not path.exists():
+                truth = {"finger": f, "pressure_kpa": p, "contact": int(p > 0), "mm_per_px": 0.1}
+                path.write_text(json.dumps(truth))
+                made += 1
+    return made
 
 
 def _one_line(capsys: pytest.CaptureFixture[str]) -> str:
@@ -162,12 +169,53 @@ def test_a_rerun_of_a_finished_shard_keeps_its_run_record(
 
 def test_run_records_add_up(tmp_path: Path) -> None:
     path = tmp_path / "run_shard0of1.json"
-    first = {"args": {"run": 1}, "fingers": 1, "frames_rendered": 2}
-    assert write_run_record(path, first, earlier_runs(path))
-    assert not write_run_record(path, {**first, "frames_rendered": 0}, earlier_runs(path))
-    second = {"args": {"run": 2}, "fingers": 1, "frames_rendered": 3}  # a resume of a damaged one
-    assert write_run_record(path, second, earlier_runs(path))
-    assert json.loads(path.read_text()) == {**second, "earlier_runs": [first]}
+    first = ShardRuns.begin(path, {"run": 1}, 1, (0, 2))
+    assert json.loads(path.read_text())["finished"] is None, "on record before the renders"
+    assert first.end(2, 2)
+    assert not ShardRuns.begin(path, {"run": 2}, 1, (2, 2)).end(0, 2), "a finished shard: kept"
+    second = ShardRuns.begin(path, {"run": 3}, 1, (1, 2))  # a resume of a damaged one
+    assert second.end(1, 2)
+    record = json.loads(path.read_text())
+    assert [r["args"] for r in record["earlier_runs"]] == [{"run": 1}]
+    assert (record["frames_at_start"], record["frames_rendered"], record["frames_at_end"]) == (
+        1,
+        1,
+        2,
+    )
+    assert read_runs(path, 2) == ([*record.pop("earlier_runs"), record], True)
     path.write_text("{")
     with pytest.raises(ValueError, match=r"run_shard0of1.json: not valid JSON .*run record"):
-        earlier_runs(path)
+        read_runs(path, 2)
+    path.write_text(json.dumps({"finished": None}))
+    with pytest.raises(ValueError, match=r"run_shard0of1.json: its unfinished run has no frames_"):
+        read_runs(path, 2)
+
+
+def test_interrupted_runs_stay_on_the_record(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """Each run that rendered frames is on the record, an interrupted one too (its start, no
+    end), and their frames add up to the shard's rows in index.csv."""
+    root = tmp_path / "ds"
+    argv = [*ARGV, "--fingers", "3", "--out", str(root)]
+    plans: list[int | None] = [1, 3, None]  # the fingers each run writes; a number: interrupted
+
+    def fake_render(root: Path, config: DatasetConfig, fingers: list[int], *_: object) -> int:
+        plan = plans.pop(0)
+        made = _write_frames(root, config, fingers[:plan])
+        if plan is not None:
+            raise KeyboardInterrupt
+        return made
+
+    monkeypatch.setattr("contactcal.synth.dataset._render_fingers", fake_render)
+    assert main(argv) == 130  # finger 0 written, then interrupted
+    assert main(argv) == 130  # fingers 1 and 2 written, interrupted before the run's end
+    assert main(argv) == 0  # a resume with nothing left to render
+    record = json.loads((root / "run_shard0of1.json").read_text())
+    runs = [*record.pop("earlier_runs"), record]
+    counts = [(r["frames_at_start"], r["frames_rendered"], r["frames_at_end"]) for r in runs]
+    assert counts == [(0, 2, 2), (2, 4, 6), (6, 0, 6)]
+    assert [r["finished"] is None for r in runs] == [True, True, False]
+    assert all(r["started"] and r["args"]["argv"] == argv for r in runs)
+    rows = (root / "index.csv").read_text().splitlines()[1:]
+    assert len(rows) == record["frames_at_end"] == sum(r["frames_rendered"] for r in runs)
