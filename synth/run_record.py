@@ -4,10 +4,12 @@ It holds the run that wrote it last (``args``; ``fingers``, the shard's; ``start
 ``finished``, UTC; ``frames_at_start``, ``frames_rendered`` and ``frames_at_end``, the shard's
 finished frames on disk before, by and after it) with the earlier runs that rendered frames
 under ``earlier_runs``, oldest first: a resumed shard's ``frames_rendered`` add up to its rows
-in ``index.csv``. A run writes it before its first render with ``finished`` and
-``frames_rendered`` null, so a run that is interrupted or killed stays on record, and the next
-run counts the frames it left from the disk (:func:`read_runs`). A run that finds every frame
-present leaves a record whose latest run finished as it is.
+in ``index.csv``, unless frames were removed between runs (a frame rendered again counts in each
+run that rendered it; a run's ``frames_at_start`` below the one before's ``frames_at_end`` shows
+it). A run writes it before its first render with ``finished`` and ``frames_rendered`` null,
+so a run that is interrupted or killed stays on record, and the next run counts the frames it
+left from the disk (:func:`read_runs`). A run that finds every frame present leaves a record
+whose latest run finished as it is.
 """
 
 from __future__ import annotations
