@@ -86,9 +86,10 @@ def _cmd_measure(args: argparse.Namespace) -> int:
         json_path = None if to_stdout else _stage_results(outs, args.out)  # before the work
         options = measure_options(args, read_rig(args))
         method = options.method(args.method)
-        read = overlay_contents(args, [*args.images, args.reference])  # None: no --overlay
-        images = sources_of(args.images, read)
+        read = overlay_contents(args)  # None: no --overlay
+        # the reference read (and refused) before the frames, as without --overlay
         reference = None if args.reference is None else sources_of([args.reference], read)[0]
+        images = sources_of(args.images, read)
         measured = options.measure(images, method, reference, digest=read is not None)
         measured, warnings = note_self_reference(measured, args.reference)
         # device_id: the display measured, per object (the output stays a list of objects).
