@@ -1,11 +1,12 @@
-"""A run that reads its frames once up front (``measure --overlay``, ``calibrate --overlay``,
+"""A run that holds its frames' contents (``measure --overlay``, ``calibrate --overlay``,
 ``demo``) refuses what a run without ``--overlay`` refuses before reading a frame, first: the
-manifest's sweep in bar, an unusable ``--model``, and ``measure``'s ``--reference`` before the
-frames. Reading every frame first let a damaged frame hide those errors (and each was reported
-only after all the frames were read)."""
+manifest's sweep in bar, an unusable ``--model``, a boundary offset measured for another model,
+and ``measure``'s ``--reference`` before the frames. Reading every frame first let a damaged
+frame hide those errors (and each was reported only after all the frames were read)."""
 
 from __future__ import annotations
 
+import json
 from pathlib import Path
 
 import pytest
@@ -82,3 +83,18 @@ def test_measure_refuses_a_damaged_reference_before_a_damaged_frame(
     argv += ["--overlay", str(tmp_path / "ov")] if overlay else []
     err = _first_error(argv, capsys)
     assert f"{s / NAMES[0]}: not a JPEG file" in err, err
+
+
+@pytest.mark.parametrize("overlay", [False, True])
+def test_calibrate_refuses_a_stale_boundary_offset_before_a_damaged_frame(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str], overlay: bool
+) -> None:
+    s = copy_session(tmp_path, NAMES)
+    (s / NAMES[2]).write_bytes(DAMAGED)
+    rig = json.loads((s / "rig.json").read_text())
+    stale = {"boundary_offset_mm": 0.2, "boundary_offset_model_sha256": "a" * 64}
+    (s / "rig.json").write_text(json.dumps(rig | stale))
+    argv = ["calibrate", str(s / "manifest.csv"), "--out", str(tmp_path / "cal")]
+    argv += ["--overlay", str(tmp_path / "ov")] if overlay else []
+    err = _first_error(argv, capsys)
+    assert f"{s / 'rig.json'}: its boundary offset was measured for the model" in err, err

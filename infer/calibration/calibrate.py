@@ -34,7 +34,7 @@ from contactcal.infer.calibration.steps import (
 )
 from contactcal.infer.calibration.table import format_table
 from contactcal.infer.files.atomic import OutputSet, run_outputs
-from contactcal.infer.image.read import ImageFile, sources_of
+from contactcal.infer.image.read import ImageFile
 from contactcal.infer.pipeline.manifest import (
     Frame,
     Session,
@@ -149,8 +149,8 @@ def calibrate_session(
         contents: the frames' contents the caller holds (``demo``'s for both methods and the
             montage, ``calibrate --overlay``'s for the outlines and the drawing too): each
             frame not in it yet is read into it once, after the manifest's and the method's
-            checks (:func:`~contactcal.infer.image.read.sources_of`), and measured and
-            recorded as read; None: each frame read here, when it is measured.
+            checks (:func:`~contactcal.infer.pipeline.measure.measure_files`), and measured
+            and recorded as read; None: each frame read here, when it is measured.
 
     Returns:
         The :class:`CalibrationReport` (table, measurements, curve, written files).
@@ -169,8 +169,7 @@ def calibrate_session(
     check_sweep_unit(manifest, session.frames)
     frames, files = session.frames, [f.file for f in session.frames]
     method = measure.method(method_name)
-    sources = sources_of(files, contents)
-    measured = measure.measure(sources, method, sources[0], digest=True)
+    measured = measure.measure(files, method, files[0], digest=True, contents=contents)
     points = _points(session.folder, frames, measured, measure.scale)
     where = Path(manifest_as if manifest_as is not None else manifest)  # not a staging path
     results, checks = session_points(where, points, options.session_rule, method.name)

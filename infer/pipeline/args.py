@@ -266,11 +266,11 @@ def run_inputs(args: argparse.Namespace) -> list[Path]:
 def overlay_contents(args: argparse.Namespace) -> dict[Path, ImageFile] | None:
     """With ``--overlay``: the frames' contents the run holds, empty until its measurement reads
     each frame (and the reference) into it once
-    (:func:`~contactcal.infer.image.read.sources_of`), after the checks a run without
-    ``--overlay`` makes before reading a frame (the manifest's, the model's; the reference
-    first); every method's outlines and the drawing then take that content (a frame replaced
-    during the run is taken as it was read). Without it None: each frame is read when it is
-    measured, none held."""
+    (:func:`~contactcal.infer.pipeline.measure.measure_files`), after the checks a run without
+    ``--overlay`` makes before reading a frame (the manifest's, the model's, the boundary
+    offset's; the reference first); every method's outlines and the drawing then take that
+    content (a frame replaced during the run is taken as it was read). Without it None: each
+    frame is read when it is measured, none held."""
     return None if args.overlay is None else {}
 
 
