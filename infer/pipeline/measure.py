@@ -218,12 +218,18 @@ def measure_files(
     return out
 
 
-def same_file(path: Path, reference: Path) -> str | None:
+def same_file(
+    path: Path, reference: Path, digests: tuple[str | None, str | None] = (None, None)
+) -> str | None:
     """How ``path`` is the ``reference`` file: ``"path"`` (the same file, also through another
-    name or a link), ``"bytes"`` (a byte-identical copy), or None (another file)."""
+    name or a link), ``"bytes"`` (a byte-identical copy: by the sha256 ``digests`` of the two
+    contents as measured where both are known, the files not read again; else by comparing
+    the files), or None (another file)."""
     try:
         if os.path.samefile(path, reference):  # one file, under any name or link
             return "path"
+        if None not in digests:
+            return "bytes" if digests[0] == digests[1] else None
         return "bytes" if filecmp.cmp(path, reference, shallow=False) else None
     except OSError:
         return None
@@ -250,7 +256,7 @@ def note_self_reference(
     for m in measured:
         how = None
         if reference is not None and m.result.note.startswith(UNCHANGED_NOTE):
-            how = same_file(m.file, reference)
+            how = same_file(m.file, reference, (m.sha256, m.reference_sha256))
         if how is not None:
             said = SELF_REFERENCE_NOTE.format(how=how)
             m = replace(m, result=replace(m.result, note=f"{m.result.note}; {said}"))
