@@ -253,3 +253,21 @@ def test_mm_per_px_reads_the_manifest_once(
     assert len(got["manifest.csv"]) == 1
     record = json.loads((out / f"{command[:-1]}ion.json").read_text(encoding="utf-8"))
     assert record["inputs"]["manifest"]["sha256"] == _sha(got["manifest.csv"][0])
+
+
+def test_measure_overlay_tells_a_copy_of_the_reference_from_the_contents_read(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """``measure --overlay --reference X COPY``: the note that COPY is the reference's bytes
+    (the change gate cannot show contact there) is of the contents measured, so each file is
+    still read once (both were read again to compare them)."""
+    s = copy_session(tmp_path, ("p12.0kpa.jpg",))  # in contact: only the gate says no contact
+    shutil.copy(s / "p12.0kpa.jpg", s / "copy.jpg")
+    argv = ["measure", str(s / "copy.jpg"), "--reference", str(s / "p12.0kpa.jpg")]
+    argv += ["--overlay", str(tmp_path / "ov"), "--out", str(tmp_path / "r.json")]
+    with _counting() as opened:
+        assert main(argv) == 0
+    assert (opened["copy.jpg"], opened["p12.0kpa.jpg"]) == (1, 1), opened
+    assert f"warning: {s / 'copy.jpg'}: this file is the reference frame itself (same bytes)" in (
+        capsys.readouterr().err
+    )

@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 import os
-from collections.abc import Mapping, Sequence
+from collections.abc import Sequence
 from dataclasses import asdict, dataclass, field, replace
 from pathlib import Path
 from typing import Any
@@ -34,7 +34,7 @@ from contactcal.infer.calibration.steps import (
 )
 from contactcal.infer.calibration.table import format_table
 from contactcal.infer.files.atomic import OutputSet, run_outputs
-from contactcal.infer.image.read import ImageFile, sources_of
+from contactcal.infer.image.read import ImageFile
 from contactcal.infer.pipeline.manifest import (
     Frame,
     Session,
@@ -120,7 +120,7 @@ def calibrate_session(
     outputs: OutputSet | None = None,
     manifest_as: str | os.PathLike[str] | None = None,
     session: Session | None = None,
-    contents: Mapping[Path, ImageFile] | None = None,
+    contents: dict[Path, ImageFile] | None = None,
 ) -> CalibrationReport:
     """Calibrate the session listed in ``manifest`` and write its outputs into ``out_dir``.
 
@@ -146,10 +146,11 @@ def calibrate_session(
         session: ``manifest`` as the caller read it with ``options.step_tolerance_kpa``
             (:func:`~contactcal.infer.pipeline.manifest.read_session`; the command shares its
             one read with its rig note), not read again; None: read here.
-        contents: each frame's content as the caller read it (``demo``'s one read for both
-            methods, ``calibrate --overlay``'s for the outlines and the drawing too:
-            :func:`~contactcal.infer.image.read.read_contents`), measured and recorded, not
-            read again; None: each frame read here, when it is measured.
+        contents: the frames' contents the caller holds (``demo``'s for both methods and the
+            montage, ``calibrate --overlay``'s for the outlines and the drawing too): each
+            frame not in it yet is read into it once, after the manifest's and the method's
+            checks (:func:`~contactcal.infer.pipeline.measure.measure_files`), and measured
+            and recorded as read; None: each frame read here, when it is measured.
 
     Returns:
         The :class:`CalibrationReport` (table, measurements, curve, written files).
@@ -168,8 +169,7 @@ def calibrate_session(
     check_sweep_unit(manifest, session.frames)
     frames, files = session.frames, [f.file for f in session.frames]
     method = measure.method(method_name)
-    sources = sources_of(files, contents)
-    measured = measure.measure(sources, method, sources[0], digest=True)
+    measured = measure.measure(files, method, files[0], digest=True, contents=contents)
     points = _points(session.folder, frames, measured, measure.scale)
     where = Path(manifest_as if manifest_as is not None else manifest)  # not a staging path
     results, checks = session_points(where, points, options.session_rule, method.name)

@@ -170,7 +170,7 @@ def _write_outputs(
     written: list[Path] = []
     named = {"--out": args.out, "--overlay": args.overlay}
     with run_outputs(run_inputs(args), options=named) as outs:
-        read = overlay_contents(args, [f.file for f in session.frames])  # None: no --overlay
+        read = overlay_contents(args)  # None: no --overlay; filled as the frames are measured
         rep = calibrate_session(
             args.manifest,
             args.out,

@@ -16,7 +16,7 @@ maximum exceeds :data:`LOW_BITS_MAX`; otherwise it is an error.
 from __future__ import annotations
 
 import os
-from collections.abc import Iterable, Mapping, Sequence
+from collections.abc import Iterable, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -255,13 +255,19 @@ def read_contents(files: Iterable[Path]) -> dict[Path, ImageFile]:
     return {p: ImageFile.read(p) for p in dict.fromkeys(files)}
 
 
-def sources_of(
-    files: Sequence[Path], contents: Mapping[Path, ImageFile] | None
-) -> list[ImageSource]:
-    """``files`` as a run measures them: their contents as read already (``contents``, of
-    :func:`read_contents`: every step then uses the same content), or with None the paths
-    (each file read when it is measured, none held)."""
-    return list(files) if contents is None else [contents[p] for p in files]
+def sources_of(files: Sequence[Path], contents: dict[Path, ImageFile] | None) -> list[ImageSource]:
+    """``files`` as a run measures them: with ``contents`` (the frames a run holds to use their
+    content for more than one step) their contents, each file not in ``contents`` yet read into
+    it now (:func:`read_contents`: every later step takes the content read), or with None the
+    paths (each file read when it is measured, none held).
+
+    Raises:
+        ImageError: a file read here unreadable (as :func:`read_file_bytes`).
+    """
+    if contents is None:
+        return list(files)
+    contents.update(read_contents(p for p in files if p not in contents))
+    return [contents[p] for p in files]
 
 
 def source_content(source: ImageSource) -> ImageFile:

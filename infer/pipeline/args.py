@@ -10,7 +10,7 @@ from typing import TYPE_CHECKING, Any, NamedTuple
 from contactcal.infer.methods.registry import METHODS
 
 if TYPE_CHECKING:
-    from collections.abc import Iterable, Sequence
+    from collections.abc import Sequence
 
     from contactcal.infer.image.read import ImageFile, ImageSource
     from contactcal.infer.pipeline.boundary import BoundaryOffset
@@ -263,19 +263,15 @@ def run_inputs(args: argparse.Namespace) -> list[Path]:
     return [p for p in (getattr(args, n, None) for n in names) if p is not None]
 
 
-def overlay_contents(
-    args: argparse.Namespace, files: Iterable[Path | None]
-) -> dict[Path, ImageFile] | None:
-    """With ``--overlay``: the content of each of ``files`` (the frames and the reference; None:
-    no reference), each file read once (:func:`~contactcal.infer.image.read.read_contents`),
-    for the run's measurement, every method's outlines and the drawing, so that all are of
-    one content (a frame replaced during the run is taken as it was read). Without it None:
-    each frame is read when it is measured, none held."""
-    from contactcal.infer.image.read import read_contents
-
-    if args.overlay is None:
-        return None
-    return read_contents(p for p in files if p is not None)
+def overlay_contents(args: argparse.Namespace) -> dict[Path, ImageFile] | None:
+    """With ``--overlay``: the frames' contents the run holds, empty until its measurement reads
+    each frame (and the reference) into it once
+    (:func:`~contactcal.infer.pipeline.measure.measure_files`), after the checks a run without
+    ``--overlay`` makes before reading a frame (the manifest's, the model's, the boundary
+    offset's; the reference first); every method's outlines and the drawing then take that
+    content (a frame replaced during the run is taken as it was read). Without it None: each
+    frame is read when it is measured, none held."""
+    return None if args.overlay is None else {}
 
 
 def overlay_runs(

@@ -86,10 +86,9 @@ def _cmd_measure(args: argparse.Namespace) -> int:
         json_path = None if to_stdout else _stage_results(outs, args.out)  # before the work
         options = measure_options(args, read_rig(args))
         method = options.method(args.method)
-        read = overlay_contents(args, [*args.images, args.reference])  # None: no --overlay
-        images = sources_of(args.images, read)
-        reference = None if args.reference is None else sources_of([args.reference], read)[0]
-        measured = options.measure(images, method, reference, digest=read is not None)
+        read = overlay_contents(args)  # None: no --overlay; filled as the frames are measured
+        ref = args.reference
+        measured = options.measure(args.images, method, ref, read is not None, read)
         measured, warnings = note_self_reference(measured, args.reference)
         # device_id: the display measured, per object (the output stays a list of objects).
         rows = [{**m.to_json(method.name), "device_id": args.device_id} for m in measured]
@@ -98,6 +97,8 @@ def _cmd_measure(args: argparse.Namespace) -> int:
             write_synced(json_path, text)
         written: list[Path] = []
         if read is not None:
+            images = sources_of(args.images, read)  # the contents measured, not read again
+            reference = None if ref is None else read[ref]
             runs = overlay_runs(args, options, measured, images, reference)
             bits = args.bit_depth
             written = write_overlays(runs, read, args.overlay, outputs=outs, bit_depth=bits)

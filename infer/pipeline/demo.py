@@ -17,7 +17,7 @@ from contactcal.infer.calibration.calibrate import (
 from contactcal.infer.calibration.provenance import Provenance
 from contactcal.infer.calibration.record import CALIBRATION_FILES
 from contactcal.infer.files.atomic import OutputSet, run_outputs, write_synced
-from contactcal.infer.image.read import read_contents
+from contactcal.infer.image.read import ImageFile
 from contactcal.infer.image.write import write_image
 from contactcal.infer.methods.registry import METHODS
 from contactcal.infer.pipeline.args import NO_SCALE_NOTE
@@ -92,7 +92,7 @@ def run_demo(
     options = options if options is not None else SessionOptions()
     session = read_session(manifest, options.step_tolerance_kpa)
     frames = session.frames
-    read = read_contents(f.file for f in frames)  # for both methods and the montage
+    read: dict[Path, ImageFile] = {}  # filled by the first method's read: both, the montage
     recorded = Provenance(argv=None if argv is None else list(argv))
     reports: dict[str, CalibrationReport] = {}
     lines = [f"session: {manifest}"]

@@ -15,7 +15,13 @@ from typing import Any
 
 import numpy as np
 
-from contactcal.infer.image.read import ImageSource, source_content, source_path
+from contactcal.infer.image.read import (
+    ImageFile,
+    ImageSource,
+    source_content,
+    source_path,
+    sources_of,
+)
 from contactcal.infer.methods.base import UNCHANGED_NOTE, AreaResult, Method
 from contactcal.infer.pipeline.boundary import BoundaryOffset, BoundaryOffsetError, apply_offset
 from contactcal.infer.pipeline.frame_check import (
@@ -146,6 +152,7 @@ def measure_files(
     bit_depth: int | None = None,
     boundary: BoundaryOffset | None = None,
     digest: bool = False,
+    contents: dict[Path, ImageFile] | None = None,
 ) -> list[Measured]:
     """Measure each image file with ``method``.
 
@@ -170,6 +177,10 @@ def measure_files(
             not to another method's.
         digest: take each file's sha256 (:attr:`Measured.sha256`, ``reference_sha256``) from
             the content read and measured, for a record of the inputs (~1 ms per MB).
+        contents: the contents the run holds, to use them for more than this measurement
+            (None: none): the reference and then each of ``files`` not in it yet are read into
+            it (:func:`~contactcal.infer.image.read.sources_of`) after the boundary offset's
+            check, before the method starts, and measured from it.
 
     Returns:
         One :class:`Measured` per file, in order.
@@ -180,6 +191,9 @@ def measure_files(
         BoundaryOffsetError: an offset measured for another model, or without a scale.
     """
     active = offset_for(method, boundary, scale)
+    if contents is not None:  # read now: after the checks a run that holds none makes first
+        reference = None if reference is None else sources_of([source_path(reference)], contents)[0]
+        files = sources_of([source_path(f) for f in files], contents)
     images = [source_path(f) for f in files]
     k, ref = _start(method, files, reference, bit_depth, digest)
     out: list[Measured] = []
@@ -204,12 +218,18 @@ def measure_files(
     return out
 
 
-def same_file(path: Path, reference: Path) -> str | None:
+def same_file(
+    path: Path, reference: Path, digests: tuple[str | None, str | None] = (None, None)
+) -> str | None:
     """How ``path`` is the ``reference`` file: ``"path"`` (the same file, also through another
-    name or a link), ``"bytes"`` (a byte-identical copy), or None (another file)."""
+    name or a link), ``"bytes"`` (a byte-identical copy: by the sha256 ``digests`` of the two
+    contents as measured where both are known, the files not read again; else by comparing
+    the files), or None (another file)."""
     try:
         if os.path.samefile(path, reference):  # one file, under any name or link
             return "path"
+        if None not in digests:
+            return "bytes" if digests[0] == digests[1] else None
         return "bytes" if filecmp.cmp(path, reference, shallow=False) else None
     except OSError:
         return None
@@ -236,7 +256,7 @@ def note_self_reference(
     for m in measured:
         how = None
         if reference is not None and m.result.note.startswith(UNCHANGED_NOTE):
-            how = same_file(m.file, reference)
+            how = same_file(m.file, reference, (m.sha256, m.reference_sha256))
         if how is not None:
             said = SELF_REFERENCE_NOTE.format(how=how)
             m = replace(m, result=replace(m.result, note=f"{m.result.note}; {said}"))

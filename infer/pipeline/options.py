@@ -14,7 +14,9 @@ from dataclasses import dataclass
 from typing import TYPE_CHECKING
 
 if TYPE_CHECKING:
-    from contactcal.infer.image.read import ImageSource
+    from pathlib import Path
+
+    from contactcal.infer.image.read import ImageFile, ImageSource
     from contactcal.infer.methods.base import Method
     from contactcal.infer.pipeline.boundary import BoundaryOffset
     from contactcal.infer.pipeline.measure import Measured
@@ -74,11 +76,13 @@ class MeasureOptions:
         method: Method,
         reference: ImageSource | None,
         digest: bool = False,
+        contents: dict[Path, ImageFile] | None = None,
     ) -> list[Measured]:
         """``files`` (paths or contents read already) measured with ``method`` against
         ``reference``, with this run's scale, bit depth and boundary offset
         (:func:`~contactcal.infer.pipeline.measure.measure_files`; ``digest``: with the sha256
-        of each file's content measured, for a record)."""
+        of each file's content measured, for a record; ``contents``: the contents the run
+        holds, each file read into it once)."""
         from contactcal.infer.pipeline.measure import measure_files
 
         return measure_files(
@@ -89,4 +93,5 @@ class MeasureOptions:
             bit_depth=self.bit_depth,
             boundary=self.boundary,
             digest=digest,
+            contents=contents,
         )
