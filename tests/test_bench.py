@@ -463,8 +463,10 @@ def test_cli_names_the_option_of_an_unusable_model(
     argv = ["bench", "--data", str(data), "--out", str(tmp_path / "o")]
     cases = (
         (["--model", str(missing)], f"--model {missing}: no such model file"),
+        (["--model", str(data)], f"--model {data}: is a folder; expected the ONNX model file"),
         (["--model", str(index)], f"--model {index}: not a loadable ONNX model ("),
         (["--variant", f"x={missing}"], f"--variant x={missing}: no such model file"),
+        (["--variant", f"x={data}"], f"--variant x={data}: is a folder; expected the ONNX model"),
         (["--variant", f"x={index}"], f"--variant x={index}: not a loadable ONNX model ("),
         (["--variant", f"unet={index}"], f"--variant unet={index}: label 'unet' is a method's"),
         (["--variant", f"classical={index}"], f"--variant classical={index}: label 'classical'"),

@@ -209,6 +209,17 @@ def test_rig_json_with_a_misspelt_or_repeated_key_is_refused(
     assert str(rig) in err and said in err
 
 
+def test_a_folder_given_as_rig_config_is_named_as_one(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """--rig naming a folder (the rig's folder, not its rig.json) says so, without the OS's
+    errno text."""
+    frame = str(Path(__file__).resolve().parents[1] / "examples" / "session" / "p05.0kpa.jpg")
+    assert main(["measure", "--rig", str(tmp_path), "--out", "-", frame]) == 2
+    err = _one_error(capsys)
+    assert f"{tmp_path}: is a folder; expected the rig config JSON file (rig.json)" in err, err
+
+
 def test_sigterm_is_handled_as_ctrl_c(
     tmp_path: Path, capsys: pytest.CaptureFixture[str], monkeypatch
 ) -> None:

@@ -233,16 +233,18 @@ def test_an_unusable_model_is_named_by_its_option(
     capsys: pytest.CaptureFixture[str],
     monkeypatch: pytest.MonkeyPatch,
 ) -> None:
-    """A missing --model, or one that is not a model, names the option as typed (as bench and
-    every --out refusal do), not only the file."""
+    """A missing --model, a folder, or a file that is not a model, names the option as typed (as
+    bench and every --out refusal do), not only the file."""
     monkeypatch.chdir(tmp_path)
     Path("notes.onnx").write_text("not a model\n")
+    Path("models").mkdir()
     cases = (
         ("missing.onnx", "no such model file"),
+        ("models", "is a folder; expected the ONNX model file"),
         ("notes.onnx", "not a loadable ONNX model ("),
     )
     for model, says in cases:
         assert main([*argv, "--model", model]) == 2
         (err,) = capsys.readouterr().err.strip().splitlines()
         assert err.startswith(f"contactcal: error: --model {model}: {says}"), err
-    assert sorted(p.name for p in tmp_path.iterdir()) == ["notes.onnx"]  # nothing written
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["models", "notes.onnx"]  # nothing written

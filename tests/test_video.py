@@ -267,6 +267,7 @@ def test_bad_inputs_exit_2(
     make_video(tmp_path / "v.avi", kpas)
     make_log(tmp_path / "log.csv", kpas, rng)
     (tmp_path / "bad.avi").write_bytes(b"not a video")
+    (tmp_path / "vids").mkdir()
     lines = (tmp_path / "log.csv").read_text().splitlines()
     (tmp_path / "nocol.csv").write_text("\n".join(["time_s,kpa", *lines[1:]]) + "\n")
     (tmp_path / "unsorted.csv").write_text("\n".join([*lines[:3], lines[2], *lines[3:]]) + "\n")
@@ -278,6 +279,7 @@ def test_bad_inputs_exit_2(
         ("v.avi", "sparse.csv"): "6 samples, 1.00 s apart (median)",
         ("bad.avi", "log.csv"): "bad.avi: cannot be read as a video",
         ("missing.avi", "log.csv"): "missing.avi: video not found",
+        ("vids", "log.csv"): "vids: is a folder; expected a video file",
         ("v.avi", "nocol.csv"): "lacks column(s) ['pressure_kpa']",
         ("v.avi", "unsorted.csv"): "row 3: time_s",
         ("v.avi", "long.csv"): "ends at 5.00 s, before step 5 kPa (unloading",

@@ -44,9 +44,11 @@ def open_video(path: str | os.PathLike[str]) -> tuple[cv2.VideoCapture, float]:
     """Open a video file; its capture and frame rate (frames/s).
 
     Raises:
-        ValueError: missing file, not a video OpenCV can decode, or no usable frame rate.
+        ValueError: missing file, a folder, not a video OpenCV can decode, or no usable frame rate.
     """
     p = Path(path)
+    if p.is_dir():
+        raise ValueError(f"{p}: is a folder; expected a video file, e.g. .avi or .mp4")
     if not p.is_file():
         raise ValueError(f"{p}: video not found (expected a video file, e.g. .avi or .mp4)")
     cap = cv2.VideoCapture(str(p))
