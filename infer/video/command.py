@@ -41,14 +41,16 @@ DEFAULT_CAMERA_FPS = 30.0
 
 
 def _methods(args: argparse.Namespace, measure: MeasureOptions) -> tuple[Method, Method | None]:
-    """The run's method and the preview's U-Net with outlines (None: no preview, which
-    ``--show``, ``--preview`` and ``--camera`` give), built before the recording is opened: a
+    """The run's method and the preview's U-Net with outlines (None: no preview,
+    :func:`~contactcal.infer.video.args.has_preview`), built before the recording is opened: a
     U-Net's model file is read once for both, and a bad ``--model`` refused before any frame.
 
     Raises:
         ValueError: an unusable ``--model`` (``--model MODEL: ...``).
     """
-    previewed = args.show or args.preview or args.camera is not None
+    from contactcal.infer.video.args import has_preview
+
+    previewed = has_preview(args)
     if args.method == "unet" or previewed:
         measure = measure.read_model()
     preview = measure.method("unet", outline=True) if previewed else None
