@@ -35,6 +35,7 @@ from contactcal.infer.calibration.steps import (
 from contactcal.infer.calibration.table import format_table
 from contactcal.infer.files.atomic import OutputSet, run_outputs
 from contactcal.infer.image.read import ImageFile
+from contactcal.infer.methods.base import Method
 from contactcal.infer.pipeline.manifest import (
     Frame,
     Session,
@@ -113,7 +114,7 @@ class SessionOptions:
 def calibrate_session(
     manifest: str | os.PathLike[str],
     out_dir: str | os.PathLike[str],
-    method_name: str,
+    method: str | Method,
     measure: MeasureOptions | None = None,
     options: SessionOptions | None = None,
     provenance: Provenance | None = None,
@@ -133,7 +134,8 @@ def calibrate_session(
         manifest: CSV with columns ``file,pressure_kpa`` and optionally ``phase`` and others
             (:mod:`contactcal.infer.pipeline.manifest`; paths relative to the manifest).
         out_dir: folder for ``calibration.json``, ``calibration.csv`` and ``curve.png``.
-        method_name: ``"unet"`` or ``"classical"``.
+        method: ``"unet"`` or ``"classical"``, built here from ``measure``; or that method
+            built already from ``measure`` (a video run's, loaded before its recording is read).
         measure: how the frames are measured (model, scale in mm/px, boundary offset, bit
             depth, change gate, threads, outlines); None: the defaults (areas in px).
         options: how the measurements become curves; None: the defaults.
@@ -168,7 +170,7 @@ def calibrate_session(
         session = read_session(manifest, options.step_tolerance_kpa)
     check_sweep_unit(manifest, session.frames)
     frames, files = session.frames, [f.file for f in session.frames]
-    method = measure.method(method_name)
+    method = measure.method(method) if isinstance(method, str) else method
     measured = measure.measure(files, method, files[0], digest=True, contents=contents)
     points = _points(session.folder, frames, measured, measure.scale)
     where = Path(manifest_as if manifest_as is not None else manifest)  # not a staging path

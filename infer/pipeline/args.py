@@ -122,9 +122,13 @@ def check_change_gate(args: argparse.Namespace) -> None:
 
     Raises:
         ValueError: ``--no-change-gate`` or ``--model`` with ``--method classical`` and no
-            ``--overlay``.
+            U-Net outline drawn: no ``--overlay``, and no preview of a recording (``--preview``,
+            ``--show``; ``--camera`` always writes one).
     """
-    runs_unet = args.method in ("unet", "both") or getattr(args, "overlay", None) is not None
+    from contactcal.infer.video.args import has_preview
+
+    outlines = getattr(args, "overlay", None) is not None or has_preview(args)
+    runs_unet = args.method in ("unet", "both") or outlines
     unet_only = (("--no-change-gate", args.no_change_gate), ("--model", args.model))
     given = [option for option, value in unet_only if value]
     if given and not runs_unet:

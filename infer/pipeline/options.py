@@ -9,13 +9,13 @@ in one place (:func:`~contactcal.infer.pipeline.args.measure_options`).
 from __future__ import annotations
 
 import os
-from collections.abc import Sequence
-from dataclasses import dataclass
+from collections.abc import Iterator, Sequence
+from contextlib import contextmanager
+from dataclasses import dataclass, field, replace
+from pathlib import Path
 from typing import TYPE_CHECKING
 
 if TYPE_CHECKING:
-    from pathlib import Path
-
     from contactcal.infer.image.read import ImageFile, ImageSource
     from contactcal.infer.methods.base import Method
     from contactcal.infer.pipeline.boundary import BoundaryOffset
@@ -47,6 +47,23 @@ class MeasureOptions:
     threads: int = 1
     #: Keep each frame's outline in input pixels (overlays; costs a full-size warp per frame).
     outline: bool = False
+    #: The U-Net model file's content, read once (:meth:`read_model`): every method built from
+    #: these options loads it, the file not read again; None: each :meth:`method` reads the file.
+    model_content: bytes | None = field(default=None, repr=False)
+
+    def read_model(self) -> MeasureOptions:
+        """These options with the U-Net's model file (:attr:`model`, None: the shipped one)
+        read once into :attr:`model_content`, for a run that builds its methods from one read.
+
+        Raises:
+            ValueError: a missing or unreadable :attr:`model` file, named as the option that
+                gave it (``--model MODEL: ...``); ``ModelError``: an unreadable shipped model.
+        """
+        from contactcal.infer.methods.unet.runner import DEFAULT_MODEL, read_model
+
+        with self._model_refused():
+            content = read_model(DEFAULT_MODEL if self.model is None else Path(self.model))
+        return replace(self, model_content=content)
 
     def method(self, name: str, outline: bool | None = None) -> Method:
         """The method ``name`` (``"unet"`` / ``"classical"``) as these options configure it.
@@ -60,11 +77,26 @@ class MeasureOptions:
                 that gave it (``--model MODEL: ...``); ``ModelError``: an unusable shipped model.
         """
         from contactcal.infer.methods.registry import make_method
-        from contactcal.infer.methods.unet.spec import ModelError, by_model_option
 
         keep = self.outline if outline is None else outline
+        with self._model_refused():
+            return make_method(
+                name,
+                self.model,
+                self.threads,
+                keep,
+                change_gate=self.change_gate,
+                content=self.model_content,
+            )
+
+    @contextmanager
+    def _model_refused(self) -> Iterator[None]:
+        """An unusable :attr:`model` file's ``ModelError`` as the ``ValueError`` naming the
+        option that gave it (``--model MODEL: ...``); the shipped model's as it is."""
+        from contactcal.infer.methods.unet.spec import ModelError, by_model_option
+
         try:
-            return make_method(name, self.model, self.threads, keep, change_gate=self.change_gate)
+            yield
         except ModelError as exc:
             if self.model is None:
                 raise

@@ -47,6 +47,13 @@ def add_video_args(p: argparse.ArgumentParser) -> None:
     g.add_argument("--show", action="store_true", help="show the preview in a window")
 
 
+def has_preview(args: argparse.Namespace) -> bool:
+    """Whether the run draws a recording's preview (the U-Net outline, whatever ``--method``):
+    ``--preview``, ``--show``, or ``--camera`` (always); False for a command without them."""
+    shown = getattr(args, "preview", False) or getattr(args, "show", False)
+    return shown or getattr(args, "camera", None) is not None
+
+
 def is_video_run(args: argparse.Namespace) -> bool:
     """Whether ``calibrate`` reads a video or camera; checks the options' combination.
 

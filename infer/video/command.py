@@ -2,11 +2,12 @@
 
 The frames taken in steady pressure steps are written to ``DIR/frames/`` with a manifest
 (:mod:`.extract`), then the session is calibrated exactly as ``contactcal calibrate MANIFEST``
-(:func:`~contactcal.infer.calibration.calibrate.calibrate_session`). Frames, manifest,
-calibration and preview are one run's outputs: all written, or none; the video and the log are
-inputs, never replaced. An ``--out`` holding an earlier recording's outputs (frames, or a preview
-that a run without ``--preview`` would leave beside its calibration) is refused before any work
-(:func:`check_fresh_recording`).
+(:func:`~contactcal.infer.calibration.calibrate.calibrate_session`), with the method built before
+the recording is opened (:func:`_methods`: a bad ``--model`` is refused before any frame). Frames,
+manifest, calibration and preview are one run's outputs: all written, or none; the video and the
+log are inputs, never replaced. An ``--out`` holding an earlier recording's outputs (frames, or a
+preview that a run without ``--preview`` would leave beside its calibration) is refused before any
+work (:func:`check_fresh_recording`).
 """
 
 from __future__ import annotations
@@ -29,6 +30,7 @@ if TYPE_CHECKING:
 
     from contactcal.infer.calibration.provenance import Provenance
     from contactcal.infer.files.atomic import OutputSet
+    from contactcal.infer.methods.base import Method
     from contactcal.infer.pipeline.options import MeasureOptions
     from contactcal.infer.video.extract import Extractor
     from contactcal.infer.video.live import Preview
@@ -38,19 +40,37 @@ if TYPE_CHECKING:
 DEFAULT_CAMERA_FPS = 30.0
 
 
+def _methods(args: argparse.Namespace, measure: MeasureOptions) -> tuple[Method, Method | None]:
+    """The run's method and the preview's U-Net with outlines (None: no preview,
+    :func:`~contactcal.infer.video.args.has_preview`), built before the recording is opened: a
+    U-Net's model file is read once for both, and a bad ``--model`` refused before any frame.
+
+    Raises:
+        ValueError: an unusable ``--model`` (``--model MODEL: ...``).
+    """
+    from contactcal.infer.video.args import has_preview
+
+    previewed = has_preview(args)
+    if args.method == "unet" or previewed:
+        measure = measure.read_model()
+    preview = measure.method("unet", outline=True) if previewed else None
+    return measure.method(args.method), preview
+
+
 def _preview(
     args: argparse.Namespace,
-    measure: MeasureOptions,
+    method: Method | None,
     outs: OutputSet,
     extractor: Extractor,
     fps: float,
 ) -> Preview | None:
+    """The preview drawn with ``method`` (:func:`_methods`; None: no preview), to a window
+    (``--show``) or staged into ``--out``."""
     from contactcal.infer.video.live import Preview, preview_format
     from contactcal.infer.video.preview_files import PREVIEW_STEM
 
-    if not (args.show or args.preview or args.camera is not None):
+    if method is None:
         return None
-    method = measure.method("unet", outline=True)
     if args.show:
         return Preview(method, extractor, None, "", fps)
     suffix, fourcc = preview_format()
@@ -188,11 +208,12 @@ def calibrate_video(
         default.tolerance_kpa if args.tolerance_kpa is None else args.tolerance_kpa,
         default.settle_s if args.settle_s is None else args.settle_s,
     )
+    method, outlines = _methods(args, measure)  # before the recording is opened
     protect = [args.video, args.pressure_log, args.model, args.rig]
     with run_outputs(protect, options={"--out": args.out}) as outs:
         ex = extract.Extractor(cfg, args.out / "frames", outs.stage)
         frames, feed, stop, fps = _source(args)
-        preview = _preview(args, measure, outs, ex, fps)
+        preview = _preview(args, outlines, outs, ex, fps)
         progress = live.Progress(ex) if args.camera is not None else None
         observers = [o for o in (preview, progress) if o is not None]
         try:
@@ -217,7 +238,7 @@ def calibrate_video(
         rep = calibrate_session(
             manifest,
             args.out,
-            args.method,
+            method,
             measure,
             replace(session_options(args), step_tolerance_kpa=0.0),  # steps found already
             provenance,
