@@ -40,6 +40,7 @@ from contactcal.synth.layout import (
 from contactcal.synth.randomize import SessionParams, sample_session
 from contactcal.synth.run_record import ShardRuns, run_record_path
 from contactcal.synth.session import FrameOutput, RenderConfig, render_session
+from contactcal.synth.shard_lock import shard_lock
 from contactcal.synth.variant import choose_variant
 
 
@@ -214,7 +215,8 @@ def build_dataset(
     recorded in ``config.json``, so a resume or a shard that would render with another variant
     (whose frames differ in their bytes) is refused instead of mixed in. Everything is checked
     before the first render: the folder (:func:`check_out_folder`), the shard, ``config.json``,
-    the finished frames' records and the shard's run record.
+    the finished frames' records, that no other run renders this shard into the folder now
+    (:mod:`~contactcal.synth.shard_lock`) and the shard's run record.
 
     Args:
         out_dir: the dataset folder (new, empty, or a synth dataset to resume).
@@ -226,6 +228,10 @@ def build_dataset(
             (:mod:`~contactcal.synth.run_record`, written before the first render and again
             at the end); None writes none.
 
+    Raises:
+        ValueError: a bad input (one line naming it), or another run renders this shard into
+            ``out_dir`` now.
+
     Returns:
         ``fingers`` (this shard's), ``frames_rendered`` (by this run) and, with ``run_args``,
         ``run_record_written`` (False: every frame was there and the record, whose latest run
@@ -233,15 +239,17 @@ def build_dataset(
     """
     root = Path(out_dir)
     config, fingers = _open_folder(root, config, shard)
-    runs = None
-    if run_args is not None:  # before the renders: a killed run stays on record
-        frames = (shard_frames(root, config, fingers), len(fingers) * len(config.pressures_kpa))
-        runs = ShardRuns.begin(run_record_path(root, shard), run_args, len(fingers), frames)
-    made = _render_fingers(root, config, fingers, workers, shard if progress else None)
-    write_index(root)
-    stats: dict[str, Any] = {"fingers": len(fingers), "frames_rendered": made}
-    if runs is not None:
-        stats["run_record_written"] = runs.end(made, shard_frames(root, config, fingers))
+    with shard_lock(root, shard):  # one run of this shard at a time
+        runs = None
+        if run_args is not None:  # before the renders: a killed run stays on record
+            total = len(fingers) * len(config.pressures_kpa)
+            frames = (shard_frames(root, config, fingers), total)
+            runs = ShardRuns.begin(run_record_path(root, shard), run_args, len(fingers), frames)
+        made = _render_fingers(root, config, fingers, workers, shard if progress else None)
+        write_index(root)
+        stats: dict[str, Any] = {"fingers": len(fingers), "frames_rendered": made}
+        if runs is not None:
+            stats["run_record_written"] = runs.end(made, shard_frames(root, config, fingers))
     return stats
 
 

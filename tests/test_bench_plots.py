@@ -1,8 +1,10 @@
-"""Bench figures: coinciding method curves stay visible and are named in the legend."""
+"""Bench figures: coinciding method curves stay visible and are named in the legend; a
+robustness figure no sampled frame scores says so."""
 
 from __future__ import annotations
 
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 import pytest
@@ -12,8 +14,10 @@ from contactcal.infer.bench.plots import (
     legend_label,
     line_style,
     plot_error_vs_pressure,
+    plot_robustness,
     same_as,
 )
+from contactcal.infer.bench.robustness_text import robustness_text
 from contactcal.infer.bench.scoring import ScoredFrame
 
 pytest.importorskip("matplotlib")
@@ -86,3 +90,69 @@ def test_error_vs_pressure_with_identical_methods(tmp_path: Path, monkeypatch) -
     assert sorted(set(styles)) == [0, 1, 2]
     assert out.read_bytes().startswith(b"\x89PNG")
     assert [p.name for p in tmp_path.iterdir()] == ["evp.png"]  # no temporary left
+
+
+def _robustness(no_contact_frames: int) -> dict[str, Any]:
+    """A robustness result of 3 sampled frames, two perturbations of two levels each, one method
+    (2 frames with contact at >= 5 kPa, ``no_contact_frames`` without contact)."""
+    levels = {"levels": [0, 1], "labels": ["0", "1"], "baseline": 0}
+    perts = [
+        {"name": n, "unit": "u", "reference": "unperturbed", **levels} for n in ("blur", "noise")
+    ]
+    rows = [
+        {
+            "perturbation": p["name"],
+            "level": level,
+            "label": str(level),
+            "in_range": True,
+            "baseline": level == 0,
+            "method": "unet",
+            "median_abs_rel_error_ge5": 0.1,
+            "error_ratio": 1.0,
+            "error_ratio_interval": None,
+            "error_change_points": 0.0,
+            "contact_frames_ge5": 2,
+            "no_contact_frames": no_contact_frames,
+            "no_contact_accuracy": 1.0 if no_contact_frames else None,
+        }
+        for p in perts
+        for level in (0, 1)
+    ]
+    return {"frames": ["a", "b", "c"], "seed": 0, "perturbations": perts, "rows": rows}
+
+
+def _panel_texts(tmp_path: Path, monkeypatch, rob: dict[str, Any], metric: str) -> list[list]:
+    """The texts drawn in each panel of :func:`plot_robustness`'s figure."""
+    from contactcal.infer.bench import plots
+
+    figures: list = []
+    monkeypatch.setattr(plots, "_save", lambda fig, path: figures.append(fig))
+    plot_robustness(tmp_path / "r.png", rob, metric)
+    return [[t.get_text() for t in ax.texts] for ax in figures[0].axes if ax.get_visible()]
+
+
+def test_no_contact_figure_of_a_sample_without_such_frames_says_so(
+    tmp_path: Path, monkeypatch
+) -> None:
+    """No sampled frame without contact: each panel says so in place of its (absent) points."""
+    said = "no frame without contact\nin the sample (3 frames)"
+    assert _panel_texts(tmp_path, monkeypatch, _robustness(0), "no_contact") == [[said]] * 2
+    assert _panel_texts(tmp_path, monkeypatch, _robustness(1), "no_contact") == [[], []]
+    assert _panel_texts(tmp_path, monkeypatch, _robustness(0), "error") == [[], []]
+
+
+def test_error_figure_of_a_sample_without_contact_at_5_kpa_says_so(
+    tmp_path: Path, monkeypatch
+) -> None:
+    rob = _robustness(1)
+    for r in rob["rows"]:
+        r |= {"contact_frames_ge5": 0, "median_abs_rel_error_ge5": None, "error_ratio": None}
+    said = "no frame with true contact at ≥ 5 kPa\nin the sample (3 frames)"
+    assert _panel_texts(tmp_path, monkeypatch, rob, "error") == [[said]] * 2
+
+
+def test_report_says_why_the_no_contact_figure_has_no_points() -> None:
+    text = robustness_text(_robustness(0))
+    assert "none of the 3 sampled frames is without true contact, so the figure has no" in text
+    assert "](robustness_no_contact.png)" in text  # still embedded: its panels say why
+    assert "none of the" not in robustness_text(_robustness(1))

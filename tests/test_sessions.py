@@ -214,3 +214,24 @@ def test_calibrate_warns_of_a_row_out_of_order(
     assert "warning: row 4 (p06.0kpa.jpg, 16 kPa) breaks the rows' order" in said
     record = json.loads((out / "calibration.json").read_text())
     assert record["extra"]["rows_out_of_order"] == ["row 4 (p06.0kpa.jpg, 16 kPa)"]
+
+
+def test_demo_montage_titles_say_the_pass(tmp_path: Path, monkeypatch) -> None:
+    """Each montage tile is titled with its pressure and pass, as ``calibrate --overlay`` titles
+    its overlays; the frame nearest to a montage pressure may be an unloading one."""
+    from contactcal.infer.pipeline import demo
+
+    manifest = _passes_session(tmp_path, (0.0, 2.0, 4.0, 8.0, 12.0), (13.0, 6.0, 1.0))
+    titles: list[str] = []
+    draw = demo.draw_overlay
+
+    def spy(gray: np.ndarray, contours: dict, title: str) -> np.ndarray:
+        titles.append(title)
+        return draw(gray, contours, title)
+
+    monkeypatch.setattr(demo, "draw_overlay", spy)
+    assert main(["demo", "--manifest", str(manifest), "--out", str(tmp_path / "out")]) == 0
+    assert titles == [
+        *(f"{p:g} kPa, loading" for p in (0.0, 2.0, 4.0, 8.0)),
+        "13 kPa, unloading",  # nearest to 14 and 20 kPa: shown once
+    ]

@@ -22,6 +22,7 @@ from contactcal.synth.dataset_folder import check_config_matches, check_out_fold
 from contactcal.synth.layout import frame_name
 from contactcal.synth.run_record import ShardRuns, read_runs
 from contactcal.synth.session import RenderConfig
+from contactcal.synth.shard_lock import lock_path, shard_lock
 from contactcal.synth.variant import choose_variant
 
 CONFIG = DatasetConfig(
@@ -219,3 +220,28 @@ def test_interrupted_runs_stay_on_the_record(
     assert all(r["started"] and r["args"]["argv"] == argv for r in runs)
     rows = (root / "index.csv").read_text().splitlines()[1:]
     assert len(rows) == record["frames_at_end"] == sum(r["frames_rendered"] for r in runs)
+
+
+def test_a_shard_another_run_renders_is_refused(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """A run of a shard that another run holds is refused at once (exit 2, one line naming the
+    folder, the shard and the holder's pid); another shard runs alongside; the lock is removed
+    at the end, and the file a killed run left blocks nothing."""
+    root = _finished(tmp_path / "ds", dataclasses.replace(CONFIG, fingers=2))
+    argv = [*ARGV, "--fingers", "2", "--out", str(root)]
+    with shard_lock(root, (0, 2)):  # as a run of shard 0/2 holds it
+        assert main([*argv, "--shard", "0/2"]) == 2
+        err = capsys.readouterr().err.strip()
+        assert len(err.splitlines()) == 1, err
+        assert f"--out {root}: shard 0/2 is being rendered by another run (pid {os.getpid()}" in err
+        assert not (root / "run_shard0of2.json").exists()  # refused before its record
+        assert main([*argv, "--shard", "1/2"]) == 0
+        assert (root / "run_shard1of2.json").is_file()
+    assert main([*argv, "--shard", "0/2"]) == 0
+    lock = lock_path(root, (0, 2))
+    assert not lock.exists() and not lock_path(root, (1, 2)).exists()
+    lock.write_text("999999999\n")  # a killed run's: nothing holds it
+    assert main([*argv, "--shard", "0/2"]) == 0
+    assert f"{lock} of an ended run (pid 999999999) taken over" in capsys.readouterr().err
+    assert not lock.exists()

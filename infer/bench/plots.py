@@ -18,6 +18,7 @@ from contactcal.infer.bench.scoring import SESSION_SUFFIX, SOFT_SUFFIX, ScoredFr
 from contactcal.infer.files.atomic import atomic_path
 
 if TYPE_CHECKING:
+    from matplotlib.axes import Axes
     from matplotlib.figure import Figure
 
 #: Smallest error drawn on the log axes (an exact area shows here instead of vanishing).
@@ -196,10 +197,23 @@ def plot_pareto(
     _save(fig, path)
 
 
-#: What :func:`plot_robustness` can draw: row key, y label, log scale.
+#: What :func:`plot_robustness` can draw: row key, y label, log scale, the row key counting the
+#: frames that score it, and what a panel says in place of its points when none does.
 ROBUSTNESS_METRICS = {
-    "error": ("median_abs_rel_error_ge5", "median |rel. area error| ≥5 kPa (%)", True),
-    "no_contact": ("no_contact_accuracy", "no-contact accuracy (%)", False),
+    "error": (
+        "median_abs_rel_error_ge5",
+        "median |rel. area error| ≥5 kPa (%)",
+        True,
+        "contact_frames_ge5",
+        "no frame with true contact at ≥ 5 kPa",
+    ),
+    "no_contact": (
+        "no_contact_accuracy",
+        "no-contact accuracy (%)",
+        False,
+        "no_contact_frames",
+        "no frame without contact",
+    ),
 }
 
 
@@ -208,11 +222,14 @@ def plot_robustness(
 ) -> None:
     """One robustness metric vs level, one panel per perturbation, one line per method; the
     dashed line marks the baseline, the grey span the levels the training randomises (where the
-    2× error target applies).
+    2× error target applies). When no sampled frame scores the metric (e.g. a sample without a
+    frame free of contact), each panel says so in place of the points:
+    ``no frame without contact in the sample (N frames)``.
 
     Args:
         path: PNG to write.
-        robustness: ``results.json``'s ``"robustness"`` (``perturbations`` and ``rows``).
+        robustness: ``results.json``'s ``"robustness"`` (``frames``, ``perturbations`` and
+            ``rows``).
         metric: ``"error"``: median |relative area error| at ≥ 5 kPa, %, log y (floored at
             ``FLOOR_PCT``); ``"no_contact"``: share of the frames without true contact reported
             as no contact, %, linear y from 0 to 100 (:data:`ROBUSTNESS_METRICS`).
@@ -222,42 +239,53 @@ def plot_robustness(
     """
     if metric not in ROBUSTNESS_METRICS:
         raise ValueError(f"metric must be one of {sorted(ROBUSTNESS_METRICS)}, got {metric!r}")
-    key, ylabel, log = ROBUSTNESS_METRICS[metric]
     perts = robustness["perturbations"]
     cols = min(5, len(perts))
     nrows = -(-len(perts) // cols)
     fig = _figure(3.2 * cols, 2.9 * nrows + 0.4)
     axes = fig.subplots(nrows, cols, squeeze=False).ravel()
-    methods = sorted({r["method"] for r in robustness["rows"]})
     for ax, p in zip(axes, perts, strict=False):
-        rows = [r for r in robustness["rows"] if r["perturbation"] == p["name"]]
-        for i, method in enumerate(methods):
-            pts = [
-                (p["levels"].index(r["level"]), 100 * r[key])
-                for r in rows
-                if r["method"] == method and r[key] is not None
-            ]
-            if pts:
-                x, y = zip(*pts, strict=True)
-                y = np.maximum(y, FLOOR_PCT) if log else y
-                ax.plot(x, y, color=f"C{i}", marker="o", ms=3, label=method, **line_style(i))
-        ax.axvline(p["levels"].index(p["baseline"]), color="0.5", ls="--", lw=0.8)
-        inside = [p["levels"].index(r["level"]) for r in rows if r["in_range"]]
-        ax.axvspan(min(inside) - 0.3, max(inside) + 0.3, color="0.9", zorder=0)
-        ax.set_xticks(range(len(p["levels"])), p["labels"], fontsize=7)
-        if log:
-            ax.set_yscale("log")
-            _plain_log_ticks(ax)
-        else:
-            ax.set_ylim(-3, 103)
-        ax.set_title(p["name"], fontsize=9)
-        ax.set_xlabel(p["unit"], fontsize=8)
-        ax.grid(alpha=0.3, which="both")
+        _robustness_panel(ax, p, robustness, metric)
     for ax in axes[len(perts) :]:
         ax.set_visible(False)
     for ax in axes[::cols]:
-        ax.set_ylabel(ylabel, fontsize=7)
+        ax.set_ylabel(ROBUSTNESS_METRICS[metric][1], fontsize=7)
     if axes[0].get_legend_handles_labels()[0]:
         axes[0].legend(fontsize=7)
     fig.tight_layout()
     _save(fig, path)
+
+
+def _robustness_panel(
+    ax: Axes, p: Mapping[str, Any], robustness: Mapping[str, Any], metric: str
+) -> None:
+    """Draw perturbation ``p``'s panel of :func:`plot_robustness` into ``ax``."""
+    key, _, log, count, none_text = ROBUSTNESS_METRICS[metric]
+    rows = [r for r in robustness["rows"] if r["perturbation"] == p["name"]]
+    methods = sorted({r["method"] for r in robustness["rows"]})
+    for i, method in enumerate(methods):
+        pts = [
+            (p["levels"].index(r["level"]), 100 * r[key])
+            for r in rows
+            if r["method"] == method and r[key] is not None
+        ]
+        if pts:
+            x, y = zip(*pts, strict=True)
+            y = np.maximum(y, FLOOR_PCT) if log else y
+            ax.plot(x, y, color=f"C{i}", marker="o", ms=3, label=method, **line_style(i))
+    if not any(r[count] for r in rows):
+        n = len(robustness["frames"])
+        text = f"{none_text}\nin the sample ({n} frame{'s' if n != 1 else ''})"
+        ax.text(0.5, 0.5, text, transform=ax.transAxes, ha="center", va="center", fontsize=8)
+    ax.axvline(p["levels"].index(p["baseline"]), color="0.5", ls="--", lw=0.8)
+    inside = [p["levels"].index(r["level"]) for r in rows if r["in_range"]]
+    ax.axvspan(min(inside) - 0.3, max(inside) + 0.3, color="0.9", zorder=0)
+    ax.set_xticks(range(len(p["levels"])), p["labels"], fontsize=7)
+    if log:
+        ax.set_yscale("log")
+        _plain_log_ticks(ax)
+    else:
+        ax.set_ylim(-3, 103)
+    ax.set_title(p["name"], fontsize=9)
+    ax.set_xlabel(p["unit"], fontsize=8)
+    ax.grid(alpha=0.3, which="both")

@@ -109,6 +109,18 @@ def robustness_text(rob: Mapping[str, Any]) -> str:
         + "\n\n"
         + md_table(list(table.values()), cols)
         + "\n\n![robustness](robustness.png)\n\n"
-        + "No-contact accuracy per level (frames without true contact):\n\n"
-        + "![robustness, no-contact accuracy](robustness_no_contact.png)"
+        + _no_contact_intro(first["no_contact_frames"], len(rob["frames"]))
+        + "\n\n![robustness, no-contact accuracy](robustness_no_contact.png)"
+    )
+
+
+def _no_contact_intro(no_contact: int, sampled: int) -> str:
+    """The line above ``robustness_no_contact.png``: what it shows, or that it shows no points
+    because no sampled frame is without true contact."""
+    if no_contact:
+        return "No-contact accuracy per level (frames without true contact):"
+    return (
+        f"No-contact accuracy per level: none of the {sampled} sampled frames is without true "
+        "contact, so the figure has no points (its panels say so); a larger sample "
+        "(`--robustness-frames`) takes frames without contact where the set has them:"
     )

@@ -165,7 +165,7 @@ def _write_outputs(
     from contactcal.infer.calibration.calibrate import calibrate_session
     from contactcal.infer.files.atomic import run_outputs
     from contactcal.infer.image.read import sources_of
-    from contactcal.infer.pipeline.overlay import write_overlays
+    from contactcal.infer.pipeline.overlay import frame_title, write_overlays
 
     written: list[Path] = []
     named = {"--out": args.out, "--overlay": args.overlay}
@@ -185,7 +185,7 @@ def _write_outputs(
         if read is not None:
             frames = sources_of([f.file for f in rep.frames], read)
             runs = overlay_runs(args, measure, rep.measured, frames, frames[0])
-            titles = [f"{f.pressure_kpa:g} kPa, {f.phase}" for f in rep.frames]
+            titles = [frame_title(f) for f in rep.frames]
             written = write_overlays(
                 runs, read, args.overlay, titles, outputs=outs, bit_depth=args.bit_depth
             )

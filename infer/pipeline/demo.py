@@ -25,10 +25,13 @@ from contactcal.infer.pipeline.boundary import rig_boundary
 from contactcal.infer.pipeline.examples import example_manifest
 from contactcal.infer.pipeline.manifest import beside_manifest, read_session
 from contactcal.infer.pipeline.options import MeasureOptions
-from contactcal.infer.pipeline.overlay import draw_overlay, measured_frame, montage
+from contactcal.infer.pipeline.overlay import draw_overlay, frame_title, measured_frame, montage
 from contactcal.infer.pipeline.scale import read_rig_json, rig_scale
 
-#: Pressures shown in the overlay montage (nearest frames), kPa.
+#: Pressures shown in the overlay montage, kPa: per pressure the frame nearest to it over both
+#: passes of a two-pass session (not the loading pass only: an unloading frame nearer to it is
+#: shown, titled as such), on a tie the first frame in the session's order (loading first, then
+#: by pressure and manifest row); a frame nearest to two of them is shown once.
 MONTAGE_KPA = (0.0, 2.0, 4.0, 8.0, 14.0, 20.0)
 #: The files a demo writes into its output folder: each method's calibration, the montage and
 #: the summary.
@@ -67,7 +70,8 @@ def run_demo(
     """Calibrate a session (default: the bundled example) with every method.
 
     Writes ``<out>/<method>/{calibration.json, calibration.csv, curve.png}``, a side-by-side
-    overlay montage ``<out>/overlay_montage.png`` and ``<out>/summary.txt``, all or nothing.
+    overlay montage ``<out>/overlay_montage.png`` (the frames :data:`MONTAGE_KPA` picks, each
+    titled by its pressure and pass) and ``<out>/summary.txt``, all or nothing.
     The manifest and each frame are read once: every method measures the same content, each
     record names its sha256, and the montage is drawn on it (a file replaced during the run
     is measured, recorded and drawn as it was read).
@@ -117,9 +121,8 @@ def run_demo(
         for i in picks:
             at = {name: rep.measured[i] for name, rep in reports.items()}
             contours = {name: m.result.contour for name, m in at.items()}
-            title = f"{frames[i].pressure_kpa:g} kPa"
             gray = measured_frame(read[frames[i].file], at, measure.bit_depth)
-            tiles.append(draw_overlay(gray, contours, title))
+            tiles.append(draw_overlay(gray, contours, frame_title(frames[i])))
         write_image(outs.stage(out / MONTAGE), montage(tiles, columns=3))
         lines.append(f"\noverlays: {out / MONTAGE}")
         if measure.scale is None:  # as calibrate says it

@@ -13,6 +13,7 @@ import numpy as np
 from contactcal.infer.files.atomic import OutputSet, run_outputs
 from contactcal.infer.image.read import ImageFile
 from contactcal.infer.image.write import write_image
+from contactcal.infer.pipeline.manifest_rows import Frame
 from contactcal.infer.pipeline.measure import Measured
 
 #: Outline colours (BGR) per method.
@@ -47,6 +48,12 @@ def draw_overlay(
         at = (5, h - 8 - round(k * 2.2 * y / 2))
         cv2.putText(img, label, at, cv2.FONT_HERSHEY_SIMPLEX, scale, colour, thick)
     return img
+
+
+def frame_title(frame: Frame) -> str:
+    """A manifest frame's overlay title, its pressure and pass: ``"2.01 kPa, loading"`` (the
+    same pressure may be in both passes of a session)."""
+    return f"{frame.pressure_kpa:g} kPa, {frame.phase}"
 
 
 def montage(images: Sequence[np.ndarray], columns: int, width: int = 400) -> np.ndarray:
