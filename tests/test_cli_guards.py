@@ -51,7 +51,9 @@ def test_evaluate_gate_flag_and_labels_folder(
     base = ["evaluate", MANIFEST, "--labels", str(masks)]
     out = tmp_path / "ev"
     assert main([*base, "--method", "classical", "--no-change-gate", "--out", str(out)]) == 2
-    assert "--no-change-gate applies to the U-Net only" in _one_error(capsys)
+    err = _one_error(capsys)
+    assert "--no-change-gate applies to the U-Net only" in err
+    assert err.endswith("drop it, or use --method unet or --method both"), err
     assert main([*base, "--method", "classical", "--out", str(masks)]) == 2
     assert "inside the labels folder" in _one_error(capsys)
     assert sorted(p.name for p in masks.iterdir()) == sorted(
@@ -280,7 +282,15 @@ def test_unet_options_without_a_unet_and_zero_threads_are_one_line(
     model = str(Path(__file__).resolve().parents[1] / "models" / "contact_unet.onnx")
     argv = ["calibrate", MANIFEST, "--method", "classical", "--model", model, "--out", str(out)]
     assert main(argv) == 2
-    assert "--model applies to the U-Net only" in _one_error(capsys)
+    err = _one_error(capsys)
+    assert "--model applies to the U-Net only" in err
+    assert err.endswith("or add --overlay DIR (it draws the U-Net's outline too)"), err
+    video = ["calibrate", "--video", "v.avi", "--pressure-log", "log.csv", *argv[2:]]
+    assert main(video) == 2  # no --overlay with a video: its --preview is offered
+    err = _one_error(capsys)
+    assert err.endswith(
+        "drop it, use --method unet, or add --preview (it draws the U-Net's outline)"
+    )
     assert main(["calibrate", MANIFEST, "--threads", "0", "--out", str(out)]) == 2
     n = os.cpu_count() or 1
     want = f"expected 1-{n} (this machine has {n} CPUs)"

@@ -22,6 +22,7 @@ from test_outputs import EXAMPLE, copy_session
 from contactcal.infer.cli import main
 from contactcal.infer.image import read
 from contactcal.infer.methods.registry import METHODS
+from contactcal.infer.methods.unet.runner import DEFAULT_MODEL
 from contactcal.infer.pipeline import manifest
 
 NAMES = ("p00.0kpa.jpg", "p04.0kpa.jpg", "p08.0kpa.jpg", "p12.0kpa.jpg", "p16.0kpa.jpg")
@@ -102,6 +103,22 @@ def test_calibration_records_the_digests_of_the_content_measured(
     assert {e["file"]: e["sha256"] for e in inputs["frames"]} == {
         name: _sha(got[name][0]) for name in NAMES
     }
+
+
+def test_classical_overlays_record_the_model_drawing_the_unet_outlines(tmp_path: Path) -> None:
+    """``--method classical --overlay DIR --model M``: the overlays draw M's outlines, so the
+    record names M with the sha256 of the content loaded (it was in ``argv`` only), read once."""
+    s = copy_session(tmp_path, NAMES[:3])
+    model = tmp_path / "m.onnx"
+    shutil.copy(DEFAULT_MODEL, model)
+    out, overlays = tmp_path / "out", tmp_path / "ov"
+    argv = ["calibrate", str(s / "manifest.csv"), "--method", "classical", "--model", str(model)]
+    with _counting() as opened:
+        assert main([*argv, "--overlay", str(overlays), "--out", str(out)]) == 0
+    assert opened["m.onnx"] == 1
+    extra = json.loads((out / "calibration.json").read_text(encoding="utf-8"))["extra"]
+    unet = extra["overlay_methods"]["unet"]
+    assert (unet["model"], unet["model_sha256"]) == (str(model.resolve()), _sha(model.read_bytes()))
 
 
 def _labelled_session(tmp_path: Path) -> tuple[Path, Path]:

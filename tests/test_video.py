@@ -9,10 +9,12 @@ frame is pixel-identical to its still.
 from __future__ import annotations
 
 import csv
+import hashlib
 import itertools
 import json
 import re
 from collections.abc import Sequence
+from functools import partial
 from pathlib import Path
 
 import cv2
@@ -117,9 +119,8 @@ def _extract_warned(
     extractor and the warnings printed under the table."""
     with run_outputs([video, log]) as outs:
         ex = Extractor(cfg, out / "frames", outs.stage)
-        cap, fps = open_video(video)
         logs = iter([read_pressure_log(log)])
-        extract_frames(video_frames(cap, fps, video), ex, lambda: next(logs, None))
+        extract_frames(video_frames(open_video(video)), ex, lambda: next(logs, None))
         warnings = check_coverage(ex, None if live else video)
         (out / "frames").mkdir(parents=True, exist_ok=True)
         (out / "frames" / "manifest.csv").write_text(ex.manifest_text())
@@ -369,6 +370,74 @@ def test_video_areas_equal_stills(
         assert p["area_px"] == still_area[round(p["pressure_kpa"])]
     cap = cv2.VideoCapture(str(next(out.glob("preview.*"))))
     assert cap.isOpened() and cap.read()[0]
+
+
+def test_the_record_names_the_video_and_the_log_with_their_sha256(
+    tmp_path: Path, rng: np.random.Generator, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """A lab auditing a calibration can tell which recording and which log produced it: the
+    video's and the pressure log's paths and sha256 are in ``inputs.recording`` (they were only
+    in ``argv``)."""
+    kpas = [0, 4, 8, 12]
+    make_video(tmp_path / "v.avi", kpas, hold_s=0.8)
+    make_log(tmp_path / "log.csv", kpas, rng, hold_s=0.8)
+    argv = ["calibrate", "--video", str(tmp_path / "v.avi"), "--pressure-log"]
+    argv += [str(tmp_path / "log.csv"), "--settle-s", "0.3", "--out", str(tmp_path / "cal")]
+    assert main(argv) == 0, capsys.readouterr().err
+    record = json.loads((tmp_path / "cal" / "calibration.json").read_text())
+
+    def sha(name: str) -> str:
+        return hashlib.sha256((tmp_path / name).read_bytes()).hexdigest()
+
+    assert record["inputs"]["recording"] == {
+        "video": {"file": str((tmp_path / "v.avi").resolve()), "sha256": sha("v.avi")},
+        "camera": None,
+        "pressure_log": {"file": str((tmp_path / "log.csv").resolve()), "sha256": sha("log.csv")},
+    }
+
+
+def test_a_video_changed_after_it_was_hashed_is_refused(tmp_path: Path) -> None:
+    """The recorded sha256 is taken before decoding: a file that changed by the end of its
+    decoding (here: written on) is refused, naming it, rather than recorded with a stale digest."""
+    make_video(tmp_path / "v.avi", [0, 4], hold_s=0.2, ramp_s=0.1)
+    video = open_video(tmp_path / "v.avi")
+    with open(tmp_path / "v.avi", "ab") as fh:
+        fh.write(b"more")
+    with pytest.raises(ValueError, match=r"v\.avi: the video changed while it was read"):
+        list(video_frames(video))
+
+
+def test_a_camera_run_records_its_index_and_the_log_as_parsed(
+    tmp_path: Path,
+    rng: np.random.Generator,
+    monkeypatch: pytest.MonkeyPatch,
+    capsys: pytest.CaptureFixture[str],
+) -> None:
+    """A camera run (fed ``v.avi`` with a fake clock) records the camera's index and the sha256
+    of the log's bytes it parsed: its last read, a row still being written left out."""
+    kpas = [0, 4, 8, 4, 0, 0, 0]
+    make_video(tmp_path / "v.avi", kpas)
+    make_log(tmp_path / "log.csv", kpas, rng)
+    whole = (tmp_path / "log.csv").read_bytes()
+    (tmp_path / "log.csv").write_bytes(whole + b"99.0,0.0")  # a row still being written
+    ticks = itertools.count()
+    fake = partial(capture_frames, clock=lambda: next(ticks) / FPS)
+    camera = lambda i: cv2.VideoCapture(str(tmp_path / "v.avi"))  # noqa: E731
+    monkeypatch.setattr("contactcal.infer.video.live.open_camera", camera)
+    monkeypatch.setattr("contactcal.infer.video.live.capture_frames", fake)
+    argv = ["calibrate", "--camera", "0", "--pressure-log", str(tmp_path / "log.csv")]
+    assert main([*argv, "--settle-s", "0.3", "--out", str(tmp_path / "cal")]) == 0, (
+        capsys.readouterr().err
+    )
+    record = json.loads((tmp_path / "cal" / "calibration.json").read_text())
+    assert record["inputs"]["recording"] == {
+        "video": None,
+        "camera": 0,
+        "pressure_log": {
+            "file": str((tmp_path / "log.csv").resolve()),
+            "sha256": hashlib.sha256(whole).hexdigest(),
+        },
+    }
 
 
 def test_staging_left_by_a_killed_run_is_no_earlier_recording(tmp_path: Path) -> None:

@@ -139,8 +139,9 @@ def calibrate_session(
         measure: how the frames are measured (model, scale in mm/px, boundary offset, bit
             depth, change gate, threads, outlines); None: the defaults (areas in px).
         options: how the measurements become curves; None: the defaults.
-        provenance: the command line and the display's id to record (its ``method_config``
-            and ``inputs`` are filled in here); None: neither.
+        provenance: the command line, the display's id, a video run's recording and the
+            overlays' methods to record (its ``method_config`` and ``inputs`` are filled in
+            here); None: none of them.
         outputs: the enclosing run's outputs to stage into (None: this call is the run). The
             manifest and its frames are protected: no output may replace them.
         manifest_as: the path recorded for the manifest: its final place when the manifest
@@ -181,10 +182,12 @@ def calibrate_session(
     floor = step_outlier_floor(unit, measured[0].width)
     off = frames_off_their_step([s for ph in fit.phases.values() for s in ph.steps], floor)
     recorded = Path(manifest_as if manifest_as is not None else manifest).resolve()
+    given = provenance if provenance is not None else Provenance()
+    digests = [(m.file, m.sha256) for m in measured]
     provenance = replace(
-        provenance if provenance is not None else Provenance(),
+        given,
         method_config=method.describe(),
-        inputs=input_digests(manifest, session, [(m.file, m.sha256) for m in measured], recorded),
+        inputs=input_digests(manifest, session, digests, recorded, given.recording),
     )
     same = identical_frames(provenance.inputs, [f.pressure_kpa for f in frames])
     listed = listed_name(session.folder, frames[0].file)
@@ -197,6 +200,7 @@ def calibrate_session(
         "rows_out_of_order": list(session.out_of_order),
         "frames_off_their_step": [asdict(o) for o in off],
         "rig_note": provenance.rig_note,
+        "overlay_methods": provenance.overlay_methods,
     }
     extra |= checks | {"identical_frames": same}
     model = None if measure.model is None else str(measure.model)

@@ -18,6 +18,7 @@ from contactcal.infer.pipeline.args import (
     measure_options,
     method_args,
     overlay_contents,
+    overlay_methods,
     overlay_runs,
     read_rig,
     run_inputs,
@@ -171,6 +172,12 @@ def _write_outputs(
     named = {"--out": args.out, "--overlay": args.overlay}
     with run_outputs(run_inputs(args), options=named) as outs:
         read = overlay_contents(args)  # None: no --overlay; filled as the frames are measured
+        # the methods drawing only outlines, built (a --model loaded) before a frame is read,
+        # recorded as loaded: extra.overlay_methods
+        drawn = {} if read is None else overlay_methods(args, measure)
+        if read is not None:
+            described = {name: m.describe() for name, m in drawn.items()}
+            provenance = replace(provenance, overlay_methods=described)
         rep = calibrate_session(
             args.manifest,
             args.out,
@@ -184,7 +191,7 @@ def _write_outputs(
         )
         if read is not None:
             frames = sources_of([f.file for f in rep.frames], read)
-            runs = overlay_runs(args, measure, rep.measured, frames, frames[0])
+            runs = overlay_runs(args, measure, rep.measured, frames, frames[0], drawn)
             titles = [frame_title(f) for f in rep.frames]
             written = write_overlays(
                 runs, read, args.overlay, titles, outputs=outs, bit_depth=args.bit_depth

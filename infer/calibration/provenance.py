@@ -69,6 +69,7 @@ def input_digests(
     session: Session,
     frames: Sequence[tuple[Path, str]],
     recorded: Path | None = None,
+    recording: dict[str, Any] | None = None,
 ) -> dict[str, Any]:
     """The record of the manifest and each frame with the sha256 of the content the run read
     (frames named as the manifest lists them:
@@ -82,10 +83,34 @@ def input_digests(
         frames: each frame's path and the sha256 of its content as measured
             (:attr:`~contactcal.infer.pipeline.measure.Measured.sha256`).
         recorded: the manifest's path in the record (None: ``manifest`` itself).
+        recording: the video or camera and pressure log the frames were extracted from
+            (:func:`recording_digests`); None: a manifest's frames (recorded as null).
     """
     return {
         "manifest": {"file": str((recorded or manifest).resolve()), "sha256": session.sha256},
         "frames": [{"file": listed_name(session.folder, f), "sha256": h} for f, h in frames],
+        "recording": recording,
+    }
+
+
+def recording_digests(
+    video: tuple[Path, str] | None, camera: int | None, log: tuple[Path, str]
+) -> dict[str, Any]:
+    """The record of what a ``calibrate --video`` / ``--camera`` run extracted its frames from:
+    ``{"video": {"file", "sha256"} | None, "camera": index | None, "pressure_log": {"file",
+    "sha256"}}``, paths made absolute.
+
+    Args:
+        video: the video file and the sha256 of its content, streamed right before it was
+            decoded (:attr:`~contactcal.infer.video.extract.VideoFile.sha256`); None: a camera.
+        camera: the camera index (``--camera``); None: a video file.
+        log: the pressure log and the sha256 of the bytes the run parsed (a camera run's log,
+            read as it grew: its last read, the one the capture used).
+    """
+    return {
+        "video": None if video is None else {"file": str(video[0].resolve()), "sha256": video[1]},
+        "camera": camera,
+        "pressure_log": {"file": str(log[0].resolve()), "sha256": log[1]},
     }
 
 
@@ -100,6 +125,13 @@ class Provenance:
     #: the note on a rig.json beside the manifest that --rig or --mm-per-px set aside
     #: (:func:`~contactcal.infer.pipeline.rig_note.rig_note`); None: none
     rig_note: str | None = None
+    #: a video or camera run's recording (:func:`recording_digests`), recorded in
+    #: ``inputs.recording``; None: a manifest's frames
+    recording: dict[str, Any] | None = None
+    #: ``--overlay``: the methods that only draw the overlays' outlines, by name, each its
+    #: ``Method.describe()`` (the U-Net's model file and sha256 of the content loaded),
+    #: recorded in ``extra.overlay_methods``; None: no overlays
+    overlay_methods: dict[str, dict[str, Any]] | None = None
 
     def __post_init__(self) -> None:
         check_device_id(self.device_id)

@@ -13,6 +13,7 @@ if TYPE_CHECKING:
     from collections.abc import Sequence
 
     from contactcal.infer.image.read import ImageFile, ImageSource
+    from contactcal.infer.methods.base import Method
     from contactcal.infer.pipeline.boundary import BoundaryOffset
     from contactcal.infer.pipeline.measure import Measured
     from contactcal.infer.pipeline.options import MeasureOptions
@@ -123,7 +124,7 @@ def check_change_gate(args: argparse.Namespace) -> None:
     Raises:
         ValueError: ``--no-change-gate`` or ``--model`` with ``--method classical`` and no
             U-Net outline drawn: no ``--overlay``, and no preview of a recording (``--preview``,
-            ``--show``; ``--camera`` always writes one).
+            ``--show``; ``--camera`` always writes one); the message says what would run it.
     """
     from contactcal.infer.video.args import has_preview
 
@@ -134,8 +135,20 @@ def check_change_gate(args: argparse.Namespace) -> None:
     if given and not runs_unet:
         raise ValueError(
             f"{given[0]} applies to the U-Net only, and --method {args.method} runs none; "
-            "drop it, or use --method unet"
+            f"drop it, {_unet_runs(args)}"
         )
+
+
+def _unet_runs(args: argparse.Namespace) -> str:
+    """How ``args``' command would run the U-Net: ``evaluate``'s ``--method both``, a
+    manifest's or images' ``--overlay`` (it draws the U-Net's outline too), else ``--method
+    unet`` or a video's ``--preview`` (a video run has no ``--overlay``; a ``--camera`` run always
+    writes a preview, so it never gets here)."""
+    if not hasattr(args, "overlay"):  # evaluate
+        return "or use --method unet or --method both"
+    if getattr(args, "video", None) is not None:  # a recording's preview draws it
+        return "use --method unet, or add --preview (it draws the U-Net's outline)"
+    return "use --method unet, or add --overlay DIR (it draws the U-Net's outline too)"
 
 
 class RigConfig(NamedTuple):
@@ -278,24 +291,30 @@ def overlay_contents(args: argparse.Namespace) -> dict[Path, ImageFile] | None:
     return None if args.overlay is None else {}
 
 
+def overlay_methods(args: argparse.Namespace, options: MeasureOptions) -> dict[str, Method]:
+    """The methods that only draw the overlays' outlines (every method but ``--method``), built
+    once: a run records their ``describe()`` (the U-Net's model and its sha256, of the content
+    loaded) and :func:`overlay_runs` measures with them."""
+    return {n: options.method(n, outline=True) for n in METHODS if n != args.method}
+
+
 def overlay_runs(
     args: argparse.Namespace,
     options: MeasureOptions,
     primary: list[Measured],
     files: Sequence[ImageSource],
     reference: ImageSource | None,
+    drawn: dict[str, Method],
 ) -> dict[str, list[Measured]]:
     """Measurements of every method for the overlays (the primary run, measured with its
-    digests, is reused; the others only draw outlines, so they get no scale or boundary
-    offset) of ``files`` against ``reference`` (the contents the primary run measured:
-    :func:`overlay_contents`), each with the digest of the content measured
-    (:func:`~contactcal.infer.pipeline.overlay.measured_frame` checks it)."""
+    digests, is reused; the others, ``drawn`` (:func:`overlay_methods`), only draw outlines, so
+    they get no scale or boundary offset) of ``files`` against ``reference`` (the contents the
+    primary run measured: :func:`overlay_contents`), each with the digest of the content
+    measured (:func:`~contactcal.infer.pipeline.overlay.measured_frame` checks it)."""
     from dataclasses import replace
 
     outlines = replace(options, scale=None, boundary=None)
     runs = {args.method: primary}
-    for name in METHODS:
-        if name not in runs:
-            method = outlines.method(name, outline=True)
-            runs[name] = outlines.measure(files, method, reference, digest=True)
+    for name, method in drawn.items():
+        runs[name] = outlines.measure(files, method, reference, digest=True)
     return runs

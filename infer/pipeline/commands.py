@@ -17,6 +17,7 @@ from contactcal.infer.pipeline.args import (
     measure_options,
     method_args,
     overlay_contents,
+    overlay_methods,
     overlay_runs,
     read_rig,
     run_inputs,
@@ -99,7 +100,8 @@ def _cmd_measure(args: argparse.Namespace) -> int:
         if read is not None:
             images = sources_of(args.images, read)  # the contents measured, not read again
             reference = None if ref is None else read[ref]
-            runs = overlay_runs(args, options, measured, images, reference)
+            drawn = overlay_methods(args, options)
+            runs = overlay_runs(args, options, measured, images, reference, drawn)
             bits = args.bit_depth
             written = write_overlays(runs, read, args.overlay, outputs=outs, bit_depth=bits)
     overlays = [] if args.overlay is None else [args.overlay]

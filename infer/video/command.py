@@ -5,9 +5,12 @@ The frames taken in steady pressure steps are written to ``DIR/frames/`` with a 
 (:func:`~contactcal.infer.calibration.calibrate.calibrate_session`), with the method built before
 the recording is opened (:func:`_methods`: a bad ``--model`` is refused before any frame). Frames,
 manifest, calibration and preview are one run's outputs: all written, or none; the video and the
-log are inputs, never replaced. An ``--out`` holding an earlier recording's outputs (frames, or a
-preview that a run without ``--preview`` would leave beside its calibration) is refused before any
-work (:func:`check_fresh_recording`).
+log are inputs, never replaced, and ``calibration.json`` records them (``inputs.recording``: each
+file's path and sha256, the camera's index): the log's of the bytes parsed, the video's streamed
+right before it is decoded; a video file that changed by the end of its decoding (its size, time
+or inode) is refused, so the recorded sha256 is of the frames decoded. An ``--out`` holding an
+earlier recording's outputs (frames, or a preview that a run without ``--preview`` would leave
+beside its calibration) is refused before any work (:func:`check_fresh_recording`).
 """
 
 from __future__ import annotations
@@ -18,7 +21,7 @@ import sys
 from collections.abc import Callable, Iterator
 from dataclasses import replace
 from pathlib import Path
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Any
 
 from contactcal.infer.video.step_config import StepConfig
 
@@ -32,7 +35,7 @@ if TYPE_CHECKING:
     from contactcal.infer.files.atomic import OutputSet
     from contactcal.infer.methods.base import Method
     from contactcal.infer.pipeline.options import MeasureOptions
-    from contactcal.infer.video.extract import Extractor
+    from contactcal.infer.video.extract import Extractor, VideoFile
     from contactcal.infer.video.live import Preview
     from contactcal.infer.video.log import PressureLog
 
@@ -84,11 +87,13 @@ def _source(
     Callable[[], PressureLog | None],
     Callable[[Extractor, float], bool],
     float,
+    VideoFile | None,
 ]:
-    """``(frames, feed, stop, fps)`` of the recording (``--video`` with its whole pressure
-    log) or the camera (``--camera``, the log polled as it grows; stops back at rest or at
-    ``--duration-s``), for :func:`~contactcal.infer.video.extract.extract_frames`; a
-    recording's log in another unit than kPa is refused before its video is opened."""
+    """``(frames, feed, stop, fps, video)`` of the recording (``--video`` with its whole
+    pressure log; ``video``: the file opened, with its sha256) or the camera (``--camera``, the
+    log polled as it grows; stops back at rest or at ``--duration-s``; ``video`` None), for
+    :func:`~contactcal.infer.video.extract.extract_frames`; a recording's log in another unit
+    than kPa is refused before its video is hashed and opened."""
     import cv2
 
     from contactcal.infer.pipeline.manifest import check_sweep_top
@@ -102,12 +107,13 @@ def _source(
         # after extraction, as a live log's can only be then
         check_sweep_top(args.pressure_log, float(log.pressures_kpa.max()))
         logs = iter([log])
-        cap, fps = extract.open_video(args.video)
+        video = extract.open_video(args.video)
         return (
-            extract.video_frames(cap, fps, args.video),
+            extract.video_frames(video),
             lambda: next(logs, None),
             lambda e, t: False,
-            fps,
+            video.fps,
+            video,
         )
     feed = live.LogPoller(args.pressure_log)
     cap = live.open_camera(args.camera)
@@ -117,7 +123,20 @@ def _source(
     def stop(e: extract.Extractor, t: float) -> bool:
         return live.returned_to_zero(e, t) or (limit is not None and t >= limit)
 
-    return live.capture_frames(cap), feed, stop, fps
+    return live.capture_frames(cap), feed, stop, fps, None
+
+
+def _recording(args: argparse.Namespace, video: VideoFile | None, ex: Extractor) -> dict[str, Any]:
+    """The record of the video (or camera) and the pressure log the frames came from: the log
+    as the extractor last used it (read once for a video; a camera's last read)."""
+    from contactcal.infer.calibration.provenance import recording_digests
+
+    assert ex.log is not None and ex.log.sha256 is not None  # extract_frames fed it the log
+    return recording_digests(
+        None if video is None else (video.path, video.sha256),
+        args.camera,
+        (ex.log.path, ex.log.sha256),
+    )
 
 
 def check_fresh_recording(out: Path) -> None:
@@ -185,7 +204,8 @@ def calibrate_video(
         args: the ``calibrate --video | --camera`` command line.
         measure: how the extracted frames are measured (no outlines:
             :func:`~contactcal.infer.video.args.is_video_run` refused --overlay).
-        provenance: the command line and the display's id, recorded.
+        provenance: the command line and the display's id, recorded (the video's or camera's
+            and the pressure log's record is added here: ``inputs.recording``).
         replaced: the note on an earlier calibration in ``--out`` this run replaces (printed
             last), or None.
 
@@ -212,7 +232,7 @@ def calibrate_video(
     protect = [args.video, args.pressure_log, args.model, args.rig]
     with run_outputs(protect, options={"--out": args.out}) as outs:
         ex = extract.Extractor(cfg, args.out / "frames", outs.stage)
-        frames, feed, stop, fps = _source(args)
+        frames, feed, stop, fps, video = _source(args)
         preview = _preview(args, outlines, outs, ex, fps)
         progress = live.Progress(ex) if args.camera is not None else None
         observers = [o for o in (preview, progress) if o is not None]
@@ -232,6 +252,7 @@ def calibrate_video(
         check_sweep_top(
             args.pressure_log, max((s.pressure_kpa for s in ex.used_steps()), default=0.0)
         )
+        provenance = replace(provenance, recording=_recording(args, video, ex))
         final_manifest = args.out / "frames" / "manifest.csv"
         manifest = outs.stage(final_manifest)
         write_synced(manifest, ex.manifest_text())

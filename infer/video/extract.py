@@ -40,17 +40,54 @@ MANIFEST_COLUMNS = ("file", "pressure_kpa", "phase", "time_s")
 PNG_PARAMS = (cv2.IMWRITE_PNG_COMPRESSION, 1)
 
 
-def open_video(path: str | os.PathLike[str]) -> tuple[cv2.VideoCapture, float]:
-    """Open a video file; its capture and frame rate (frames/s).
+@dataclass(frozen=True)
+class VideoFile:
+    """A video file opened for decoding (:func:`open_video`)."""
+
+    path: Path
+    capture: cv2.VideoCapture
+    fps: float  # frames/s, as the file states it
+    #: sha256 of the file's content, streamed in chunks right before it was opened for decoding
+    #: (recorded in ``calibration.json``)
+    sha256: str
+    #: (device, inode, size, modification time in ns) when it was hashed: :func:`video_frames`
+    #: refuses a file that no longer matches once decoded
+    stamp: tuple[int, int, int, int]
+
+
+def _stamp(p: Path) -> tuple[int, int, int, int]:
+    st = p.stat()
+    return st.st_dev, st.st_ino, st.st_size, st.st_mtime_ns
+
+
+def _changed(p: Path) -> ValueError:
+    return ValueError(
+        f"{p}: the video changed while it was read (replaced, or still being written); "
+        "expected a finished recording (run again once it is complete)"
+    )
+
+
+def open_video(path: str | os.PathLike[str]) -> VideoFile:
+    """Hash a video file (streamed, never held in memory), then open it for decoding.
 
     Raises:
-        ValueError: missing file, a folder, not a video OpenCV can decode, or no usable frame rate.
+        ValueError: missing file, a folder, unreadable, changed while hashed, not a video
+            OpenCV can decode, or no usable frame rate.
     """
+    from contactcal.infer.files.digest import sha256_file
+
     p = Path(path)
     if p.is_dir():
         raise ValueError(f"{p}: is a folder; expected a video file, e.g. .avi or .mp4")
     if not p.is_file():
         raise ValueError(f"{p}: video not found (expected a video file, e.g. .avi or .mp4)")
+    try:
+        stamp = _stamp(p)
+        sha = sha256_file(p)
+    except OSError as exc:
+        raise ValueError(f"{p}: cannot read the video ({exc.strerror})") from None
+    if _stamp(p) != stamp:
+        raise _changed(p)
     cap = cv2.VideoCapture(str(p))
     fps = cap.get(cv2.CAP_PROP_FPS) if cap.isOpened() else 0.0
     if not cap.isOpened():
@@ -58,29 +95,34 @@ def open_video(path: str | os.PathLike[str]) -> tuple[cv2.VideoCapture, float]:
     if not (math.isfinite(fps) and fps > 0):
         cap.release()
         raise ValueError(f"{p}: the video states no frame rate (got {fps}); re-encode it")
-    return cap, fps
+    return VideoFile(p, cap, fps, sha, stamp)
 
 
-def video_frames(
-    capture: cv2.VideoCapture, fps: float, path: Path
-) -> Iterator[tuple[float, np.ndarray]]:
+def video_frames(video: VideoFile) -> Iterator[tuple[float, np.ndarray]]:
     """``(time_s, (H, W, 3) uint8 BGR frame)`` of an opened video file; time = index / fps.
 
     Raises:
-        ValueError: no frame in the video (naming ``path``).
+        ValueError: no frame in the video, or the file changed since it was hashed (its
+            :attr:`VideoFile.sha256` would not be of the frames decoded), naming the file.
     """
     try:
         index = 0
         while True:
-            ok, frame = capture.read()
+            ok, frame = video.capture.read()
             if not ok:
                 break
-            yield index / fps, frame
+            yield index / video.fps, frame
             index += 1
         if index == 0:
-            raise ValueError(f"{path}: the video has no decodable frame")
+            raise ValueError(f"{video.path}: the video has no decodable frame")
+        try:
+            same = _stamp(video.path) == video.stamp
+        except OSError:  # removed
+            same = False
+        if not same:
+            raise _changed(video.path)
     finally:
-        capture.release()
+        video.capture.release()
 
 
 @dataclass(frozen=True)

@@ -26,7 +26,7 @@ from contactcal.infer.image.gray import to_gray_u8
 from contactcal.infer.methods.base import Method
 from contactcal.infer.pipeline.overlay import draw_overlay
 from contactcal.infer.video.extract import Decision, Extractor
-from contactcal.infer.video.log import PressureLog, parse_log, read_log_text
+from contactcal.infer.video.log import PressureLog, read_log_bytes, read_pressure_log
 from contactcal.infer.video.preview_files import PREVIEW_FORMATS
 from contactcal.infer.video.steps import reference_step
 
@@ -81,12 +81,14 @@ def capture_frames(
 
 
 class LogPoller:
-    """The pressure log as the controller writes it: read again whenever the file changed."""
+    """The pressure log as the controller writes it: read again whenever the file changed (the
+    last log returned is the one the capture used, its :attr:`~.log.PressureLog.sha256` of the
+    bytes parsed then)."""
 
     def __init__(self, path: Path) -> None:
         self.path = path
         self._seen: tuple[int, int] | None = None
-        read_log_text(path)  # fails now, clearly, for a wrong path
+        read_log_bytes(path)  # fails now, clearly, for a wrong path
 
     def __call__(self) -> PressureLog | None:
         """The log if it changed since the last call, else None (a partial last line waits)."""
@@ -94,7 +96,7 @@ class LogPoller:
         if (st.st_size, st.st_mtime_ns) == self._seen:
             return None
         self._seen = (st.st_size, st.st_mtime_ns)
-        return parse_log(read_log_text(self.path), self.path, complete=False)
+        return read_pressure_log(self.path, complete=False)
 
 
 def returned_to_zero(extractor: Extractor, _time_s: float) -> bool:

@@ -12,8 +12,9 @@ first frame may be negative); ``pressure_kpa`` the chamber gauge pressure in kPa
 ``-GAUGE_ZERO_NOISE_KPA`` (a gauge reads slightly below 0 at rest) to the manifest's
 :data:`~contactcal.infer.pipeline.manifest.MAX_PRESSURE_KPA`.
 
-A log still being written (live capture) may end in a partial line: :func:`parse_log` with
-``complete=False`` ignores a last line without its newline.
+A log still being written (live capture) may end in a partial line: :func:`read_pressure_log` with
+``complete=False`` ignores a last line without its newline. The log read records the sha256 of
+the bytes it parsed (:attr:`PressureLog.sha256`, recorded in ``calibration.json``).
 """
 
 from __future__ import annotations
@@ -22,11 +23,12 @@ import csv
 import io
 import math
 import os
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from pathlib import Path
 
 import numpy as np
 
+from contactcal.infer.files.digest import sha256_bytes
 from contactcal.infer.pipeline.manifest import GAUGE_ZERO_NOISE_KPA, MAX_PRESSURE_KPA
 
 #: The columns a pressure log must have.
@@ -45,18 +47,20 @@ class PressureLog:
         path: the log file (for messages).
         times_s: ``(N,) float64`` sample times, s since the video's first frame, increasing.
         pressures_kpa: ``(N,) float64`` chamber gauge pressures, kPa.
+        sha256: of the bytes parsed (:func:`read_pressure_log`; None: parsed from text, not a file).
     """
 
     path: Path
     times_s: np.ndarray
     pressures_kpa: np.ndarray
+    sha256: str | None = None
 
 
-def read_log_text(path: str | os.PathLike[str]) -> str:
-    """The log file's text, with one clear error for a missing, unreadable or non-UTF-8 file."""
+def read_log_bytes(path: str | os.PathLike[str]) -> bytes:
+    """The log file's bytes, with one clear error for a missing or unreadable file."""
     p = Path(path)
     try:
-        return p.read_text(encoding="utf-8-sig")
+        return p.read_bytes()
     except FileNotFoundError:
         raise PressureLogError(
             f"{p}: pressure log not found; expected the controller's CSV "
@@ -64,21 +68,33 @@ def read_log_text(path: str | os.PathLike[str]) -> str:
         ) from None
     except IsADirectoryError:
         raise PressureLogError(f"{p}: is a folder; expected the pressure log CSV file") from None
-    except UnicodeDecodeError as exc:
-        raise PressureLogError(
-            f"{p}: not UTF-8 text ({exc.reason} at byte {exc.start}); expected a CSV file"
-        ) from None
     except OSError as exc:
         raise PressureLogError(f"{p}: cannot read the pressure log ({exc.strerror})") from None
 
 
-def read_pressure_log(path: str | os.PathLike[str]) -> PressureLog:
-    """Read and validate a complete pressure log (see the module docstring).
+def read_pressure_log(path: str | os.PathLike[str], complete: bool = True) -> PressureLog:
+    """Read the log file once, parse and validate it (see the module docstring), with the sha256
+    of the bytes parsed.
+
+    Args:
+        path: the log file.
+        complete: False for a log still being written: a last line without newline is left
+            out (neither parsed nor hashed).
 
     Raises:
-        PressureLogError: naming the file and row, saying what was expected.
+        PressureLogError: naming the file (and row), saying what was expected.
     """
-    return parse_log(read_log_text(path), Path(path), complete=True)
+    p = Path(path)
+    data = read_log_bytes(p)
+    if not complete:
+        data = data[: data.rfind(b"\n") + 1]
+    try:
+        text = data.decode("utf-8-sig")
+    except UnicodeDecodeError as exc:
+        raise PressureLogError(
+            f"{p}: not UTF-8 text ({exc.reason} at byte {exc.start}); expected a CSV file"
+        ) from None
+    return replace(parse_log(text, p, complete), sha256=sha256_bytes(data))
 
 
 def _header(where: Path, rows: list[list[str]]) -> dict[str, int]:
@@ -115,7 +131,8 @@ def parse_log(text: str, where: Path, complete: bool = True) -> PressureLog:
     Args:
         text: the CSV text.
         where: the file, named in errors.
-        complete: False for a log still being written: a last line without newline is skipped.
+        complete: False for a log still being written: no samples yet is no error (a reader
+            leaves its partial last line out first: :func:`read_pressure_log`).
 
     Returns:
         The :class:`PressureLog` (possibly with no samples when ``complete`` is False).
@@ -124,8 +141,6 @@ def parse_log(text: str, where: Path, complete: bool = True) -> PressureLog:
         PressureLogError: missing column, non-finite or implausible value, times not strictly
             increasing, or (complete log) no samples; the message names the file and row.
     """
-    if not complete and not text.endswith("\n"):
-        text = text[: text.rfind("\n") + 1]
     rows = [r for r in csv.reader(io.StringIO(text)) if any(c.strip() for c in r)]
     if not rows and not complete:
         return PressureLog(where, np.zeros(0), np.zeros(0))
