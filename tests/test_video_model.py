@@ -93,6 +93,14 @@ def test_the_model_is_read_once_and_only_where_a_unet_runs(
     out = tmp_path / "out"
     assert main(["calibrate", *recording, "--settle-s", "0.3", *options, "--out", str(out)]) == 0
     assert reads == ({} if read is None else {files[read]: 1})
-    config = json.loads((out / "calibration.json").read_text())["method_config"]
+    record = json.loads((out / "calibration.json").read_text())
     if "classical" not in options:  # the U-Net calibrated, from the content read
-        assert config["model_sha256"] == sha256_file(model)
+        assert record["method_config"]["model_sha256"] == sha256_file(model)
+    # the preview's U-Net is recorded as loaded (behind --method classical it was in argv only)
+    drawn = record["extra"]["preview_method"]
+    if "--preview" not in options:
+        assert drawn is None
+    else:
+        assert read is not None
+        shown = (drawn["model"], drawn["model_sha256"])
+        assert shown == (str(files[read].resolve()), sha256_file(files[read]))

@@ -139,9 +139,9 @@ def calibrate_session(
         measure: how the frames are measured (model, scale in mm/px, boundary offset, bit
             depth, change gate, threads, outlines); None: the defaults (areas in px).
         options: how the measurements become curves; None: the defaults.
-        provenance: the command line, the display's id, a video run's recording and the
-            overlays' methods to record (its ``method_config`` and ``inputs`` are filled in
-            here); None: none of them.
+        provenance: the command line, the display's id, a video run's recording and preview
+            method and the overlays' methods to record (its ``method_config`` and ``inputs``
+            are filled in here); None: none of them.
         outputs: the enclosing run's outputs to stage into (None: this call is the run). The
             manifest and its frames are protected: no output may replace them.
         manifest_as: the path recorded for the manifest: its final place when the manifest
@@ -201,6 +201,7 @@ def calibrate_session(
         "frames_off_their_step": [asdict(o) for o in off],
         "rig_note": provenance.rig_note,
         "overlay_methods": provenance.overlay_methods,
+        "preview_method": provenance.preview_method,
     }
     extra |= checks | {"identical_frames": same}
     model = None if measure.model is None else str(measure.model)

@@ -132,6 +132,10 @@ class Provenance:
     #: ``Method.describe()`` (the U-Net's model file and sha256 of the content loaded),
     #: recorded in ``extra.overlay_methods``; None: no overlays
     overlay_methods: dict[str, dict[str, Any]] | None = None
+    #: a video or camera run's preview (``--preview``, ``--show``, ``--camera``): the
+    #: ``Method.describe()`` of the U-Net drawing its outline (its model file and sha256 of the
+    #: content loaded, whatever ``--method``), recorded in ``extra.preview_method``; None: none
+    preview_method: dict[str, Any] | None = None
 
     def __post_init__(self) -> None:
         check_device_id(self.device_id)

@@ -205,7 +205,8 @@ def calibrate_video(
         measure: how the extracted frames are measured (no outlines:
             :func:`~contactcal.infer.video.args.is_video_run` refused --overlay).
         provenance: the command line and the display's id, recorded (the video's or camera's
-            and the pressure log's record is added here: ``inputs.recording``).
+            and the pressure log's record is added here, ``inputs.recording``, and the
+            preview's U-Net, ``extra.preview_method``).
         replaced: the note on an earlier calibration in ``--out`` this run replaces (printed
             last), or None.
 
@@ -229,6 +230,8 @@ def calibrate_video(
         default.settle_s if args.settle_s is None else args.settle_s,
     )
     method, outlines = _methods(args, measure)  # before the recording is opened
+    if outlines is not None:  # the preview's U-Net, recorded as loaded
+        provenance = replace(provenance, preview_method=outlines.describe())
     protect = [args.video, args.pressure_log, args.model, args.rig]
     with run_outputs(protect, options={"--out": args.out}) as outs:
         ex = extract.Extractor(cfg, args.out / "frames", outs.stage)
