@@ -12,6 +12,7 @@ import csv
 import hashlib
 import itertools
 import json
+import os
 import re
 from collections.abc import Sequence
 from functools import partial
@@ -275,9 +276,16 @@ def test_bad_inputs_exit_2(
     make_log(tmp_path / "long.csv", [*kpas, 5], rng)  # a step after the video's end
     ramp = [f"{t:.1f},{t:.1f},{t:.1f}" for t in range(6)]  # 1 Hz, never steady
     (tmp_path / "sparse.csv").write_text("\n".join([lines[0], *ramp]) + "\n")
+    for name in ("null.avi", "null.csv"):  # a device: /dev/zero would be read forever
+        (tmp_path / name).symlink_to(os.devnull)
+    os.mkfifo(tmp_path / "fifo.csv")  # reading it would wait for a writer forever
+    odd = "not a regular file (a device, pipe or socket); expected"
     out = tmp_path / "out"
     cases = {
         ("v.avi", "sparse.csv"): "6 samples, 1.00 s apart (median)",
+        ("null.avi", "log.csv"): f"null.avi: {odd} a video file",
+        ("v.avi", "null.csv"): f"null.csv: {odd} the pressure log",
+        ("v.avi", "fifo.csv"): f"fifo.csv: {odd} the pressure log",
         ("bad.avi", "log.csv"): "bad.avi: cannot be read as a video",
         ("missing.avi", "log.csv"): "missing.avi: video not found",
         ("vids", "log.csv"): "vids: is a folder; expected a video file",

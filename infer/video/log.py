@@ -57,9 +57,14 @@ class PressureLog:
 
 
 def read_log_bytes(path: str | os.PathLike[str]) -> bytes:
-    """The log file's bytes, with one clear error for a missing or unreadable file."""
+    """The log file's bytes, with one clear error for a missing or unreadable file, or one that
+    is not a regular file (a device or pipe, never read: it could be read or waited on forever)."""
     p = Path(path)
     try:
+        if p.exists() and not p.is_dir() and not p.is_file():
+            raise PressureLogError(
+                f"{p}: not a regular file (a device, pipe or socket); expected the pressure log CSV"
+            )
         return p.read_bytes()
     except FileNotFoundError:
         raise PressureLogError(
