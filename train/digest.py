@@ -9,12 +9,14 @@ import os
 from collections.abc import Sequence
 from pathlib import Path
 
+from contactcal.infer.files.regular import read_input_bytes, refuse_special
+
 
 def dataset_digest(data_dirs: Sequence[str | os.PathLike[str]]) -> str:
     """sha256 (hex) of the concatenated index.csv files, in the given order."""
     h = hashlib.sha256()
     for d in data_dirs:
-        h.update((Path(d) / "index.csv").read_bytes())
+        h.update(read_input_bytes(Path(d) / "index.csv", "the dataset's index.csv", ValueError))
     return h.hexdigest()
 
 
@@ -27,6 +29,7 @@ def render_digest(data_dirs: Sequence[str | os.PathLike[str]]) -> str:
     h = hashlib.sha256()
     for d in data_dirs:
         path = Path(d) / "config.json"
+        refuse_special(path, "the dataset's config.json (how the set was rendered)", ValueError)
         h.update(path.read_bytes() if path.is_file() else b"(no config.json)")
         h.update(b"\0")
     return h.hexdigest()

@@ -17,6 +17,7 @@ from collections.abc import Sequence
 from pathlib import Path
 
 from contactcal.infer.bench.dataset import check_dataset_folder
+from contactcal.infer.files.regular import read_input_bytes
 
 #: A ``config.json`` key of ``contactcal procedural`` sets (its frames are drawn supersampled),
 #: absent from ``contactcal synth`` datasets, whose rendering is under ``render``.
@@ -27,7 +28,8 @@ def is_procedural_set(folder: Path) -> bool:
     """Whether ``folder``'s ``config.json`` is a ``contactcal procedural`` set's (an unreadable
     or absent one is not: the readers name whatever else is wrong with the folder)."""
     try:
-        config = json.loads((folder / "config.json").read_text(encoding="utf-8"))
+        raw = read_input_bytes(folder / "config.json", "the set's config.json", ValueError)
+        config = json.loads(raw.decode("utf-8"))
     except (OSError, ValueError):
         return False
     return isinstance(config, dict) and PROCEDURAL_KEY in config and "render" not in config

@@ -6,6 +6,7 @@ from __future__ import annotations
 
 import csv
 import functools
+import io
 import math
 import os
 from collections.abc import Sequence
@@ -15,6 +16,7 @@ from pathlib import Path
 import numpy as np
 
 from contactcal.infer.errors import option_error
+from contactcal.infer.files.regular import read_input_bytes, refuse_special
 
 #: Columns every dataset row must have.
 REQUIRED_COLUMNS = (
@@ -99,6 +101,10 @@ def _parse(folder: Path, line: int, r: dict[str, str | None]) -> IndexRow:
     return row
 
 
+#: What a dataset folder's ``index.csv`` must be.
+_INDEX_EXPECTED = "the dataset's index.csv (a CSV file written by `contactcal synth`)"
+
+
 def check_dataset_folder(folder: str | os.PathLike[str], option: str | None = None) -> None:
     """Refuse a path that is no folder holding an ``index.csv`` (cheap: before any work).
 
@@ -112,6 +118,7 @@ def check_dataset_folder(folder: str | os.PathLike[str], option: str | None = No
             `contactcal synth```.
     """
     root = Path(folder)
+    refuse_special(root / "index.csv", _INDEX_EXPECTED, ValueError)
     if not root.is_dir():
         problem = "is not a folder" if root.exists() else "does not exist"
     elif not (root / "index.csv").is_file():
@@ -135,7 +142,8 @@ def read_index(folder: str | os.PathLike[str]) -> list[IndexRow]:
     check_dataset_folder(root)
     index = root / "index.csv"
     try:
-        with open(index, newline="", encoding="utf-8") as fh:
+        text = read_input_bytes(index, _INDEX_EXPECTED, ValueError).decode("utf-8")
+        with io.StringIO(text, newline="") as fh:
             reader = csv.DictReader(fh)
             missing = [c for c in REQUIRED_COLUMNS if c not in (reader.fieldnames or [])]
             if missing:

@@ -16,6 +16,7 @@ Every label must name a frame of the manifest; frames without a label are return
 from __future__ import annotations
 
 import csv
+import io
 import math
 import os
 from dataclasses import dataclass
@@ -26,6 +27,7 @@ import numpy as np
 from contactcal.infer.evaluate.ellipse import ImageJEllipse, rasterise
 from contactcal.infer.evaluate.errors import LabelError
 from contactcal.infer.evaluate.mask_read import MASK_FIX, read_mask
+from contactcal.infer.files.regular import read_input_bytes
 from contactcal.infer.image.read import SUPPORTED_SUFFIXES
 from contactcal.infer.pipeline.manifest import Frame
 from contactcal.infer.pipeline.manifest_rows import listed_name
@@ -71,7 +73,7 @@ def read_labels(labels: str | os.PathLike[str], frames: list[Frame], folder: Pat
     path = Path(labels)
     if path.is_dir():
         return _mask_labels(path, frames)
-    if not path.is_file():
+    if not path.exists():  # a device or pipe is refused by the CSV reader, unread
         raise LabelError(
             f"{path}: labels not found; expected a folder of <frame stem>.png masks or a CSV "
             f"'{_HEADER}'"
@@ -134,7 +136,8 @@ def _refuse_other_images(folder: Path, frames: list[Frame]) -> None:
 def _read_rows(path: Path) -> tuple[dict[str, int], list[tuple[int, list[str]]]]:
     """Column index by name and the non-blank data rows ``(row number, cells)`` of a CSV."""
     try:
-        with open(path, encoding="utf-8-sig", newline="") as fh:
+        text = read_input_bytes(path, f"the label CSV '{_HEADER}'", LabelError)
+        with io.StringIO(text.decode("utf-8-sig"), newline="") as fh:
             rows = [r for r in csv.reader(fh) if any(c.strip() for c in r)]
     except (OSError, UnicodeDecodeError, csv.Error) as exc:
         raise LabelError(

@@ -39,6 +39,7 @@ from contactcal.infer.evaluate.offset import (
     median_interval,
     rig_total,
 )
+from contactcal.infer.files.regular import read_input_bytes
 from contactcal.infer.pipeline.boundary import MAX_OFFSET_MM, MODEL_KEY, OFFSET_KEY
 
 #: Fewest sessions pooled: the median's 90 % interval needs five values.
@@ -55,7 +56,8 @@ def _load(path: Path) -> dict[str, Any]:
     """An evaluation's ``boundary_offset``, checked; ValueError naming the file otherwise."""
     file = path / "evaluation.json" if path.is_dir() else path
     try:
-        record = json.loads(file.read_text(encoding="utf-8"))
+        raw = read_input_bytes(file, "the evaluation.json of `contactcal evaluate`", ValueError)
+        record = json.loads(raw.decode("utf-8"))
     except (OSError, UnicodeDecodeError, json.JSONDecodeError) as exc:
         raise ValueError(
             f"{file}: not a readable evaluation.json of `contactcal evaluate`"

@@ -12,6 +12,7 @@ import os
 from pathlib import Path
 from typing import BinaryIO
 
+from contactcal.infer.files.regular import open_input
 from contactcal.infer.image.gray import ImageError
 
 #: Start-of-frame markers (baseline, extended, progressive, lossless; Huffman and arithmetic).
@@ -77,7 +78,8 @@ def jpeg_size(path: str | os.PathLike[str], data: bytes | None = None) -> tuple[
     """
     p = Path(path)
     try:
-        with open(p, "rb") if data is None else io.BytesIO(data) as f:
+        f = open_input(p, "a JPEG file", ImageError) if data is None else io.BytesIO(data)
+        with f:
             start = f.read(4)
             if not start.startswith(b"\xff\xd8"):
                 got = next((n for s, n in SIGNATURES.items() if start.startswith(s)), None)

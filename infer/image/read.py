@@ -24,6 +24,7 @@ import cv2
 import numpy as np
 
 from contactcal.infer.files.digest import sha256_bytes
+from contactcal.infer.files.regular import read_input_bytes
 from contactcal.infer.image.complete import jpeg_end, png_end
 from contactcal.infer.image.decode import decode_strict
 from contactcal.infer.image.frame import LOW_BITS_MAX, check_frame_shape
@@ -104,10 +105,8 @@ def read_file_bytes(path: str | os.PathLike[str], other_format_fix: str | None =
         )
     if not p.exists():
         raise ImageError(f"{p}: no such file")
-    if not p.is_file():
-        raise ImageError(f"{p}: not a file")
     try:
-        data = p.read_bytes()
+        data = read_input_bytes(p, "an image file", ImageError)
     except OSError as exc:
         raise ImageError(f"{p}: cannot read ({exc.strerror})") from exc
     if not data:

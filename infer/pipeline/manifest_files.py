@@ -10,6 +10,7 @@ import os
 from pathlib import Path
 
 from contactcal.infer.errors import few
+from contactcal.infer.files.regular import refuse_special
 from contactcal.infer.pipeline.manifest_rows import Frame, ManifestError
 
 #: At most this many rows a manifest's refusal lists (then how many more).
@@ -17,7 +18,8 @@ MAX_LISTED = 5
 
 
 def check_files(where: str, frames: list[Frame], base: Path) -> None:
-    """Reject missing image files and one image on two rows.
+    """Reject a listed file that is a device, pipe or socket (unread), missing image files and
+    one image on two rows.
 
     Args:
         where: the manifest, for the message.
@@ -27,6 +29,8 @@ def check_files(where: str, frames: list[Frame], base: Path) -> None:
     Raises:
         ManifestError: naming the rows and files, and how relative paths are resolved.
     """
+    for f in sorted(frames, key=lambda f: f.row):
+        refuse_special(f.file, f"an image file (row {f.row} of {where})", ManifestError)
     missing = [f for f in sorted(frames, key=lambda f: f.row) if not f.file.is_file()]
     if missing:
         listed = few(

@@ -15,6 +15,7 @@ from pathlib import Path
 
 from contactcal.infer.calibration.phases import LOADING, PHASES, parse_phase
 from contactcal.infer.files.digest import sha256_bytes
+from contactcal.infer.files.regular import read_input_bytes
 
 REQUIRED_COLUMNS: tuple[str, ...] = ("file", "pressure_kpa")
 PHASE_COLUMN = "phase"
@@ -69,7 +70,7 @@ def read_rows(mpath: Path) -> tuple[list[tuple[int, list[str]]], str]:
     """Non-blank CSV rows as ``(line number, cells)``, and the sha256 of the content parsed
     (read once: a record's digest is that of the rows the run used)."""
     try:
-        data = mpath.read_bytes()
+        data = read_input_bytes(mpath, "the manifest CSV file", ManifestError)
         reader = csv.reader(io.StringIO(data.decode("utf-8-sig"), newline=""))
         rows = [(reader.line_num, cells) for cells in reader if any(c.strip() for c in cells)]
     except FileNotFoundError:

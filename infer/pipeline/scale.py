@@ -18,6 +18,8 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
+from contactcal.infer.files.regular import read_input_bytes
+
 #: Plausible mm per pixel at the contact plane. The rig's camera gives ~0.012 mm/px on a
 #: 2592 px frame (a ~30 mm field); 1e-4 mm/px (a 0.26 mm field) is finer than any camera's view
 #: of a fingertip and 10 mm/px (a 16 px frame spans 16 cm) coarser than any frame of one. The
@@ -95,7 +97,8 @@ def read_rig_json(path: str | os.PathLike[str]) -> dict[str, Any]:
     """
     p = Path(path)
     try:
-        text = p.read_text(encoding="utf-8-sig")  # a BOM (Notepad) is fine
+        raw = read_input_bytes(p, "the rig config JSON file (rig.json)", RigConfigError)
+        text = raw.decode("utf-8-sig")  # a BOM (Notepad) is fine
         data = json.loads(text, object_pairs_hook=_pairs_once)
     except FileNotFoundError as exc:
         raise RigConfigError(f"{p}: no such rig config file") from exc

@@ -75,15 +75,12 @@ def open_video(path: str | os.PathLike[str]) -> VideoFile:
             changed while hashed, not a video OpenCV can decode, or no usable frame rate.
     """
     from contactcal.infer.files.digest import sha256_file
+    from contactcal.infer.files.regular import refuse_special
 
     p = Path(path)
     if p.is_dir():
         raise ValueError(f"{p}: is a folder; expected a video file, e.g. .avi or .mp4")
-    if p.exists() and not p.is_file():  # a device or pipe: never hashed nor decoded
-        raise ValueError(
-            f"{p}: not a regular file (a device, pipe or socket); expected a video file, "
-            "e.g. .avi or .mp4"
-        )
+    refuse_special(p, "a video file, e.g. .avi or .mp4", ValueError)  # never hashed nor decoded
     if not p.is_file():
         raise ValueError(f"{p}: video not found (expected a video file, e.g. .avi or .mp4)")
     try:

@@ -29,6 +29,7 @@ from pathlib import Path
 import numpy as np
 
 from contactcal.infer.files.digest import sha256_bytes
+from contactcal.infer.files.regular import read_input_bytes
 from contactcal.infer.pipeline.manifest import GAUGE_ZERO_NOISE_KPA, MAX_PRESSURE_KPA
 
 #: The columns a pressure log must have.
@@ -61,11 +62,7 @@ def read_log_bytes(path: str | os.PathLike[str]) -> bytes:
     is not a regular file (a device or pipe, never read: it could be read or waited on forever)."""
     p = Path(path)
     try:
-        if p.exists() and not p.is_dir() and not p.is_file():
-            raise PressureLogError(
-                f"{p}: not a regular file (a device, pipe or socket); expected the pressure log CSV"
-            )
-        return p.read_bytes()
+        return read_input_bytes(p, "the pressure log CSV", PressureLogError)
     except FileNotFoundError:
         raise PressureLogError(
             f"{p}: pressure log not found; expected the controller's CSV "

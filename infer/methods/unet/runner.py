@@ -18,6 +18,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from contactcal.infer.files.digest import sha256_bytes
+from contactcal.infer.files.regular import read_input_bytes
 from contactcal.infer.methods.unet.postprocess import Segmentation, postprocess
 from contactcal.infer.methods.unet.prepare import (
     SessionReference,
@@ -138,10 +139,10 @@ def read_model(path: Path) -> bytes:
         raise ModelError(
             f"{path}: is a folder; expected the ONNX model file (e.g. contact_unet.onnx)"
         )
-    if not path.is_file():
+    if not path.exists():
         raise ModelError(f"{path}: no such model file")
     try:
-        return path.read_bytes()
+        return read_input_bytes(path, "the ONNX model file (e.g. contact_unet.onnx)", ModelError)
     except OSError as exc:
         raise ModelError(f"{path}: cannot read the model ({exc.strerror})") from None
 

@@ -1,0 +1,86 @@
+"""Reading a user-given input file, refusing one that is not a regular file.
+
+A device (``/dev/zero``), a FIFO or a socket, or a link to one, named where a file is expected,
+would be read until memory runs out or waited on forever; it is refused unread, in one line
+naming it and what was expected. A FIFO is never opened in blocking mode.
+"""
+
+from __future__ import annotations
+
+import errno
+import os
+import stat
+from collections.abc import Callable
+from pathlib import Path
+from typing import BinaryIO
+
+
+def not_regular_message(path: str | os.PathLike[str], expected: str) -> str:
+    """The one line refusing ``path``, which is not a regular file; ``expected``: what the
+    reader expected there, e.g. ``"the manifest CSV"``."""
+    return f"{path}: not a regular file (a device, pipe or socket); expected {expected}"
+
+
+def _special(mode: int) -> bool:
+    """Whether ``mode`` is neither a regular file's nor a folder's."""
+    return not (stat.S_ISREG(mode) or stat.S_ISDIR(mode))
+
+
+def refuse_special(
+    path: str | os.PathLike[str], expected: str, error: Callable[[str], Exception]
+) -> None:
+    """Raise ``error(line)`` when ``path`` (links followed) is a device, pipe or socket; a
+    missing or unstatable path passes (the caller's own open or check reports it).
+
+    Args:
+        path: the input file.
+        expected: what was expected there (:func:`not_regular_message`).
+        error: the caller's exception type, built from the message line.
+    """
+    try:
+        mode = os.stat(path).st_mode
+    except (OSError, ValueError):
+        return
+    if _special(mode):
+        raise error(not_regular_message(path, expected))
+
+
+def open_input(
+    path: str | os.PathLike[str], expected: str, error: Callable[[str], Exception]
+) -> BinaryIO:
+    """A user-given input file opened for binary reading, refusing a device, pipe or socket
+    unread (checked before opening, and on the opened file: opened non-blocking, a FIFO put
+    there in between never blocks).
+
+    Args:
+        path: the input file.
+        expected: what was expected there, e.g. ``"the manifest CSV"``.
+        error: the caller's exception type, built from the message line.
+
+    Raises:
+        error: ``path`` is not a regular file.
+        OSError: as ``open`` raises it (FileNotFoundError, IsADirectoryError, PermissionError,
+            ...), for the caller's own messages.
+    """
+    p = Path(path)
+    refuse_special(p, expected, error)
+    fd = os.open(p, os.O_RDONLY | os.O_NONBLOCK)
+    try:
+        mode = os.fstat(fd).st_mode
+        if stat.S_ISDIR(mode):
+            raise IsADirectoryError(errno.EISDIR, os.strerror(errno.EISDIR), str(p))
+        if _special(mode):
+            raise error(not_regular_message(p, expected))
+    except BaseException:
+        os.close(fd)
+        raise
+    return os.fdopen(fd, "rb")
+
+
+def read_input_bytes(
+    path: str | os.PathLike[str], expected: str, error: Callable[[str], Exception]
+) -> bytes:
+    """The whole content of a user-given input file, read once (:func:`open_input`; raises as
+    it does)."""
+    with open_input(path, expected, error) as fh:
+        return fh.read()
