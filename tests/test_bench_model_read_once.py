@@ -18,6 +18,7 @@ from contactcal.infer.bench.config import BenchConfig
 from contactcal.infer.bench.run import run_bench
 from contactcal.infer.cli import main
 from contactcal.infer.files.digest import sha256_bytes
+from contactcal.infer.methods.unet import runner
 from contactcal.infer.methods.unet.runner import DEFAULT_MODEL
 
 ort = pytest.importorskip("onnxruntime")
@@ -49,7 +50,17 @@ class Watched:
             self.sessions.append(sha256_bytes(content))
             return real_session(model, *args, **kwargs)
 
+        def read_input_then_replace(path: Path, *args: object) -> bytes:
+            content = real_input(path, *args)
+            if path in self.first:
+                self.reads[path] += 1
+                if path != DEFAULT_MODEL:
+                    path.write_bytes(content + DOC_STRING + b"x")
+            return content
+
+        real_input = runner.read_input_bytes  # how read_model reads a model file
         monkeypatch.setattr(Path, "read_bytes", read_then_replace)
+        monkeypatch.setattr(runner, "read_input_bytes", read_input_then_replace)
         monkeypatch.setattr(ort, "InferenceSession", session)
 
     def check(self, results: dict[str, object], names: dict[str, Path]) -> None:

@@ -5,6 +5,7 @@ same path) is neither half loaded nor recorded as the model that ran."""
 from __future__ import annotations
 
 import json
+import os
 import shutil
 from pathlib import Path
 
@@ -43,10 +44,14 @@ def test_a_model_that_cannot_be_read_is_one_model_error(
     model = tmp_path / "model.onnx"
     shutil.copyfile(DEFAULT_MODEL, model)
 
-    def refused(self: Path) -> bytes:
-        raise PermissionError(13, "Permission denied", str(self))
+    real_open = os.open
 
-    monkeypatch.setattr(Path, "read_bytes", refused)
+    def refused(path: str | os.PathLike[str], *args: object, **kwargs: object) -> int:
+        if Path(path) == model:  # as for a file this user may not read (root reads any)
+            raise PermissionError(13, "Permission denied", str(path))
+        return real_open(path, *args, **kwargs)
+
+    monkeypatch.setattr(os, "open", refused)
     with pytest.raises(
         ModelError, match=r"model\.onnx: cannot read the model \(Permission denied\)"
     ):

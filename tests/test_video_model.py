@@ -16,6 +16,7 @@ from test_video import make_log, make_video
 
 from contactcal.infer.cli import main
 from contactcal.infer.files.digest import sha256_file
+from contactcal.infer.methods.unet import runner
 from contactcal.infer.methods.unet.runner import DEFAULT_MODEL
 
 KPAS = [0, 5, 10]
@@ -88,7 +89,15 @@ def test_the_model_is_read_once_and_only_where_a_unet_runs(
             reads[path] += 1
         return real_read(path)
 
+    real_input = runner.read_input_bytes  # how read_model reads a model file
+
+    def counted_input(path: Path, *args: object) -> bytes:
+        if path in files.values():
+            reads[path] += 1
+        return real_input(path, *args)
+
     monkeypatch.setattr(Path, "read_bytes", counted)
+    monkeypatch.setattr(runner, "read_input_bytes", counted_input)
     options = [str(files.get(o, o)) for o in options]
     out = tmp_path / "out"
     assert main(["calibrate", *recording, "--settle-s", "0.3", *options, "--out", str(out)]) == 0
