@@ -22,6 +22,7 @@ from contactcal.infer.calibration.session import SessionFit, fit_session
 from contactcal.infer.calibration.table import format_table
 from contactcal.infer.cli import main
 from contactcal.infer.methods.classical import ClassicalConfig
+from contactcal.infer.pipeline import scale
 
 P = np.arange(0.0, 11.0, 2.0)
 
@@ -329,8 +330,11 @@ def test_calibrate_reads_the_earlier_record_and_the_rig_json_once(
     assert main(argv) == 0
     capsys.readouterr()
     reads: list[Path] = []
-    real = Path.read_text
+    real, real_input = Path.read_text, scale.read_input_bytes  # the record's, the rig.json's
     monkeypatch.setattr(Path, "read_text", lambda p, *a, **k: reads.append(p) or real(p, *a, **k))
+    monkeypatch.setattr(
+        scale, "read_input_bytes", lambda p, *a: reads.append(p) or real_input(p, *a)
+    )
     assert main(argv) == 0
     printed = capsys.readouterr().out
     assert "note: replaced the calibration that" in printed  # from the one read
