@@ -66,3 +66,17 @@ def test_not_regular_input_exit_2(tmp_path: Path, case: str, kind: str) -> None:
     assert res.returncode == 2, res.stderr
     assert res.stderr.count("\n") == 1, res.stderr
     assert f"{bad}: not a regular file (a device, pipe or socket); expected" in res.stderr
+
+
+def test_inputs_are_opened_binary_and_non_blocking_where_the_platform_has_them() -> None:
+    """Windows has no O_NONBLOCK (reading any input raised AttributeError there) and opens in
+    text mode without O_BINARY (CR LF read as LF in a frame's bytes)."""
+    from types import SimpleNamespace
+
+    from contactcal.infer.files.regular import READ_FLAGS, input_flags
+
+    windows = SimpleNamespace(O_RDONLY=0, O_BINARY=0x8000)
+    assert input_flags(windows) == 0x8000
+    posix = SimpleNamespace(O_RDONLY=0, O_NONBLOCK=0x800)
+    assert input_flags(posix) == 0x800
+    assert READ_FLAGS & getattr(os, "O_NONBLOCK", 0) == getattr(os, "O_NONBLOCK", 0)

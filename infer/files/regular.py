@@ -12,7 +12,20 @@ import os
 import stat
 from collections.abc import Callable
 from pathlib import Path
-from typing import BinaryIO
+from typing import Any, BinaryIO
+
+
+def input_flags(platform: Any = os) -> int:
+    """``os.open`` flags of an input: read-only, binary (Windows' C runtime would otherwise open
+    the file in text mode, turning CR LF into LF and stopping at Ctrl-Z) and non-blocking (a FIFO
+    put in place after the type check is not waited on), each where ``platform`` (the ``os``
+    module) defines it: Windows has neither ``O_NONBLOCK`` nor FIFOs, POSIX no ``O_BINARY``."""
+    binary, nonblocking = getattr(platform, "O_BINARY", 0), getattr(platform, "O_NONBLOCK", 0)
+    return platform.O_RDONLY | binary | nonblocking
+
+
+#: :func:`input_flags` of this platform.
+READ_FLAGS = input_flags()
 
 
 def not_regular_message(path: str | os.PathLike[str], expected: str) -> str:
@@ -64,7 +77,7 @@ def open_input(
     """
     p = Path(path)
     refuse_special(p, expected, error)
-    fd = os.open(p, os.O_RDONLY | os.O_NONBLOCK)
+    fd = os.open(p, READ_FLAGS)
     try:
         mode = os.fstat(fd).st_mode
         if stat.S_ISDIR(mode):
