@@ -198,6 +198,7 @@ class ImageFile:
 
     path: Path
     data: bytes = field(repr=False)
+    _sha256: str | None = field(default=None, init=False, repr=False, compare=False)  # memo
 
     @classmethod
     def read(cls, path: str | os.PathLike[str]) -> ImageFile:
@@ -206,8 +207,10 @@ class ImageFile:
         return cls(p, read_file_bytes(p))
 
     def sha256(self) -> str:
-        """The content's sha256, lower-case hex (hashed on each call: ~1 ms per MB)."""
-        return sha256_bytes(self.data)
+        """The content's sha256, lower-case hex (hashed on the first call, ~1 ms per MB)."""
+        if self._sha256 is None:
+            object.__setattr__(self, "_sha256", sha256_bytes(self.data))  # frozen: a memo only
+        return self._sha256
 
     def decode(self, reduce: int = 1, bit_depth: int | None = None) -> np.ndarray:
         """The content in the canonical form, as :func:`load_image` documents it."""
