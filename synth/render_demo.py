@@ -175,7 +175,7 @@ def spp_study(width: int, height: int, spps=(1, 2, 4, 8, 16, 32, 64), n_ref: int
 
 def main(argv: list[str] | None = None) -> None:
     """Command line entry (see module docstring)."""
-    ap = argparse.ArgumentParser(prog="python -m contactcal.synth.render_demo")
+    ap = argparse.ArgumentParser(prog="python -m contactcal.synth.render_demo", allow_abbrev=False)
     ap.add_argument("what", choices=("figures", "bench", "spp"))
     ap.add_argument("--out", type=Path, default=Path("docs"))
     ap.add_argument("--width", type=int, default=648)

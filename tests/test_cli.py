@@ -186,3 +186,34 @@ def test_demo_takes_bit_depth_and_says_which_calibration_it_replaced(
         assert f"note: replaced the calibration that {out / method} held (created " in printed
     # no rig.json beside that manifest: areas in px, said as calibrate says it
     assert "note: no pixel scale (no rig.json beside the manifest): areas are in px" in printed
+
+
+@pytest.mark.parametrize(
+    "argv",
+    [
+        ["measure", "x.png", "--out", "o", "--ref", "r.png"],  # --reference
+        ["calibrate", "m.csv", "--out", "o", "--mm", "0.05"],  # --mm-per-px
+        ["synth", "--fingers", "2", "--out", "o", "--see", "3"],  # a plugin command's --seed
+    ],
+)
+def test_option_prefixes_are_refused(argv: list[str], capsys: pytest.CaptureFixture[str]) -> None:
+    """An abbreviation is not taken for the option it starts: a recorded command line keeps its
+    meaning when an option sharing the prefix is added."""
+    with pytest.raises(SystemExit) as exit_:
+        main(argv)
+    assert exit_.value.code == 2
+    assert f"unrecognized arguments: {argv[-2]} {argv[-1]}" in capsys.readouterr().err
+
+
+def test_module_tools_refuse_option_prefixes(capsys: pytest.CaptureFixture[str]) -> None:
+    """The ``python -m`` tools' parsers take whole option names too."""
+    from contactcal.train import floor, restate
+
+    with pytest.raises(SystemExit) as exit_:
+        floor.main(["m.onnx", "--percentile", "1", "--out", "new.onnx", "--perc", "2"])
+    assert exit_.value.code == 2
+    assert "unrecognized arguments: --perc 2" in capsys.readouterr().err
+    parser = restate.restating_parser("restate", "a restating tool")
+    with pytest.raises(SystemExit):
+        parser.parse_args(["m.onnx", "--data", "d", "--out", "new.onnx", "--dat", "e"])
+    assert "unrecognized arguments: --dat e" in capsys.readouterr().err

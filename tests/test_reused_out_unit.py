@@ -144,7 +144,7 @@ def test_demo_without_a_rig_json_refuses_a_record_in_mm2(
     [
         (["calibrate", "--rig", "rig dir/rig.json"], "--rig 'rig dir/rig.json'"),
         (["calibrate", "--mm-per-px=0.05"], "--mm-per-px=0.05"),
-        (["calibrate", "--mm", "0.05"], "--mm-per-px 0.05"),  # abbreviations argparse took
+        (["calibrate", "--mm", "0.05"], "--mm-per-px 0.05"),  # abbreviations in earlier records
         (["calibrate", "--ri=r.json"], "--rig=r.json"),
         (["calibrate", "--method", "classical"], None),  # no scale option
         (["demo", "--m", "m.csv"], None),  # demo's --manifest: demo has no scale options

@@ -72,6 +72,7 @@ def main(argv: Sequence[str] | None = None) -> int:
     ap = argparse.ArgumentParser(
         prog="python -m contactcal.train.floor",
         description="Set an exported model's dark floor (metadata only).",
+        allow_abbrev=False,
     )
     ap.add_argument("model", help="exported .onnx model")
     ap.add_argument("--percentile", type=float, required=True, help="floor percentile, %%")

@@ -155,7 +155,7 @@ def save_restated(proto: Any, updates: Mapping[str, str], spec: ModelSpec, out: 
 
 def restating_parser(prog: str, description: str) -> argparse.ArgumentParser:
     """The command line every restating tool shares: ``MODEL --data DIR... --out NEW.onnx``."""
-    ap = argparse.ArgumentParser(prog=prog, description=description)
+    ap = argparse.ArgumentParser(prog=prog, description=description, allow_abbrev=False)
     ap.add_argument("model", type=Path, help="exported .onnx model")
     ap.add_argument("--data", type=Path, nargs="+", required=True, help="dataset folder(s)")
     ap.add_argument("--out", type=Path, required=True, help="new .onnx file")

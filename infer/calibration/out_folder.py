@@ -131,7 +131,8 @@ SCALE_OPTIONS = ("--rig", "--mm-per-px")
 
 def _scale_option(arg: str) -> str | None:
     """The scale option (:data:`SCALE_OPTIONS`) that ``arg`` (``--name`` or ``--name=value``)
-    gave, also as an abbreviation argparse accepted (``--mm 0.05``); None: none."""
+    gave, also as an abbreviation (``--mm 0.05``), which argparse accepted before the CLI
+    refused prefixes: records written then still hold them; None: none."""
     name = arg.split("=", 1)[0]
     if not name.startswith("--") or len(name) < 3:
         return None
