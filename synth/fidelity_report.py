@@ -17,7 +17,8 @@ import cv2
 import numpy as np
 
 from contactcal.infer.methods.classical import ClassicalConfig, find_roi, measure_classical
-from contactcal.synth.dataset import DatasetConfig, session_params
+from contactcal.synth.dataset import DatasetConfig
+from contactcal.synth.dataset_finger import session_params
 from contactcal.synth.fidelity import SessionFidelity, measure_session
 from contactcal.synth.session import FrameOutput, RenderConfig, render_session
 

@@ -16,14 +16,8 @@ import pytest
 pytest.importorskip("mitsuba")
 
 from contactcal.infer.cli import main
-from contactcal.synth.dataset import (
-    DatasetConfig,
-    build_dataset,
-    parse_shard,
-    render_finger,
-    shard_fingers,
-    stop_if_orphaned,
-)
+from contactcal.synth.dataset import DatasetConfig, build_dataset, parse_shard, shard_fingers
+from contactcal.synth.dataset_finger import render_finger, stop_if_orphaned
 from contactcal.synth.dataset_folder import check_config_matches
 from contactcal.synth.layout import parse_pressures, parse_size
 from contactcal.synth.session import RenderConfig
@@ -219,7 +213,7 @@ def test_worker_stops_when_its_run_is_gone(tmp_path: Path, monkeypatch: pytest.M
         rendered.append(1)
         yield object()  # a rendered frame, never to be written
 
-    monkeypatch.setattr("contactcal.synth.dataset.render_session", fake_render)
+    monkeypatch.setattr("contactcal.synth.dataset_finger.render_session", fake_render)
     with pytest.raises(SystemExit):
         render_finger(str(tmp_path), CONFIG, 0, parent_pid=os.getppid() + 1)
     assert rendered and not list(tmp_path.rglob("*.png")) and not list(tmp_path.rglob("*.json"))

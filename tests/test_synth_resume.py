@@ -17,7 +17,8 @@ pytest.importorskip("mitsuba")
 
 from contactcal.infer.cli import main
 from contactcal.infer.errors import config_changes
-from contactcal.synth.dataset import DatasetConfig, build_dataset, render_finger
+from contactcal.synth.dataset import DatasetConfig, build_dataset
+from contactcal.synth.dataset_finger import render_finger
 from contactcal.synth.dataset_folder import check_config_matches, check_out_folder
 from contactcal.synth.layout import frame_name
 from contactcal.synth.run_record import ShardRuns, read_runs

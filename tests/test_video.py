@@ -455,7 +455,7 @@ def test_staging_left_by_a_killed_run_is_no_earlier_recording(tmp_path: Path) ->
     import subprocess
     import sys
 
-    from contactcal.infer.video.command import check_fresh_frames
+    from contactcal.infer.video.fresh_out import check_fresh_frames
 
     dead = subprocess.Popen([sys.executable, "-c", "pass"])
     dead.wait()
@@ -496,7 +496,7 @@ def test_a_preview_of_an_earlier_recording_is_refused(
     assert code == 2 and expected in err and err.count("\n") == 1, err
     assert [p.name for p in out.iterdir()] == ["preview.mp4"]
     assert (out / "preview.mp4").read_bytes() == b"earlier"
-    from contactcal.infer.video.command import check_fresh_recording
+    from contactcal.infer.video.fresh_out import check_fresh_recording
 
     (out / "preview.avi").write_bytes(b"earlier")  # both formats: both named
     with pytest.raises(ValueError, match=r"preview\.mp4 and .*preview\.avi: .*those files first"):

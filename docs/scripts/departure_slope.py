@@ -25,20 +25,22 @@ import json
 from dataclasses import asdict, replace
 from pathlib import Path
 
-from contactcal.synth import dataset
-from contactcal.synth.dataset import DatasetConfig, render_finger, write_index
+from contactcal.synth import dataset, dataset_finger
+from contactcal.synth.dataset import DatasetConfig, write_index
+from contactcal.synth.dataset_finger import render_finger
 from contactcal.synth.randomize import SessionParams
 
 
 def with_slope(slope: float) -> None:
-    """Make ``dataset.session_params`` give every session ``slope`` (dz/dr) as its departure."""
-    drawn = dataset.session_params
+    """Make ``dataset_finger.session_params`` give every session ``slope`` (dz/dr) as its
+    departure."""
+    drawn = dataset_finger.session_params
 
     def session_params(config: DatasetConfig, finger: int) -> SessionParams:
         p = drawn(config, finger)
         return replace(p, membrane=replace(p.membrane, departure_slope=slope))
 
-    dataset.session_params = session_params
+    dataset_finger.session_params = session_params
 
 
 def main() -> None:

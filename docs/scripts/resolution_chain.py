@@ -34,7 +34,8 @@ from contactcal.infer.methods.unet.config import PreprocessConfig
 from contactcal.infer.methods.unet.crop import crop_resize
 from contactcal.infer.methods.unet.prepare import prepare, session_reference
 from contactcal.infer.methods.unet.shrink import deployed_shrink
-from contactcal.synth.dataset import DatasetConfig, session_params
+from contactcal.synth.dataset import DatasetConfig
+from contactcal.synth.dataset_finger import session_params
 from contactcal.synth.session import RenderConfig, render_session
 
 PRESSURES = (0.0, 10.0, 20.0)

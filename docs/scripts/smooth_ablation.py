@@ -18,7 +18,8 @@ import cv2
 import numpy as np
 
 from contactcal.infer.image.write import write_image
-from contactcal.synth.dataset import DatasetConfig, session_params
+from contactcal.synth.dataset import DatasetConfig
+from contactcal.synth.dataset_finger import session_params
 from contactcal.synth.session import RenderConfig, render_session
 
 ROOT = Path(__file__).resolve().parents[2]

@@ -18,7 +18,8 @@ from contactcal.infer.image.gray import to_gray_u8
 from contactcal.infer.methods.unet.crop import crop_resize
 from contactcal.infer.methods.unet.prepare import prepare, session_reference
 from contactcal.infer.methods.unet.runner import OnnxSegmenter
-from contactcal.synth.dataset import DatasetConfig, session_params
+from contactcal.synth.dataset import DatasetConfig
+from contactcal.synth.dataset_finger import session_params
 from contactcal.synth.session import RenderConfig, render_session
 
 SEED, FINGERS = 13000, range(6)

@@ -6,24 +6,12 @@ import os
 from collections.abc import Sequence
 from dataclasses import asdict, dataclass, field, replace
 from pathlib import Path
-from typing import Any
 
 from contactcal.infer.calibration.curve import MM2, PX, Curve
 from contactcal.infer.calibration.fit import CurveConfig
-from contactcal.infer.calibration.gate_check import (
-    LOST_ABOVE_CONTACT_WARNING,
-    NOT_AT_REST_WARNING,
-    REFERENCE_NOTE,
-    REST_KPA,
-)
 from contactcal.infer.calibration.phases import LOADING
 from contactcal.infer.calibration.points import CalibrationPoint
-from contactcal.infer.calibration.provenance import (
-    Provenance,
-    identical_frames,
-    identical_frames_warning,
-    input_digests,
-)
+from contactcal.infer.calibration.provenance import Provenance, identical_frames, input_digests
 from contactcal.infer.calibration.record import write_calibration
 from contactcal.infer.calibration.session import SessionFit, fit_session
 from contactcal.infer.calibration.session_checks import check_inverse_contact, session_points
@@ -33,16 +21,11 @@ from contactcal.infer.calibration.steps import (
     step_outlier_floor,
 )
 from contactcal.infer.calibration.table import format_table
+from contactcal.infer.calibration.table_notes import LISTED_FRAMES, session_notes
 from contactcal.infer.files.atomic import OutputSet, run_outputs
 from contactcal.infer.image.read import ImageFile
 from contactcal.infer.methods.base import Method
-from contactcal.infer.pipeline.manifest import (
-    Frame,
-    Session,
-    check_sweep_unit,
-    read_session,
-    sweep_top_warning,
-)
+from contactcal.infer.pipeline.manifest import Frame, Session, check_sweep_unit, read_session
 from contactcal.infer.pipeline.manifest_rows import listed_name
 from contactcal.infer.pipeline.measure import Measured
 from contactcal.infer.pipeline.options import MeasureOptions
@@ -60,33 +43,6 @@ class CalibrationReport:
     curve: Curve  # the inverted phase's curve (fit.curve)
     files: dict[str, Path]  # "json", "csv", "png"
     fit: SessionFit  # every phase's steps, curve and band; hysteresis
-
-
-#: Frames a warning listing frames names (without contact above a contact, off their step's
-#: median); the record lists all.
-LISTED_FRAMES = 5
-#: The table's line when readings were pooled into steps (``{p}``: the session's
-#: :class:`~contactcal.infer.pipeline.manifest.Pooled`, ``{t}``: the tolerance, kPa).
-POOLED_NOTE = (
-    "note: {p.frames} frame(s) in {p.steps} step(s) pooled from differing gauge readings "
-    "(widest {p.widest_kpa[0]:g}-{p.widest_kpa[1]:g} kPa; readings less than {t:g} kPa apart "
-    "are one step at their median, each frame keeping its reading as pressure_kpa_read; "
-    "--step-tolerance-kpa 0 reads every distinct value as a step)"
-)
-#: The table's line when a step was read below 0 kPa (``{r}``: the session's
-#: :class:`~contactcal.infer.pipeline.manifest.AtRest`).
-AT_REST_NOTE = (
-    "note: {r.frames} frame(s) in steps read below 0 kPa (lowest reading {r.lowest_kpa:g} kPa: "
-    "the gauge's offset at rest) are given as 0 kPa, each keeping its reading as "
-    "pressure_kpa_read"
-)
-#: The table's line when one or two rows broke an otherwise rising (then falling) row order
-#: (``{rows}``: the rows, named; the session was read as one loading pass in pressure order).
-OUT_OF_ORDER_WARNING = (
-    "warning: {rows} {verb} the rows' order, rising then falling elsewhere, so the session was "
-    "read as one loading pass in pressure order (a mistyped pressure, or a frame listed in the "
-    "wrong place?); correct the manifest, or state the passes in a 'phase' column"
-)
 
 
 @dataclass(frozen=True)
@@ -209,53 +165,9 @@ def calibrate_session(
         paths = write_calibration(out_dir, results, fit, method.name, extra, provenance, outs)
     table = format_table(results, fit, provenance.device_id)
     off_warning = off_step_warning(off, unit, floor, LISTED_FRAMES) if off else None
-    notes = _notes(session, results, checks, same, options, off_warning)
+    notes = session_notes(session, results, checks, same, options, off_warning)
     table += "".join("\n" + line for line in notes)
     return CalibrationReport(table, frames, measured, fit.curve, paths, fit)
-
-
-def _notes(
-    session: Session,
-    results: list[CalibrationPoint],
-    checks: dict[str, object],
-    same: list[dict[str, Any]],
-    options: SessionOptions,
-    off_warning: str | None,
-) -> list[str]:
-    """The warning and note lines printed under the table, in a fixed order: the reference
-    (gated above 0 kPa, or not at rest), identical frames, rows out of order, frames off their
-    step (``off_warning``, None when none is), pooled readings, readings below 0 kPa, a sweep
-    top far above the display's range."""
-    lines = []
-    if checks["reference_gated_above_zero"]:
-        lines.append("warning: " + REFERENCE_NOTE.format(p=results[0].pressure_kpa))
-    elif checks["reference_above_rest_kpa"] is not None:
-        name = os.path.basename(results[0].file)
-        lines.append(
-            NOT_AT_REST_WARNING.format(name=name, p=results[0].pressure_kpa, rest=REST_KPA)
-        )
-    lost = checks["no_contact_above_contact"]
-    if lost:
-        shown = ", ".join(os.path.basename(f) for f in lost[:LISTED_FRAMES])
-        more = ", …" if len(lost) > LISTED_FRAMES else ""
-        lines.append(LOST_ABOVE_CONTACT_WARNING.format(n=len(lost), shown=shown + more))
-    if same:
-        lines.append(identical_frames_warning(same))
-    if session.out_of_order:
-        verb = "breaks" if len(session.out_of_order) == 1 else "break"
-        lines.append(
-            OUT_OF_ORDER_WARNING.format(rows=" and ".join(session.out_of_order), verb=verb)
-        )
-    if off_warning is not None:
-        lines.append(off_warning)
-    if session.pooled is not None:
-        lines.append(POOLED_NOTE.format(p=session.pooled, t=options.step_tolerance_kpa))
-    if session.at_rest is not None:
-        lines.append(AT_REST_NOTE.format(r=session.at_rest))
-    high = sweep_top_warning(max(f.pressure_kpa for f in session.frames))
-    if high is not None:
-        lines.append(high)
-    return lines
 
 
 def _interval(

@@ -17,12 +17,14 @@ from contactcal.infer.pipeline.args import (
     check_output_folder,
     measure_options,
     method_args,
-    overlay_contents,
-    overlay_methods,
-    overlay_runs,
     read_rig,
     run_inputs,
     scale_args,
+)
+from contactcal.infer.pipeline.overlay_measure import (
+    overlay_contents,
+    overlay_methods,
+    overlay_runs,
 )
 from contactcal.infer.pipeline.readings import DEFAULT_STEP_TOLERANCE_KPA, check_tolerance
 
@@ -111,7 +113,8 @@ def _cmd_calibrate(args: argparse.Namespace) -> int:
     from contactcal.infer.pipeline.overlay import earlier_overlays_note, overlay_names
     from contactcal.infer.pipeline.rig_note import rig_note
     from contactcal.infer.video.args import is_video_run
-    from contactcal.infer.video.command import calibrate_video, check_fresh_recording
+    from contactcal.infer.video.command import calibrate_video
+    from contactcal.infer.video.fresh_out import check_fresh_recording
 
     provenance = Provenance(argv=args.argv, device_id=args.device_id)  # refuses a bad id
     check_change_gate(args)

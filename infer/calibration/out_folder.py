@@ -29,7 +29,7 @@ def check_reused_out(
         device_id: this run's ``--device-id`` (None: not given).
         manifest: the still frames' manifest (None: a video or camera run, whose own check
             refuses an earlier recording's frames or preview:
-            :func:`~contactcal.infer.video.command.check_fresh_recording`).
+            :func:`~contactcal.infer.video.fresh_out.check_fresh_recording`).
         no_scale: where this run looked for a pixel scale and found none (as
             :data:`~contactcal.infer.pipeline.args.NO_SCALE_NOTE` says it); None: it has one.
 

@@ -10,12 +10,7 @@ from typing import TYPE_CHECKING, Any, NamedTuple
 from contactcal.infer.methods.registry import METHODS
 
 if TYPE_CHECKING:
-    from collections.abc import Sequence
-
-    from contactcal.infer.image.read import ImageFile, ImageSource
-    from contactcal.infer.methods.base import Method
     from contactcal.infer.pipeline.boundary import BoundaryOffset
-    from contactcal.infer.pipeline.measure import Measured
     from contactcal.infer.pipeline.options import MeasureOptions
     from contactcal.infer.pipeline.scale import PixelScale
 
@@ -73,7 +68,7 @@ def check_bit_depth(bit_depth: int | None) -> None:
     Raises:
         ValueError: ``"--bit-depth N: expected 1-16 significant bits per sample ..."``.
     """
-    from contactcal.infer.image.read import MAX_BIT_DEPTH
+    from contactcal.infer.image.bit_depth import MAX_BIT_DEPTH
 
     if bit_depth is not None and not 1 <= bit_depth <= MAX_BIT_DEPTH:
         raise ValueError(
@@ -278,43 +273,3 @@ def run_inputs(args: argparse.Namespace) -> list[Path]:
     """The files a run reads besides its images: no output may replace them."""
     names = ("reference", "model", "rig", "manifest")
     return [p for p in (getattr(args, n, None) for n in names) if p is not None]
-
-
-def overlay_contents(args: argparse.Namespace) -> dict[Path, ImageFile] | None:
-    """With ``--overlay``: the frames' contents the run holds, empty until its measurement reads
-    each frame (and the reference) into it once
-    (:func:`~contactcal.infer.pipeline.measure.measure_files`), after the checks a run without
-    ``--overlay`` makes before reading a frame (the manifest's, the model's, the boundary
-    offset's; the reference first); every method's outlines and the drawing then take that
-    content (a frame replaced during the run is taken as it was read). Without it None: each
-    frame is read when it is measured, none held."""
-    return None if args.overlay is None else {}
-
-
-def overlay_methods(args: argparse.Namespace, options: MeasureOptions) -> dict[str, Method]:
-    """The methods that only draw the overlays' outlines (every method but ``--method``), built
-    once: a run records their ``describe()`` (the U-Net's model and its sha256, of the content
-    loaded) and :func:`overlay_runs` measures with them."""
-    return {n: options.method(n, outline=True) for n in METHODS if n != args.method}
-
-
-def overlay_runs(
-    args: argparse.Namespace,
-    options: MeasureOptions,
-    primary: list[Measured],
-    files: Sequence[ImageSource],
-    reference: ImageSource | None,
-    drawn: dict[str, Method],
-) -> dict[str, list[Measured]]:
-    """Measurements of every method for the overlays (the primary run, measured with its
-    digests, is reused; the others, ``drawn`` (:func:`overlay_methods`), only draw outlines, so
-    they get no scale or boundary offset) of ``files`` against ``reference`` (the contents the
-    primary run measured: :func:`overlay_contents`), each with the digest of the content
-    measured (:func:`~contactcal.infer.pipeline.overlay.measured_frame` checks it)."""
-    from dataclasses import replace
-
-    outlines = replace(options, scale=None, boundary=None)
-    runs = {args.method: primary}
-    for name, method in drawn.items():
-        runs[name] = outlines.measure(files, method, reference, digest=True)
-    return runs

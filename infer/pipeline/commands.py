@@ -16,12 +16,14 @@ from contactcal.infer.pipeline.args import (
     check_output_folder,
     measure_options,
     method_args,
-    overlay_contents,
-    overlay_methods,
-    overlay_runs,
     read_rig,
     run_inputs,
     scale_args,
+)
+from contactcal.infer.pipeline.overlay_measure import (
+    overlay_contents,
+    overlay_methods,
+    overlay_runs,
 )
 
 if TYPE_CHECKING:

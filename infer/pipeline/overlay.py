@@ -112,7 +112,7 @@ def measured_frame(
 
     Args:
         content: the frame as the run read it once for every method
-            (:func:`~contactcal.infer.pipeline.args.overlay_contents`): not read again.
+            (:func:`~contactcal.infer.pipeline.overlay_measure.overlay_contents`): not read again.
         measured: method name → its measurement of ``content``, with the digest of the content
             measured (``digest=True``).
         bit_depth: significant bits of a 16-bit frame, as measured (None: from the file).
@@ -153,7 +153,8 @@ def write_overlays(
             digests: each frame is drawn on only as the content every method measured
             (:func:`measured_frame`).
         contents: each frame's content as the run read it once, measured by every method
-            (:func:`~contactcal.infer.pipeline.args.overlay_contents`): drawn on, not read again.
+            (:func:`~contactcal.infer.pipeline.overlay_measure.overlay_contents`): drawn on, not
+            read again.
         out_dir: folder for the overlays.
         titles: per-file caption (e.g. ``"8.0 kPa"``); default the file name.
         outputs: the enclosing run's outputs to stage into (None: this call is the run).

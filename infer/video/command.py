@@ -10,7 +10,8 @@ file's path and sha256, the camera's index): the log's of the bytes parsed, the 
 right before it is decoded; a video file that changed by the end of its decoding (its size, time
 or inode) is refused, so the recorded sha256 is of the frames decoded. An ``--out`` holding an
 earlier recording's outputs (frames, or a preview that a run without ``--preview`` would leave
-beside its calibration) is refused before any work (:func:`check_fresh_recording`).
+beside its calibration) is refused before any work
+(:func:`~contactcal.infer.video.fresh_out.check_fresh_recording`).
 """
 
 from __future__ import annotations
@@ -20,7 +21,6 @@ import os
 import sys
 from collections.abc import Callable, Iterator
 from dataclasses import replace
-from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 from contactcal.infer.video.step_config import StepConfig
@@ -31,6 +31,7 @@ FFMPEG_QUIET = "-8"
 if TYPE_CHECKING:
     import numpy as np
 
+    from contactcal.infer.calibration.calibrate import CalibrationReport
     from contactcal.infer.calibration.provenance import Provenance
     from contactcal.infer.files.atomic import OutputSet
     from contactcal.infer.methods.base import Method
@@ -139,59 +140,6 @@ def _recording(args: argparse.Namespace, video: VideoFile | None, ex: Extractor)
     )
 
 
-def check_fresh_recording(out: Path) -> None:
-    """Refuse an ``--out`` holding an earlier recording's outputs, before any work: frames in
-    ``frames/`` (:func:`check_fresh_frames`), or a preview (``preview.mp4`` or ``.avi``), which
-    a run without ``--preview`` (or writing the other format) would leave beside its calibration.
-
-    Raises:
-        ValueError: naming the folder or file and what to do.
-    """
-    from contactcal.infer.video.preview_files import previews_in
-
-    check_fresh_frames(out / "frames")
-    stale = [str(out / name) for name in previews_in(out)]
-    if stale:
-        raise ValueError(
-            f"{' and '.join(stale)}: the preview of an earlier recording; expected a new --out "
-            "folder for each recording (or remove "
-            f"{'that file' if len(stale) == 1 else 'those files'} first)"
-        )
-
-
-def check_fresh_frames(frames_dir: Path) -> None:
-    """Refuse a ``frames/`` folder that already holds files: an earlier recording's frames would
-    stay beside this one's, outside its manifest.
-
-    The staging entries of a killed run (:data:`~contactcal.infer.files.temporaries.TEMP_NAME`,
-    their process gone) are no frames: they are removed first, as the next write into the
-    folder would (:func:`~contactcal.infer.files.temporaries.remove_stale_temporaries`). Those of a
-    run still going are another recording into the same folder: refused, said so.
-
-    Raises:
-        ValueError: naming the folder and what to do.
-    """
-    from contactcal.infer.files.temporaries import TEMP_NAME, remove_stale_temporaries
-
-    if not frames_dir.is_dir():
-        return
-    remove_stale_temporaries(frames_dir)
-    names = [p.name for p in frames_dir.iterdir()]
-    if not names:
-        return
-    staging = [m for m in map(TEMP_NAME.match, names) if m is not None]
-    if len(staging) == len(names):
-        pids = sorted({m["pid"] for m in staging})
-        raise ValueError(
-            f"{frames_dir}: another run (process {', '.join(pids)}) is writing a recording into "
-            "it; expected a new --out folder for each recording"
-        )
-    raise ValueError(
-        f"{frames_dir}: holds the frames of an earlier recording; expected a new --out "
-        "folder for each recording (or remove that folder first)"
-    )
-
-
 def calibrate_video(
     args: argparse.Namespace,
     measure: MeasureOptions,
@@ -210,51 +158,24 @@ def calibrate_video(
         replaced: the note on an earlier calibration in ``--out`` this run replaces (printed
             last), or None.
 
-    The caller checked ``--out`` first (:func:`check_fresh_recording`, then
+    The caller checked ``--out`` first
+    (:func:`~contactcal.infer.video.fresh_out.check_fresh_recording`, then
     :func:`~contactcal.infer.calibration.out_folder.check_reused_out`).
     """
     from contactcal.infer.calibration.calibrate import calibrate_session
     from contactcal.infer.calibration.command import session_options
     from contactcal.infer.files.atomic import run_outputs, write_synced
-    from contactcal.infer.files.stdout import printing_after
-    from contactcal.infer.pipeline.args import NO_SCALE_NOTE, VIDEO_SCALE
-    from contactcal.infer.pipeline.manifest import check_sweep_top
-    from contactcal.infer.video import coverage, extract, live
 
     # FFmpeg's own log ("[mjpeg @ …] overread 8" on a truncated file) would precede the one-line
     # error; OpenCV reads this before its first FFmpeg use in the process. A user's value wins.
     os.environ.setdefault("OPENCV_FFMPEG_LOGLEVEL", FFMPEG_QUIET)
-    default = StepConfig()
-    cfg = StepConfig(
-        default.tolerance_kpa if args.tolerance_kpa is None else args.tolerance_kpa,
-        default.settle_s if args.settle_s is None else args.settle_s,
-    )
+    cfg = _step_config(args)
     method, outlines = _methods(args, measure)  # before the recording is opened
     if outlines is not None:  # the preview's U-Net, recorded as loaded
         provenance = replace(provenance, preview_method=outlines.describe())
     protect = [args.video, args.pressure_log, args.model, args.rig]
     with run_outputs(protect, options={"--out": args.out}) as outs:
-        ex = extract.Extractor(cfg, args.out / "frames", outs.stage)
-        frames, feed, stop, fps, video = _source(args)
-        preview = _preview(args, outlines, outs, ex, fps)
-        progress = live.Progress(ex) if args.camera is not None else None
-        observers = [o for o in (preview, progress) if o is not None]
-        try:
-            extract.extract_frames(frames, ex, feed, lambda d: [o(d) for o in observers], stop)
-        finally:
-            for o in observers:
-                o.close()
-        warnings = coverage.check_coverage(ex, args.video if args.video is not None else None)
-        for step in ex.left_out():
-            print(
-                f"note: step {step.label()} left out: a one-pressure unloading pass is no "
-                "curve (its frames stay in frames/, outside the manifest)",
-                file=sys.stderr,
-            )
-        # the log's unit, named as the log (the manifest below is this run's own)
-        check_sweep_top(
-            args.pressure_log, max((s.pressure_kpa for s in ex.used_steps()), default=0.0)
-        )
+        ex, video, warnings = _extract(args, cfg, outlines, outs)
         provenance = replace(provenance, recording=_recording(args, video, ex))
         final_manifest = args.out / "frames" / "manifest.csv"
         manifest = outs.stage(final_manifest)
@@ -269,6 +190,79 @@ def calibrate_video(
             outputs=outs,
             manifest_as=final_manifest,
         )
+    _print_report(args, measure, rep, ex, warnings, replaced)
+    return 0
+
+
+def _step_config(args: argparse.Namespace) -> StepConfig:
+    """The steady-step settings: ``--tolerance-kpa`` and ``--settle-s``, else the defaults.
+
+    Raises:
+        ValueError: either option not a number >= 0 (:class:`StepConfig`).
+    """
+    default = StepConfig()
+    return StepConfig(
+        default.tolerance_kpa if args.tolerance_kpa is None else args.tolerance_kpa,
+        default.settle_s if args.settle_s is None else args.settle_s,
+    )
+
+
+def _extract(
+    args: argparse.Namespace, cfg: StepConfig, outlines: Method | None, outs: OutputSet
+) -> tuple[Extractor, VideoFile | None, list[str]]:
+    """Extract the recording's steady frames into ``--out``'s ``frames/`` (staged in ``outs``),
+    the preview drawn with ``outlines`` (:func:`_methods`; None: no preview) and a camera's
+    progress shown as they come, then check them: every step covered
+    (:func:`~contactcal.infer.video.coverage.check_coverage`), the steps left out said on
+    stderr, the log's unit (:func:`~contactcal.infer.pipeline.manifest.check_sweep_top`).
+
+    Returns:
+        The extractor (its steps and manifest), the video file read (None: a camera) and the
+        coverage's warning lines, for the command to print under the calibration's table.
+
+    Raises:
+        ValueError: a recording or log that cannot be calibrated, naming it.
+    """
+    from contactcal.infer.pipeline.manifest import check_sweep_top
+    from contactcal.infer.video import coverage, extract, live
+
+    ex = extract.Extractor(cfg, args.out / "frames", outs.stage)
+    frames, feed, stop, fps, video = _source(args)
+    preview = _preview(args, outlines, outs, ex, fps)
+    progress = live.Progress(ex) if args.camera is not None else None
+    observers = [o for o in (preview, progress) if o is not None]
+    try:
+        extract.extract_frames(frames, ex, feed, lambda d: [o(d) for o in observers], stop)
+    finally:
+        for o in observers:
+            o.close()
+    warnings = coverage.check_coverage(ex, args.video if args.video is not None else None)
+    for step in ex.left_out():
+        print(
+            f"note: step {step.label()} left out: a one-pressure unloading pass is no "
+            "curve (its frames stay in frames/, outside the manifest)",
+            file=sys.stderr,
+        )
+    # the log's unit, named as the log (the manifest written from the steps is this run's own)
+    check_sweep_top(args.pressure_log, max((s.pressure_kpa for s in ex.used_steps()), default=0.0))
+    return ex, video, warnings
+
+
+def _print_report(
+    args: argparse.Namespace,
+    measure: MeasureOptions,
+    rep: CalibrationReport,
+    ex: Extractor,
+    warnings: list[str],
+    replaced: str | None,
+) -> None:
+    """Print the run's table, the note of a run without a pixel scale, the extraction's summary,
+    ``warnings`` (under the table, where they are read with the curve) and ``replaced`` (the
+    note on an earlier calibration replaced; None: none), after the outputs were moved into
+    place (:func:`~contactcal.infer.files.stdout.printing_after`)."""
+    from contactcal.infer.files.stdout import printing_after
+    from contactcal.infer.pipeline.args import NO_SCALE_NOTE, VIDEO_SCALE
+
     with printing_after([args.out], [replaced]):
         print(rep.table)
         if measure.scale is None:
@@ -278,4 +272,3 @@ def calibrate_video(
             print(line)
         if replaced is not None:
             print(replaced)
-    return 0
