@@ -256,14 +256,12 @@ class HeldRecord:
 
     #: Its path.
     path: Path
-    #: Its JSON object; None: unreadable (a folder, device or pipe too, refused unread), or not
-    #: a JSON object (a run replaces it with a note).
+    #: Its JSON object; None: unreadable (or a device, pipe, folder), or not a JSON object.
     data: dict[str, Any] | None
 
 
 def held_record(out_dir: str | os.PathLike[str]) -> HeldRecord | None:
-    """The ``calibration.json`` ``out_dir`` holds, read once as every input is
-    (:func:`~contactcal.infer.files.regular.read_input_bytes`); None: no such file."""
+    """The ``calibration.json`` ``out_dir`` holds, read once as inputs are; None: none."""
     path = Path(out_dir) / "calibration.json"
     try:
         raw = read_input_bytes(path, "an earlier calibration.json", ValueError)
