@@ -24,24 +24,12 @@ from contactcal.infer.evaluate import command as evaluate_command
 from contactcal.infer.files.interrupt import Terminated, stop_signals_interrupt
 from contactcal.infer.files.stdout import named_stdout
 from contactcal.infer.image.cv_threads import opencv_threads
+from contactcal.infer.parser import Parser
 from contactcal.infer.pipeline import commands as pipeline_commands
 from contactcal.infer.pipeline.args import check_cpu_count
 
 #: Entry-point group through which other roles add subcommands (see pyproject.toml).
 COMMAND_GROUP = "contactcal.commands"
-
-
-class _Parser(argparse.ArgumentParser):
-    """argparse without prefix matching: ``--ref`` is not taken for ``--reference``.
-
-    An abbreviation recorded in ``calibration.json``'s ``argv`` would change its meaning, or stop
-    parsing, the day an option sharing its prefix is added. The subcommands' parsers are of this
-    class too (``add_subparsers`` makes its parsers of the parent's class).
-    """
-
-    def __init__(self, *args: Any, **kwargs: Any) -> None:
-        kwargs.setdefault("allow_abbrev", False)
-        super().__init__(*args, **kwargs)
 
 
 class _Version(argparse.Action):
@@ -72,7 +60,7 @@ def build_parser(command: str | None = None) -> argparse.ArgumentParser:
             subcommands are not added (finding and importing them took ~10-20 ms of every
             command's start-up here); None or any other word: all of them (``--help`` lists all).
     """
-    parser = _Parser(
+    parser = Parser(
         prog="contactcal",
         description="Contact-area calibration of pneumatic fingertip displays from rig images.",
     )

@@ -11,7 +11,6 @@ Demo membrane states (mm): ``flat`` (0 kPa), ``cap`` ``z = 6 (1 - r²/a²)`` (fr
 
 from __future__ import annotations
 
-import argparse
 import time
 from collections.abc import Callable
 from functools import partial
@@ -19,6 +18,7 @@ from pathlib import Path
 
 import numpy as np
 
+from contactcal.infer.parser import Parser
 from contactcal.synth.rig import RigGeometry
 
 __all__ = ["demo_states", "tonemap"]
@@ -175,7 +175,7 @@ def spp_study(width: int, height: int, spps=(1, 2, 4, 8, 16, 32, 64), n_ref: int
 
 def main(argv: list[str] | None = None) -> None:
     """Command line entry (see module docstring)."""
-    ap = argparse.ArgumentParser(prog="python -m contactcal.synth.render_demo", allow_abbrev=False)
+    ap = Parser(prog="python -m contactcal.synth.render_demo")
     ap.add_argument("what", choices=("figures", "bench", "spp"))
     ap.add_argument("--out", type=Path, default=Path("docs"))
     ap.add_argument("--width", type=int, default=648)

@@ -8,11 +8,11 @@ from __future__ import annotations
 
 import json
 import shutil
-from collections import Counter
 from pathlib import Path
 
 import pytest
 from procedural import write_dataset
+from read_counts import count_reads
 
 from contactcal.infer.bench.config import BenchConfig
 from contactcal.infer.bench.run import run_bench
@@ -32,36 +32,23 @@ class Watched:
     a re-export into the same path) and the content of every onnxruntime session built."""
 
     def __init__(self, monkeypatch: pytest.MonkeyPatch, files: list[Path]) -> None:
-        self.reads: Counter[Path] = Counter()
         self.sessions: list[str] = []  # sha256 of each session's model content
         self.first = {f: sha256_bytes(f.read_bytes()) for f in files}
         real_read, real_session = Path.read_bytes, ort.InferenceSession
 
-        def read_then_replace(path: Path) -> bytes:
-            content = real_read(path)
-            if path in self.first:
-                self.reads[path] += 1
-                if path != DEFAULT_MODEL:  # the installed file is only counted
-                    path.write_bytes(content + DOC_STRING + b"x")
-            return content
+        def replace(path: Path, content: bytes) -> None:
+            if path != DEFAULT_MODEL:  # the installed file is only counted
+                path.write_bytes(content + DOC_STRING + b"x")
 
         def session(model: bytes | str, *args: object, **kwargs: object) -> object:
             content = model if isinstance(model, bytes) else real_read(Path(model))
             self.sessions.append(sha256_bytes(content))
             return real_session(model, *args, **kwargs)
 
-        def read_input_then_replace(path: Path, *args: object) -> bytes:
-            content = real_input(path, *args)
-            if path in self.first:
-                self.reads[path] += 1
-                if path != DEFAULT_MODEL:
-                    path.write_bytes(content + DOC_STRING + b"x")
-            return content
-
-        real_input = runner.read_input_bytes  # how read_model reads a model file
-        monkeypatch.setattr(Path, "read_bytes", read_then_replace)
-        monkeypatch.setattr(runner, "read_input_bytes", read_input_then_replace)
         monkeypatch.setattr(ort, "InferenceSession", session)
+        # runner.read_input_bytes: how read_model reads a model file
+        readers = ((Path, "read_bytes"), (runner, "read_input_bytes"))
+        self.reads = count_reads(monkeypatch, *readers, only=self.first, after=replace)
 
     def check(self, results: dict[str, object], names: dict[str, Path]) -> None:
         """Each file read once; ``models`` records, and every session ran, the content read."""

@@ -9,6 +9,7 @@ from pathlib import Path
 
 import pytest
 from procedural import write_dataset
+from read_counts import count_reads
 
 from contactcal.infer.bench.accuracy import score_session
 from contactcal.infer.bench.dataset import read_index, sessions_of
@@ -20,15 +21,7 @@ from contactcal.infer.methods.registry import make_method
 @pytest.fixture
 def reads(monkeypatch: pytest.MonkeyPatch) -> Counter[Path]:
     """Each image file's reads (of its bytes), by path."""
-    counts: Counter[Path] = Counter()
-    real = image_read.read_file_bytes
-
-    def counted(path: Path, *args: object, **kwargs: object) -> bytes:
-        counts[Path(path)] += 1
-        return real(path, *args, **kwargs)
-
-    monkeypatch.setattr(image_read, "read_file_bytes", counted)
-    return counts
+    return count_reads(monkeypatch, (image_read, "read_file_bytes"))
 
 
 @pytest.mark.parametrize("name", ["classical", "unet"])

@@ -11,6 +11,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from read_counts import count_reads
 from test_outputs import copy_session
 
 from contactcal.infer.calibration import record as calibration_io
@@ -329,18 +330,15 @@ def test_calibrate_reads_the_earlier_record_and_the_rig_json_once(
     argv += ["--device-id", "display-07", "--mm-per-px", "0.2"]
     assert main(argv) == 0
     capsys.readouterr()
-    reads: list[Path] = []
-    real, real_input = Path.read_text, scale.read_input_bytes  # the record's, the rig.json's
-    monkeypatch.setattr(Path, "read_text", lambda p, *a, **k: reads.append(p) or real(p, *a, **k))
-    monkeypatch.setattr(
-        scale, "read_input_bytes", lambda p, *a: reads.append(p) or real_input(p, *a)
+    # how the record and the rig.json are read
+    reads = count_reads(
+        monkeypatch, (calibration_io, "read_input_bytes"), (scale, "read_input_bytes")
     )
     assert main(argv) == 0
     printed = capsys.readouterr().out
     assert "note: replaced the calibration that" in printed  # from the one read
     assert f"note: --mm-per-px 0.2 used in place of the scale of {s / 'rig.json'}" in printed
-    assert [p.name for p in reads].count("calibration.json") == 1
-    assert [p.name for p in reads].count("rig.json") == 1
+    assert reads == {out / "calibration.json": 1, s / "rig.json": 1}
 
 
 def test_a_sweep_far_above_20_kpa_is_read_with_a_warning(

@@ -102,7 +102,7 @@ def test_output_folder_link_and_unwritable_folder(
 def test_a_folder_given_as_a_frame(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
     (tmp_path / "frames").mkdir()
     assert main(["measure", "--out", str(tmp_path / "r.json"), str(tmp_path / "frames")]) == 2
-    assert "frames: is a folder, not an image file" in _one_error(capsys)
+    assert "frames: is a folder; expected an image file" in _one_error(capsys)
 
 
 def test_a_curve_that_cannot_tell_pressures_apart_is_said(

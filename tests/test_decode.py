@@ -96,7 +96,7 @@ def test_jpeg_size_missing_file_or_folder(tmp_path: Path) -> None:
     with pytest.raises(ImageError, match="missing.jpg: no such file"):
         jpeg_size(tmp_path / "missing.jpg")
     (tmp_path / "d.jpg").mkdir()
-    with pytest.raises(ImageError, match="d.jpg: is a folder, expected a JPEG file"):
+    with pytest.raises(ImageError, match="d.jpg: is a folder; expected a JPEG file"):
         jpeg_size(tmp_path / "d.jpg")
 
 

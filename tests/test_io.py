@@ -80,7 +80,7 @@ def test_missing_and_truncated(tmp_path: Path) -> None:
             load_image(cut)
     with pytest.raises(ImageError, match="unsupported image type"):
         load_image(tmp_path / "x.gif")
-    with pytest.raises(ImageError, match="is a folder, not an image file"):
+    with pytest.raises(ImageError, match="is a folder; expected an image file"):
         load_image(_dir_png(tmp_path))
 
 

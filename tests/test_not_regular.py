@@ -7,6 +7,8 @@ import os
 import shutil
 import subprocess
 import sys
+import threading
+from collections.abc import Iterator
 from pathlib import Path
 
 import pytest
@@ -80,3 +82,120 @@ def test_inputs_are_opened_binary_and_non_blocking_where_the_platform_has_them()
     posix = SimpleNamespace(O_RDONLY=0, O_NONBLOCK=0x800)
     assert input_flags(posix) == 0x800
     assert READ_FLAGS & getattr(os, "O_NONBLOCK", 0) == getattr(os, "O_NONBLOCK", 0)
+
+
+class WaitingWriter:
+    """A FIFO with a writer waiting for a reader to open it (a thread): opening it for reading
+    would not block, and reading it would get nothing; it is :attr:`opened` once a reader did.
+    """
+
+    def __init__(self, path: Path) -> None:
+        os.mkfifo(path)
+        self.path = path
+        self._thread = threading.Thread(target=self._write, daemon=True)
+        self._thread.start()
+
+    def _write(self) -> None:
+        with open(self.path, "wb"):  # blocks until a reader opens the FIFO
+            pass
+
+    @property
+    def opened(self) -> bool:
+        """Whether a reader opened the FIFO (and so released the writer)."""
+        self._thread.join(timeout=0.5)  # a reader that opened it released the writer
+        return not self._thread.is_alive()
+
+    def release(self) -> None:
+        """Open the FIFO for reading, releasing the writer, and wait for it to end."""
+        fd = os.open(self.path, os.O_RDONLY | os.O_NONBLOCK)
+        try:
+            self._thread.join()
+        finally:
+            os.close(fd)
+
+
+@pytest.fixture
+def fifo(tmp_path: Path) -> Iterator[WaitingWriter]:
+    """A FIFO ``calibration.json`` in ``tmp_path``, a writer waiting (:class:`WaitingWriter`)."""
+    writer = WaitingWriter(tmp_path / "calibration.json")
+    yield writer
+    writer.release()
+
+
+def test_a_hashed_file_that_is_a_fifo_is_refused_unopened(fifo: WaitingWriter) -> None:
+    """``sha256_file`` opened the file blocking, after its caller's type check: a FIFO put there
+    in between was waited on (and here, with a writer, hashed as empty)."""
+    from contactcal.infer.files.digest import sha256_file
+
+    with pytest.raises(ValueError, match="not a regular file .*; expected a video file"):
+        sha256_file(fifo.path, "a video file", ValueError)
+    assert not fifo.opened
+
+
+def test_a_calibration_that_is_not_a_regular_file_is_refused_unread(
+    fifo: WaitingWriter, tmp_path: Path
+) -> None:
+    """``load_curve`` read the path as text: /dev/zero until memory ran out, a FIFO waited on
+    for a writer, a folder "not a readable contactcal calibration ([Errno 21] ...)"."""
+    from contactcal.infer.calibration.load import load_curve
+
+    expected = "expected the calibration.json that `contactcal calibrate` wrote"
+    with pytest.raises(ValueError, match=f"calibration.json: not a regular file .*; {expected}"):
+        load_curve(fifo.path)
+    assert not fifo.opened
+    (tmp_path / "folder.json").mkdir()
+    with pytest.raises(ValueError, match=f"^{tmp_path}/folder.json: is a folder; {expected}$"):
+        load_curve(tmp_path / "folder.json")
+
+
+def test_an_earlier_calibration_that_is_not_a_regular_file_is_not_read(
+    fifo: WaitingWriter, tmp_path: Path
+) -> None:
+    """The earlier record of ``calibrate --out`` was read as text after an ``is_file`` check: a
+    FIFO put there in between was waited on. It is held (so its run is refused or noted),
+    unreadable, and never opened."""
+    from contactcal.infer.calibration.record import HeldRecord, held_record
+
+    assert held_record(tmp_path) == HeldRecord(fifo.path, None)
+    assert not fifo.opened
+    assert held_record(tmp_path / "none") is None
+
+
+def test_a_folder_is_refused_by_the_shared_reader_naming_what_was_expected(
+    tmp_path: Path,
+) -> None:
+    """A folder read as an input raised IsADirectoryError, each reader wording it its own way
+    (", expected", ", not an image file", "; expected")."""
+    from contactcal.infer.files.regular import read_input_bytes
+
+    with pytest.raises(ValueError, match=f"^{tmp_path}: is a folder; expected the X file$"):
+        read_input_bytes(tmp_path, "the X file", ValueError)
+
+
+@pytest.mark.parametrize(
+    ("argv", "expected"),
+    [
+        (["measure", "--rig", "{bad}", FRAME, "--out", "-"], "the rig config JSON file"),
+        (["calibrate", "{bad}", "--out", "{out}"], "the manifest CSV file (e.g. session"),
+        (["measure", "{bad}", "--out", "-"], "a JPEG file"),
+        (["measure", "--reference", "{bad}", FRAME, "--out", "-"], "an image file"),
+        (["measure", "--model", "{bad}", FRAME, "--out", "-"], "the ONNX model file"),
+        (
+            ["calibrate", "--video", "{bad}", "--pressure-log", "{bad}", "--out", "{out}"],
+            "the pressure log CSV file",
+        ),
+    ],
+)
+def test_a_folder_given_as_an_input_file_is_one_line(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str], argv: list[str], expected: str
+) -> None:
+    from contactcal.infer.cli import main
+
+    bad = tmp_path / "odd.jpg"
+    bad.mkdir()
+    fill = {"bad": str(bad), "out": str(tmp_path / "out")}
+    assert main([a.format(**fill) for a in argv]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1, err
+    assert f"{bad}: is a folder; expected {expected}" in err
+    assert not (tmp_path / "out").exists()

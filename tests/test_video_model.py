@@ -6,12 +6,12 @@ extracted), and the calibration and the preview are built from that one read."""
 from __future__ import annotations
 
 import json
-from collections import Counter
 from pathlib import Path
 
 import cv2
 import numpy as np
 import pytest
+from read_counts import count_reads
 from test_video import make_log, make_video
 
 from contactcal.infer.cli import main
@@ -81,23 +81,9 @@ def test_the_model_is_read_once_and_only_where_a_unet_runs(
     model = tmp_path / "model.onnx"
     model.write_bytes(DEFAULT_MODEL.read_bytes())
     files = {"MODEL": model, "SHIPPED": DEFAULT_MODEL}
-    reads: Counter[Path] = Counter()
-    real_read = Path.read_bytes
-
-    def counted(path: Path) -> bytes:
-        if path in files.values():
-            reads[path] += 1
-        return real_read(path)
-
-    real_input = runner.read_input_bytes  # how read_model reads a model file
-
-    def counted_input(path: Path, *args: object) -> bytes:
-        if path in files.values():
-            reads[path] += 1
-        return real_input(path, *args)
-
-    monkeypatch.setattr(Path, "read_bytes", counted)
-    monkeypatch.setattr(runner, "read_input_bytes", counted_input)
+    # runner.read_input_bytes: how read_model reads a model file
+    readers = ((Path, "read_bytes"), (runner, "read_input_bytes"))
+    reads = count_reads(monkeypatch, *readers, only=list(files.values()))
     options = [str(files.get(o, o)) for o in options]
     out = tmp_path / "out"
     assert main(["calibrate", *recording, "--settle-s", "0.3", *options, "--out", str(out)]) == 0

@@ -14,12 +14,12 @@ scales the frame-reference difference by ``P / (P − F)``) when the model has o
 
 from __future__ import annotations
 
-import argparse
 import dataclasses
 import os
 from collections.abc import Sequence
 from typing import Any
 
+from contactcal.infer.parser import Parser
 from contactcal.train.restate import (
     check_paths,
     load_proto,
@@ -69,10 +69,9 @@ def floor_model(
 
 def main(argv: Sequence[str] | None = None) -> int:
     """``python -m contactcal.train.floor MODEL --percentile F --out NEW.onnx``."""
-    ap = argparse.ArgumentParser(
+    ap = Parser(
         prog="python -m contactcal.train.floor",
         description="Set an exported model's dark floor (metadata only).",
-        allow_abbrev=False,
     )
     ap.add_argument("model", help="exported .onnx model")
     ap.add_argument("--percentile", type=float, required=True, help="floor percentile, %%")

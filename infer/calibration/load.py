@@ -6,7 +6,6 @@ import errno
 import json
 import os
 import warnings
-from pathlib import Path
 from typing import Any
 
 import numpy as np
@@ -15,12 +14,15 @@ from contactcal.infer.calibration.band import Band
 from contactcal.infer.calibration.curve import MM2, PX, Curve
 from contactcal.infer.calibration.parametric import Saturating
 from contactcal.infer.calibration.phases import LOADING
+from contactcal.infer.files.regular import read_input_bytes
 
 FORMAT = "contactcal.calibration"
 FORMAT_VERSION = 3
 #: Versions :func:`load_curve` reads: 2 added the run's provenance; 3 phases (loading and
 #: unloading), steps of repeated frames, the parametric model, the band and hysteresis.
 READABLE_VERSIONS = (1, 2, 3)
+#: What :func:`load_curve` expects at its path, for its refusals.
+_EXPECTED = "the calibration.json that `contactcal calibrate` wrote"
 
 
 def _curve(fit: dict[str, Any], onset: Any, unit: Any, inverse: Any, **more: Any) -> Curve:
@@ -140,7 +142,8 @@ def load_curve(
             ``calibrate`` refuses to write such a record for the pass it inverts).
         NoSuchPhaseError: the record holds no ``phase`` pass (e.g. a loading-only session).
         CalibrationNotFoundError: no file at ``path`` (a FileNotFoundError and a ValueError).
-        ValueError: unreadable file, not a contactcal calibration, an unknown
+        ValueError: a folder, not a regular file (a device or pipe: refused unread), an
+            unreadable file, not a contactcal calibration, an unknown
             ``area_unit``, or another unit than ``area_unit``.
     """
     unit = _check_unit(area_unit)
@@ -169,10 +172,29 @@ def _check_unit(area_unit: str | None) -> str | None:
     raise ValueError(f"area_unit {area_unit!r}: expected {MM2!r} (or 'mm2'), {PX!r} or None")
 
 
+def _read_record(path: str | os.PathLike[str]) -> bytes:
+    """The content of the record file ``path``, read as every input is (a folder, device or
+    pipe refused unread: :func:`~contactcal.infer.files.regular.read_input_bytes`).
+
+    Raises:
+        CalibrationNotFoundError: no file at ``path``.
+        ValueError: a folder, not a regular file, or unreadable; one line naming ``path``.
+    """
+    try:
+        return read_input_bytes(path, _EXPECTED, ValueError)
+    except FileNotFoundError:
+        raise CalibrationNotFoundError(
+            errno.ENOENT, f"{path}: no such file; expected {_EXPECTED}"
+        ) from None
+    except OSError as exc:
+        raise ValueError(f"{path}: cannot read the calibration ({exc.strerror or exc})") from None
+
+
 def _read_curve(path: str | os.PathLike[str], phase: str | None, allow_unresolved: bool) -> Curve:
     """:func:`load_curve` without the unit check."""
+    raw = _read_record(path)
     try:
-        data = json.loads(Path(path).read_text(encoding="utf-8"))
+        data = json.loads(raw.decode("utf-8"))
         if data.get("format") != FORMAT:
             raise ValueError(f"format {data.get('format')!r}, expected {FORMAT!r}")
         version = data.get("format_version")
@@ -189,13 +211,7 @@ def _read_curve(path: str | os.PathLike[str], phase: str | None, allow_unresolve
             )
         curve = _curve(data["fit"], data["onset_kpa"], data["area_unit"], data.get("inverse"))
         return _check_contact(curve, LOADING)
-    except FileNotFoundError:
-        raise CalibrationNotFoundError(
-            errno.ENOENT,
-            f"{path}: no such file; expected the calibration.json that `contactcal calibrate` "
-            "wrote",
-        ) from None
     except (UnresolvedCurveError, NoContactCurveError, NoSuchPhaseError) as exc:
         raise type(exc)(f"{path}: {exc}") from exc
-    except (OSError, ValueError, KeyError, TypeError, AttributeError) as exc:
+    except (ValueError, KeyError, TypeError, AttributeError) as exc:
         raise ValueError(f"{path}: not a readable contactcal calibration ({exc})") from exc

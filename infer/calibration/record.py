@@ -39,6 +39,7 @@ from contactcal.infer.calibration.provenance import (
 from contactcal.infer.calibration.session import PhaseFit, SessionFit
 from contactcal.infer.files.atomic import OutputSet, run_outputs, write_synced
 from contactcal.infer.files.jsonable import finite_or_none, json_text, jsonable
+from contactcal.infer.files.regular import read_input_bytes
 
 # plot_curve is looked up here at call time, so tests can replace it.
 __all__ = ["Provenance", "check_device_id", "input_digests", "load_curve", "write_calibration"]
@@ -255,17 +256,18 @@ class HeldRecord:
 
     #: Its path.
     path: Path
-    #: Its JSON object; None: unreadable, or not a JSON object (a run replaces it with a note).
+    #: Its JSON object; None: unreadable (or a device, pipe, folder), or not a JSON object.
     data: dict[str, Any] | None
 
 
 def held_record(out_dir: str | os.PathLike[str]) -> HeldRecord | None:
-    """The ``calibration.json`` ``out_dir`` holds, read once; None: no such file."""
+    """The ``calibration.json`` ``out_dir`` holds, read once as inputs are; None: none."""
     path = Path(out_dir) / "calibration.json"
-    if not path.is_file():
-        return None
     try:
-        data = json.loads(path.read_text(encoding="utf-8"))
+        raw = read_input_bytes(path, "an earlier calibration.json", ValueError)
+        data = json.loads(raw.decode("utf-8"))
+    except (FileNotFoundError, NotADirectoryError):  # none there
+        return None
     except (OSError, ValueError):
         data = None
     return HeldRecord(path, data if isinstance(data, dict) else None)

@@ -2,12 +2,11 @@
 
 A device (``/dev/zero``), a FIFO or a socket, or a link to one, named where a file is expected,
 would be read until memory runs out or waited on forever; it is refused unread, in one line
-naming it and what was expected. A FIFO is never opened in blocking mode.
+naming it and what was expected, as a folder is. A FIFO is never opened in blocking mode.
 """
 
 from __future__ import annotations
 
-import errno
 import os
 import stat
 from collections.abc import Callable
@@ -34,9 +33,25 @@ def not_regular_message(path: str | os.PathLike[str], expected: str) -> str:
     return f"{path}: not a regular file (a device, pipe or socket); expected {expected}"
 
 
+def folder_message(path: str | os.PathLike[str], expected: str) -> str:
+    """The one line refusing ``path``, a folder; ``expected``: what the reader expected there,
+    e.g. ``"the manifest CSV"``."""
+    return f"{path}: is a folder; expected {expected}"
+
+
 def _special(mode: int) -> bool:
     """Whether ``mode`` is neither a regular file's nor a folder's."""
     return not (stat.S_ISREG(mode) or stat.S_ISDIR(mode))
+
+
+def _refuse_mode(
+    path: str | os.PathLike[str], mode: int, expected: str, error: Callable[[str], Exception]
+) -> None:
+    """Raise ``error(line)`` when ``mode`` (``path``'s) is not a regular file's."""
+    if stat.S_ISDIR(mode):
+        raise error(folder_message(path, expected))
+    if _special(mode):
+        raise error(not_regular_message(path, expected))
 
 
 def refuse_special(
@@ -58,12 +73,31 @@ def refuse_special(
         raise error(not_regular_message(path, expected))
 
 
+def refuse_non_file(
+    path: str | os.PathLike[str], expected: str, error: Callable[[str], Exception]
+) -> None:
+    """Raise ``error(line)`` when ``path`` (links followed) is a folder
+    (:func:`folder_message`), or a device, pipe or socket (:func:`not_regular_message`); a
+    missing or unstatable path passes (the caller's own open or check reports it).
+
+    Args:
+        path: the input file.
+        expected: what was expected there, e.g. ``"the manifest CSV"``.
+        error: the caller's exception type, built from the message line.
+    """
+    try:
+        mode = os.stat(path).st_mode
+    except (OSError, ValueError):
+        return
+    _refuse_mode(path, mode, expected, error)
+
+
 def open_input(
     path: str | os.PathLike[str], expected: str, error: Callable[[str], Exception]
 ) -> BinaryIO:
-    """A user-given input file opened for binary reading, refusing a device, pipe or socket
-    unread (checked before opening, and on the opened file: opened non-blocking, a FIFO put
-    there in between never blocks).
+    """A user-given input file opened for binary reading, refusing a folder, device, pipe or
+    socket unread (checked before opening, and on the opened file: opened non-blocking, a FIFO
+    put there in between never blocks).
 
     Args:
         path: the input file.
@@ -71,19 +105,15 @@ def open_input(
         error: the caller's exception type, built from the message line.
 
     Raises:
-        error: ``path`` is not a regular file.
-        OSError: as ``open`` raises it (FileNotFoundError, IsADirectoryError, PermissionError,
-            ...), for the caller's own messages.
+        error: ``path`` is a folder or not a regular file.
+        OSError: as ``open`` raises it (FileNotFoundError, PermissionError, ...), for the
+            caller's own messages.
     """
     p = Path(path)
-    refuse_special(p, expected, error)
+    refuse_non_file(p, expected, error)
     fd = os.open(p, READ_FLAGS)
     try:
-        mode = os.fstat(fd).st_mode
-        if stat.S_ISDIR(mode):
-            raise IsADirectoryError(errno.EISDIR, os.strerror(errno.EISDIR), str(p))
-        if _special(mode):
-            raise error(not_regular_message(p, expected))
+        _refuse_mode(p, os.fstat(fd).st_mode, expected, error)
     except BaseException:
         os.close(fd)
         raise

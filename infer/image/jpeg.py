@@ -91,8 +91,6 @@ def jpeg_size(path: str | os.PathLike[str], data: bytes | None = None) -> tuple[
         raise
     except FileNotFoundError as exc:
         raise ImageError(f"{p}: no such file") from exc
-    except IsADirectoryError as exc:
-        raise ImageError(f"{p}: is a folder, expected a JPEG file") from exc
     except (EOFError, ValueError) as exc:
         why = str(exc) or "truncated"
         raise ImageError(f"{p}: not a readable JPEG (header: {why})") from exc

@@ -20,7 +20,7 @@ import cv2
 import numpy as np
 
 from contactcal.infer.files.digest import sha256_bytes
-from contactcal.infer.files.regular import read_input_bytes
+from contactcal.infer.files.regular import folder_message, read_input_bytes
 from contactcal.infer.image.bit_depth import MAX_BIT_DEPTH, scale_depth
 from contactcal.infer.image.complete import jpeg_end, png_end
 from contactcal.infer.image.decode import decode_strict
@@ -90,7 +90,7 @@ def read_file_bytes(path: str | os.PathLike[str], other_format_fix: str | None =
     """
     p = Path(path)
     if p.is_dir():
-        raise ImageError(f"{p}: is a folder, not an image file; give the frames' file names")
+        raise ImageError(f"{folder_message(p, 'an image file')}; give the frames' file names")
     if p.suffix.lower() not in SUPPORTED_SUFFIXES:
         raise ImageError(
             f"{p}: unsupported image type {p.suffix!r}; expected one of "

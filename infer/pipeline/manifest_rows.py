@@ -70,17 +70,15 @@ def read_rows(mpath: Path) -> tuple[list[tuple[int, list[str]]], str]:
     """Non-blank CSV rows as ``(line number, cells)``, and the sha256 of the content parsed
     (read once: a record's digest is that of the rows the run used)."""
     try:
-        data = read_input_bytes(mpath, "the manifest CSV file", ManifestError)
+        data = read_input_bytes(
+            mpath, "the manifest CSV file (e.g. session/manifest.csv)", ManifestError
+        )
         reader = csv.reader(io.StringIO(data.decode("utf-8-sig"), newline=""))
         rows = [(reader.line_num, cells) for cells in reader if any(c.strip() for c in cells)]
     except FileNotFoundError:
         raise ManifestError(
             f"{mpath}: manifest not found; expected a CSV file '{HEADER}' listing the "
             "session's images (check the path)"
-        ) from None
-    except IsADirectoryError:
-        raise ManifestError(
-            f"{mpath}: is a folder; expected the manifest CSV file inside it (e.g. manifest.csv)"
         ) from None
     except OSError as exc:
         raise ManifestError(

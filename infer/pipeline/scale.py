@@ -102,10 +102,6 @@ def read_rig_json(path: str | os.PathLike[str]) -> dict[str, Any]:
         data = json.loads(text, object_pairs_hook=_pairs_once)
     except FileNotFoundError as exc:
         raise RigConfigError(f"{p}: no such rig config file") from exc
-    except IsADirectoryError:
-        raise RigConfigError(
-            f"{p}: is a folder; expected the rig config JSON file (rig.json)"
-        ) from None
     except (OSError, UnicodeDecodeError, json.JSONDecodeError) as exc:
         raise RigConfigError(f"{p}: not a readable JSON rig config ({exc})") from exc
     except _DuplicateKey as exc:

@@ -75,17 +75,16 @@ def open_video(path: str | os.PathLike[str]) -> VideoFile:
             changed while hashed, not a video OpenCV can decode, or no usable frame rate.
     """
     from contactcal.infer.files.digest import sha256_file
-    from contactcal.infer.files.regular import refuse_special
+    from contactcal.infer.files.regular import refuse_non_file
 
     p = Path(path)
-    if p.is_dir():
-        raise ValueError(f"{p}: is a folder; expected a video file, e.g. .avi or .mp4")
-    refuse_special(p, "a video file, e.g. .avi or .mp4", ValueError)  # never hashed nor decoded
+    expected = "a video file, e.g. .avi or .mp4"
+    refuse_non_file(p, expected, ValueError)  # a folder, device or pipe: never hashed nor decoded
     if not p.is_file():
-        raise ValueError(f"{p}: video not found (expected a video file, e.g. .avi or .mp4)")
+        raise ValueError(f"{p}: video not found (expected {expected})")
     try:
         stamp = _stamp(p)
-        sha = sha256_file(p)
+        sha = sha256_file(p, expected, ValueError)
     except OSError as exc:
         raise ValueError(f"{p}: cannot read the video ({exc.strerror})") from None
     if _stamp(p) != stamp:

@@ -62,14 +62,12 @@ def read_log_bytes(path: str | os.PathLike[str]) -> bytes:
     is not a regular file (a device or pipe, never read: it could be read or waited on forever)."""
     p = Path(path)
     try:
-        return read_input_bytes(p, "the pressure log CSV", PressureLogError)
+        return read_input_bytes(p, "the pressure log CSV file", PressureLogError)
     except FileNotFoundError:
         raise PressureLogError(
             f"{p}: pressure log not found; expected the controller's CSV "
             f"'{','.join(LOG_COLUMNS)}' (check the path)"
         ) from None
-    except IsADirectoryError:
-        raise PressureLogError(f"{p}: is a folder; expected the pressure log CSV file") from None
     except OSError as exc:
         raise PressureLogError(f"{p}: cannot read the pressure log ({exc.strerror})") from None
 

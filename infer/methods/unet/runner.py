@@ -135,10 +135,6 @@ def read_model(path: Path) -> bytes:
     """The content of model file ``path``, read once for everything built from it (pass it as
     :class:`OnnxSegmenter`'s ``content``); ModelError (naming it) when missing, a folder or
     unreadable."""
-    if path.is_dir():
-        raise ModelError(
-            f"{path}: is a folder; expected the ONNX model file (e.g. contact_unet.onnx)"
-        )
     if not path.exists():
         raise ModelError(f"{path}: no such model file")
     try:

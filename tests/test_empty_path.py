@@ -1,0 +1,54 @@
+"""A path option given an empty string is refused: ``Path("")`` is ``.``, so ``--model ""`` was
+refused as "--model .: is a folder", and ``calibrate --out ""`` wrote into the current folder."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import pytest
+
+from contactcal.infer.cli import main
+
+SESSION = Path(__file__).resolve().parents[1] / "examples" / "session"
+FRAME = str(SESSION / "p05.0kpa.jpg")
+REFUSAL = (
+    "'': expected a file or folder path, got an empty string (for the current folder give '.')"
+)
+
+
+@pytest.mark.parametrize(
+    ("argv", "option"),
+    [
+        (["measure", FRAME, "--model", "", "--out", "-"], "--model"),
+        (["measure", "", "--out", "-"], "IMAGE"),
+        (["measure", FRAME, "--reference", "", "--out", "-"], "--reference"),
+        (["measure", FRAME, "--rig", "", "--out", "-"], "--rig"),
+        (
+            ["calibrate", str(SESSION / "manifest.csv"), "--method", "classical", "--out", ""],
+            "--out",
+        ),
+    ],
+)
+def test_an_empty_path_is_refused_naming_the_option(
+    tmp_path: Path,
+    monkeypatch: pytest.MonkeyPatch,
+    capsys: pytest.CaptureFixture[str],
+    argv: list[str],
+    option: str,
+) -> None:
+    monkeypatch.chdir(tmp_path)  # where "" would have been read or written
+    with pytest.raises(SystemExit) as exc:
+        main(argv)
+    assert exc.value.code == 2
+    assert f"error: argument {option}: {REFUSAL}" in capsys.readouterr().err
+    assert list(tmp_path.iterdir()) == []
+
+
+def test_the_restating_tools_refuse_an_empty_path() -> None:
+    """``python -m contactcal.train.restate``'s and its kin's parser, outside ``contactcal``."""
+    from contactcal.train.restate import restating_parser
+
+    parser = restating_parser("restate", "test")
+    assert parser.parse_args(["m.onnx", "--data", "d", "--out", "o.onnx"]).out == Path("o.onnx")
+    with pytest.raises(SystemExit):
+        parser.parse_args(["m.onnx", "--data", "d", "--out", ""])
