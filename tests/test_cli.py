@@ -193,16 +193,25 @@ def test_demo_takes_bit_depth_and_says_which_calibration_it_replaced(
     [
         ["measure", "x.png", "--out", "o", "--ref", "r.png"],  # --reference
         ["calibrate", "m.csv", "--out", "o", "--mm", "0.05"],  # --mm-per-px
-        ["synth", "--fingers", "2", "--out", "o", "--see", "3"],  # a plugin command's --seed
+        # a plugin command's --seed (--fingers 0: a prefix taken is a quick refusal, no render)
+        ["synth", "--fingers", "0", "--out", "o", "--see", "3"],
     ],
 )
-def test_option_prefixes_are_refused(argv: list[str], capsys: pytest.CaptureFixture[str]) -> None:
+def test_option_prefixes_are_refused(
+    argv: list[str],
+    tmp_path: Path,
+    monkeypatch: pytest.MonkeyPatch,
+    capsys: pytest.CaptureFixture[str],
+) -> None:
     """An abbreviation is not taken for the option it starts: a recorded command line keeps its
-    meaning when an option sharing the prefix is added."""
+    meaning when an option sharing the prefix is added. (Run where the relative ``--out`` of a
+    prefix taken would write: the synth case once rendered a dataset into the repository.)"""
+    monkeypatch.chdir(tmp_path)
     with pytest.raises(SystemExit) as exit_:
         main(argv)
     assert exit_.value.code == 2
     assert f"unrecognized arguments: {argv[-2]} {argv[-1]}" in capsys.readouterr().err
+    assert list(tmp_path.iterdir()) == []
 
 
 def test_module_tools_refuse_option_prefixes(capsys: pytest.CaptureFixture[str]) -> None:

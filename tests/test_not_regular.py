@@ -199,3 +199,30 @@ def test_a_folder_given_as_an_input_file_is_one_line(
     assert err.count("\n") == 1, err
     assert f"{bad}: is a folder; expected {expected}" in err
     assert not (tmp_path / "out").exists()
+
+
+@pytest.mark.parametrize("kind", ["fifo", "folder"])
+def test_a_restating_tools_model_that_is_not_a_file_is_refused_unread(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str], kind: str
+) -> None:
+    """``python -m contactcal.train.floor`` (and ``interval``, ``change_gate``: the same
+    ``read_model``) read MODEL with ``Path.read_bytes``: a FIFO was waited on (or, with a writer,
+    read as an empty model), /dev/zero read until a MemoryError traceback, a folder refused as
+    "not a readable ONNX model ([Errno 21] Is a directory: ...)"."""
+    pytest.importorskip("onnx")
+    from contactcal.train.floor import main
+
+    bad, out = tmp_path / "model.onnx", tmp_path / "new.onnx"
+    writer = WaitingWriter(bad) if kind == "fifo" else None
+    if writer is None:
+        bad.mkdir()
+    try:
+        assert main([str(bad), "--percentile", "1", "--out", str(out)]) == 2
+        assert writer is None or not writer.opened
+    finally:
+        if writer is not None:
+            writer.release()
+    err = capsys.readouterr().err
+    says = "is a folder" if writer is None else "not a regular file (a device, pipe or socket)"
+    assert err == f"error: {bad}: {says}; expected a .onnx file written by contactcal export\n"
+    assert not out.exists()

@@ -22,6 +22,7 @@ from contactcal.infer.errors import option_error
 from contactcal.infer.files.atomic import atomic_open
 from contactcal.infer.files.destination import check_destination
 from contactcal.infer.files.digest import sha256_file
+from contactcal.infer.files.regular import read_input_bytes
 from contactcal.infer.files.replaced import replaced_file_note
 from contactcal.infer.methods.unet.spec import ModelSpec, read_spec
 from contactcal.infer.parser import Parser
@@ -98,6 +99,10 @@ def check_paths(model: str | os.PathLike[str], out: str | os.PathLike[str]) -> t
     return src, dst
 
 
+#: What a restating tool's ``MODEL`` must be, for its refusals.
+_MODEL_EXPECTED = "a .onnx file written by contactcal export"
+
+
 def load_proto(model: Path) -> Any:
     """The ONNX ``ModelProto`` of ``model``.
 
@@ -109,22 +114,30 @@ def load_proto(model: Path) -> Any:
 
 def read_model(model: Path) -> tuple[bytes, Any]:
     """The content of ``model`` and its ONNX ``ModelProto``, from one read of the file (a tool
-    that measures the model and rewrites it measures the model it writes).
+    that measures the model and rewrites it measures the model it writes), read as every input
+    is (:func:`~contactcal.infer.files.regular.read_input_bytes`: a folder, device or pipe is
+    refused unread, never read until memory runs out nor waited on).
 
     Raises:
-        ValueError: the file cannot be read or is not an ONNX model (the message names it).
+        ValueError: the file is a folder or not a regular file, cannot be read, or is not an
+            ONNX model (the message names it).
     """
     import onnx
     from google.protobuf.message import DecodeError
 
     try:
-        content = model.read_bytes()
+        content = read_input_bytes(model, _MODEL_EXPECTED, ValueError)
+    except OSError as exc:
+        raise _unreadable(model, exc) from None
+    try:
         return content, onnx.load_from_string(content)
-    except (DecodeError, OSError, ValueError) as exc:
-        raise ValueError(
-            f"{model}: not a readable ONNX model ({exc}); expected a .onnx file written by "
-            "contactcal export"
-        ) from None
+    except (DecodeError, ValueError) as exc:
+        raise _unreadable(model, exc) from None
+
+
+def _unreadable(model: Path, exc: Exception) -> ValueError:
+    """The error of a ``model`` that could not be read, or is not an ONNX model (``exc``)."""
+    return ValueError(f"{model}: not a readable ONNX model ({exc}); expected {_MODEL_EXPECTED}")
 
 
 def metadata_of(proto: Any) -> dict[str, str]:
