@@ -144,11 +144,14 @@ def earlier_results_note(out: Path) -> str | None:
 
 
 def _results_held(out: Path) -> str:
-    """How many results the file ``out`` holds ("not a results list" when it is not one)."""
+    """How many results the file ``out`` holds ("not a results list" when it is not one), read
+    as inputs are (a device or pipe put there after the caller's check is not read)."""
     import json
 
+    from contactcal.infer.files.regular import read_input_bytes
+
     try:
-        old = json.loads(out.read_text(encoding="utf-8"))
+        old = json.loads(read_input_bytes(out, "earlier results", ValueError).decode("utf-8"))
     except (OSError, ValueError):
         return "unreadable as results"
     return f"{len(old)} result(s)" if isinstance(old, list) else "not a results list"
