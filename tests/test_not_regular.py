@@ -179,7 +179,10 @@ def test_a_folder_is_refused_by_the_shared_reader_naming_what_was_expected(
         (["measure", "--rig", "{bad}", FRAME, "--out", "-"], "the rig config JSON file"),
         (["calibrate", "{bad}", "--out", "{out}"], "the manifest CSV file (e.g. session"),
         (["measure", "{bad}", "--out", "-"], "a JPEG file"),
-        (["measure", "--reference", "{bad}", FRAME, "--out", "-"], "an image file"),
+        (  # not the frames' hint ("give the frames' file names")
+            ["measure", "--reference", "{bad}", FRAME, "--out", "-"],
+            "the session's zero-pressure frame (an image file)",
+        ),
         (["measure", "--model", "{bad}", FRAME, "--out", "-"], "the ONNX model file"),
         (
             ["calibrate", "--video", "{bad}", "--pressure-log", "{bad}", "--out", "{out}"],
