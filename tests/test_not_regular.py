@@ -155,7 +155,7 @@ def test_an_earlier_calibration_that_is_not_a_regular_file_is_not_read(
     """The earlier record of ``calibrate --out`` was read as text after an ``is_file`` check: a
     FIFO put there in between was waited on. It is held (so its run is refused or noted),
     unreadable, and never opened."""
-    from contactcal.infer.calibration.record import HeldRecord, held_record
+    from contactcal.infer.calibration.out_folder import HeldRecord, held_record
 
     assert held_record(tmp_path) == HeldRecord(fifo.path, None)
     assert not fifo.opened

@@ -159,8 +159,12 @@ def _results_held(out: Path) -> str:
 
 def _cmd_demo(args: argparse.Namespace) -> int:
     from contactcal.infer.calibration.calibrate import SessionOptions
-    from contactcal.infer.calibration.out_folder import check_same_device, check_same_unit
-    from contactcal.infer.calibration.record import earlier_record_note, held_record
+    from contactcal.infer.calibration.out_folder import (
+        check_same_device,
+        check_same_unit,
+        earlier_record_note,
+        held_record,
+    )
     from contactcal.infer.files.atomic import run_outputs
     from contactcal.infer.files.stdout import printing_after
     from contactcal.infer.methods.registry import METHODS
