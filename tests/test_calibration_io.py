@@ -14,9 +14,11 @@ import pytest
 from read_counts import count_reads
 from test_outputs import copy_session
 
+from contactcal.infer.calibration import out_folder
 from contactcal.infer.calibration import record as calibration_io
 from contactcal.infer.calibration.fit import CurveConfig
 from contactcal.infer.calibration.load import NoContactCurveError, NoSuchPhaseError, load_curve
+from contactcal.infer.calibration.out_folder import earlier_record_note, held_record
 from contactcal.infer.calibration.points import CalibrationPoint
 from contactcal.infer.calibration.record import write_calibration
 from contactcal.infer.calibration.session import SessionFit, fit_session
@@ -331,9 +333,7 @@ def test_calibrate_reads_the_earlier_record_and_the_rig_json_once(
     assert main(argv) == 0
     capsys.readouterr()
     # how the record and the rig.json are read
-    reads = count_reads(
-        monkeypatch, (calibration_io, "read_input_bytes"), (scale, "read_input_bytes")
-    )
+    reads = count_reads(monkeypatch, (out_folder, "read_input_bytes"), (scale, "read_input_bytes"))
     assert main(argv) == 0
     printed = capsys.readouterr().out
     assert "note: replaced the calibration that" in printed  # from the one read
@@ -399,16 +399,16 @@ def test_a_replaced_record_without_a_device_id_is_said_so(tmp_path: Path) -> Non
     """The note read "device id None" for a record made without --device-id."""
     record = {"created": "2024-05-01T10:00:00+00:00", "device_id": None}
     (tmp_path / "calibration.json").write_text(json.dumps(record))
-    note = calibration_io.earlier_record_note(tmp_path, calibration_io.held_record(tmp_path))
+    note = earlier_record_note(tmp_path, held_record(tmp_path))
     assert note is not None and "None" not in note
     assert f"(created {record['created']}, no device id)" in note
 
 
 def test_a_foreign_calibration_csv_replaced_is_said_so(tmp_path: Path) -> None:
     """A calibration.csv without a calibration.json beside it was overwritten without a word."""
-    assert calibration_io.earlier_record_note(tmp_path, None) is None
+    assert earlier_record_note(tmp_path, None) is None
     (tmp_path / "calibration.csv").write_text("pressure,area\n1,2\n")
-    note = calibration_io.earlier_record_note(tmp_path, None)
+    note = earlier_record_note(tmp_path, None)
     assert note is not None
     want = f"note: replaced the calibration.csv that {tmp_path} held (no calibration"
     assert note.startswith(want)

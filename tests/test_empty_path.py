@@ -52,3 +52,31 @@ def test_the_restating_tools_refuse_an_empty_path() -> None:
     assert parser.parse_args(["m.onnx", "--data", "d", "--out", "o.onnx"]).out == Path("o.onnx")
     with pytest.raises(SystemExit):
         parser.parse_args(["m.onnx", "--data", "d", "--out", ""])
+
+
+@pytest.mark.parametrize(
+    ("argv", "option"),
+    [
+        (["", "--percentile", "1", "--out", "x.onnx"], "model"),
+        (["m.onnx", "--percentile", "1", "--out", ""], "--out"),
+    ],
+)
+def test_the_floor_tool_refuses_an_empty_path_naming_it(
+    tmp_path: Path,
+    monkeypatch: pytest.MonkeyPatch,
+    capsys: pytest.CaptureFixture[str],
+    argv: list[str],
+    option: str,
+) -> None:
+    """``python -m contactcal.train.floor`` took its paths as plain strings: ``""`` was read as
+    the current folder (".: not a readable ONNX model ([Errno 21] Is a directory: '.')") or
+    refused as ``--out .``."""
+    from contactcal.train.floor import main
+
+    monkeypatch.chdir(tmp_path)
+    with pytest.raises(SystemExit) as exc:
+        main(argv)
+    assert exc.value.code == 2
+    errors = [line for line in capsys.readouterr().err.splitlines() if "error" in line]
+    assert errors == [f"python -m contactcal.train.floor: error: argument {option}: {REFUSAL}"]
+    assert list(tmp_path.iterdir()) == []

@@ -4,6 +4,7 @@ unread, in one line naming the file, exit 2: never read until memory runs out no
 from __future__ import annotations
 
 import os
+import re
 import shutil
 import subprocess
 import sys
@@ -154,7 +155,7 @@ def test_an_earlier_calibration_that_is_not_a_regular_file_is_not_read(
     """The earlier record of ``calibrate --out`` was read as text after an ``is_file`` check: a
     FIFO put there in between was waited on. It is held (so its run is refused or noted),
     unreadable, and never opened."""
-    from contactcal.infer.calibration.record import HeldRecord, held_record
+    from contactcal.infer.calibration.out_folder import HeldRecord, held_record
 
     assert held_record(tmp_path) == HeldRecord(fifo.path, None)
     assert not fifo.opened
@@ -178,7 +179,10 @@ def test_a_folder_is_refused_by_the_shared_reader_naming_what_was_expected(
         (["measure", "--rig", "{bad}", FRAME, "--out", "-"], "the rig config JSON file"),
         (["calibrate", "{bad}", "--out", "{out}"], "the manifest CSV file (e.g. session"),
         (["measure", "{bad}", "--out", "-"], "a JPEG file"),
-        (["measure", "--reference", "{bad}", FRAME, "--out", "-"], "an image file"),
+        (  # not the frames' hint ("give the frames' file names")
+            ["measure", "--reference", "{bad}", FRAME, "--out", "-"],
+            "the session's zero-pressure frame (an image file)",
+        ),
         (["measure", "--model", "{bad}", FRAME, "--out", "-"], "the ONNX model file"),
         (
             ["calibrate", "--video", "{bad}", "--pressure-log", "{bad}", "--out", "{out}"],
@@ -226,3 +230,68 @@ def test_a_restating_tools_model_that_is_not_a_file_is_refused_unread(
     says = "is a folder" if writer is None else "not a regular file (a device, pipe or socket)"
     assert err == f"error: {bad}: {says}; expected a .onnx file written by contactcal export\n"
     assert not out.exists()
+
+
+def _earlier_results(fifo: Path) -> object:
+    from contactcal.infer.pipeline.commands import _results_held
+
+    return _results_held(fifo)
+
+
+def _earlier_evaluation(fifo: Path) -> object:
+    from contactcal.infer.evaluate.command import earlier_evaluation_note
+
+    (fifo.parent / "evaluation.png").write_bytes(b"png")
+    return earlier_evaluation_note(fifo.parent, fifo.parent / "manifest.csv")
+
+
+def _frame_record(fifo: Path) -> object:
+    from contactcal.synth.dataset_folder import read_frame_record
+
+    return read_frame_record(fifo)
+
+
+def _run_config(fifo: Path) -> object:
+    from contactcal.train.run_folder import read_run_info
+
+    return read_run_info(fifo.parent)
+
+
+#: Reader of an earlier output → (the file it reads, and what it returns or raises for a FIFO).
+EARLIER_OUTPUTS = {
+    "measure's results": (_earlier_results, "results.json", "unreadable as results"),
+    "evaluate's evaluation": (
+        _earlier_evaluation,
+        "evaluation.json",
+        "evaluation.png, not readable as an evaluation",
+    ),
+    "a synth frame record": (
+        _frame_record,
+        "p05.0kpa.json",
+        "not a regular file .*; expected a frame record a `contactcal synth` run wrote",
+    ),
+    "a train run's config": (
+        _run_config,
+        "config.json",
+        "not a regular file .*; expected the config.json a `contactcal train` run wrote",
+    ),
+}
+
+
+@pytest.mark.parametrize("case", list(EARLIER_OUTPUTS))
+def test_an_earlier_output_that_is_a_fifo_is_not_opened(tmp_path: Path, case: str) -> None:
+    """These readers checked ``is_file`` (or globbed the folder) and then read the file as text:
+    a FIFO there (for synth, any ``frames/*.json``: a resume hung on it) was waited on for a
+    writer, and read as empty when one was waiting, as here."""
+    reader, name, expected = EARLIER_OUTPUTS[case]
+    fifo = WaitingWriter(tmp_path / name)
+    try:
+        try:
+            got = str(reader(fifo.path))
+        except ValueError as exc:
+            got = str(exc)
+        assert re.search(expected, got), got
+        assert "\n" not in got
+        assert not fifo.opened
+    finally:
+        fifo.release()

@@ -6,6 +6,7 @@ from __future__ import annotations
 import hashlib
 import json
 import math
+import re
 from pathlib import Path
 
 import numpy as np
@@ -119,8 +120,14 @@ def test_bad_sets_of_evaluations(tmp_path: Path) -> None:
     for name in ("old", "list"):
         with pytest.raises(ValueError, match=rf"{name}/evaluation\.json: has no U-Net"):
             pool_offsets([*good[:4], tmp_path / name])
-    (tmp_path / "empty").mkdir()
-    with pytest.raises(ValueError, match="not a readable evaluation.json"):
+    (tmp_path / "empty").mkdir()  # said missing, and what writes it, not "not a readable ..."
+    said = "missing; expected the evaluation.json that `contactcal evaluate ... --out DIR` writes"
+    for given in (tmp_path / "empty", tmp_path / "typo"):
+        file = given / "evaluation.json" if given.is_dir() else given
+        with pytest.raises(ValueError, match=f"^{re.escape(f'{file}: {said}')}"):
+            pool_offsets([*good[:4], given])
+    (tmp_path / "empty" / "evaluation.json").write_text("{")
+    with pytest.raises(ValueError, match="empty/evaluation.json: not a readable evaluation.json"):
         pool_offsets([*good[:4], tmp_path / "empty"])
 
 

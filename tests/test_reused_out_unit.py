@@ -154,8 +154,7 @@ def test_the_refusal_quotes_the_scale_options_as_the_record_gave_them(
     argv: list[str], said: str | None, tmp_path: Path
 ) -> None:
     """Spelled out, whichever way the record's command line gave them."""
-    from contactcal.infer.calibration.out_folder import check_same_unit
-    from contactcal.infer.calibration.record import HeldRecord
+    from contactcal.infer.calibration.out_folder import HeldRecord, check_same_unit
 
     path = tmp_path / "calibration.json"
     data = {"area_unit": MM2, "argv": [*argv, "--out", "cal"]}

@@ -17,6 +17,7 @@ from __future__ import annotations
 import dataclasses
 import os
 from collections.abc import Sequence
+from pathlib import Path
 from typing import Any
 
 from contactcal.infer.parser import Parser
@@ -73,9 +74,9 @@ def main(argv: Sequence[str] | None = None) -> int:
         prog="python -m contactcal.train.floor",
         description="Set an exported model's dark floor (metadata only).",
     )
-    ap.add_argument("model", help="exported .onnx model")
+    ap.add_argument("model", type=Path, help="exported .onnx model")
     ap.add_argument("--percentile", type=float, required=True, help="floor percentile, %%")
-    ap.add_argument("--out", required=True, help="new .onnx file")
+    ap.add_argument("--out", type=Path, required=True, help="new .onnx file")
     a = ap.parse_args(argv)
     return run_restating(lambda: floor_model(a.model, a.percentile, a.out), a.out)
 

@@ -17,22 +17,28 @@ from typing import Any
 
 from contactcal.infer.errors import few
 from contactcal.infer.files.destination import check_receiving_folder
+from contactcal.infer.files.regular import read_input_bytes
 from contactcal.infer.files.temporaries import TEMP_NAME
 
 
 def read_run_info(run_dir: str | os.PathLike[str]) -> dict[str, Any]:
-    """A run's ``config.json``.
+    """A run's ``config.json``, read as inputs are (a folder, device or pipe there is refused
+    unread).
 
     Raises:
-        ValueError: missing, unreadable, or not a ``contactcal train`` run config.
+        ValueError: missing, unreadable, not a regular file, or not a ``contactcal train`` run
+            config.
     """
     run = Path(run_dir)
     path = run / "config.json"
-    if not path.is_file():
-        raise ValueError(f"{path}: missing run config (is {run} a `contactcal train` run folder?)")
     try:
-        info = json.loads(path.read_text(encoding="utf-8"))
-    except (OSError, json.JSONDecodeError) as exc:
+        raw = read_input_bytes(path, "the config.json a `contactcal train` run wrote", ValueError)
+        info = json.loads(raw.decode("utf-8"))
+    except (FileNotFoundError, NotADirectoryError):
+        raise ValueError(
+            f"{path}: missing run config (is {run} a `contactcal train` run folder?)"
+        ) from None
+    except (OSError, UnicodeDecodeError, json.JSONDecodeError) as exc:
         raise ValueError(f"{path}: unreadable run config ({exc})") from exc
     if not isinstance(info, dict) or "train" not in info:
         raise ValueError(

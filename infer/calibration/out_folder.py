@@ -1,22 +1,87 @@
 """What ``calibrate``'s ``--out`` may already hold, checked before a run measures anything.
 
 A run into a folder that holds a calibration replaces it whole, with a note
-(:func:`~contactcal.infer.calibration.record.earlier_record_note`): a re-calibration of the same
-display. It is refused where that would lose another display's record (the device ids differ),
-replace a record in mm² with one in px (this run has no pixel scale), or leave a recording's
-``frames/`` and preview beside a calibration made of other frames.
+(:func:`earlier_record_note`): a re-calibration of the same display. It is refused where that
+would lose another display's record (the device ids differ), replace a record in mm² with one in
+px (this run has no pixel scale), or leave a recording's ``frames/`` and preview beside a
+calibration made of other frames. The ``calibration.json`` held is read once, as inputs are
+(:func:`held_record`), for the checks and the note.
 """
 
 from __future__ import annotations
 
+import json
 import os
 import shlex
+from dataclasses import dataclass
 from pathlib import Path
+from typing import Any
 
 from contactcal.infer.calibration.curve import MM2
-from contactcal.infer.calibration.record import HeldRecord, earlier_record_note, held_record
+from contactcal.infer.files.regular import read_input_bytes
 from contactcal.infer.files.temporaries import TEMP_NAME
 from contactcal.infer.video.preview_files import previews_in
+
+
+@dataclass(frozen=True)
+class HeldRecord:
+    """The ``calibration.json`` an output folder holds before a run, read once
+    (:func:`held_record`): the device check and the note on what the run replaces both see it."""
+
+    #: Its path.
+    path: Path
+    #: Its JSON object; None: unreadable (or a device, pipe, folder), or not a JSON object.
+    data: dict[str, Any] | None
+
+
+def held_record(out_dir: str | os.PathLike[str]) -> HeldRecord | None:
+    """The ``calibration.json`` ``out_dir`` holds, read once as inputs are; None: none."""
+    path = Path(out_dir) / "calibration.json"
+    try:
+        raw = read_input_bytes(path, "an earlier calibration.json", ValueError)
+        data = json.loads(raw.decode("utf-8"))
+    except (FileNotFoundError, NotADirectoryError):  # none there
+        return None
+    except (OSError, ValueError):
+        data = None
+    return HeldRecord(path, data if isinstance(data, dict) else None)
+
+
+def earlier_record_note(out_dir: str | os.PathLike[str], held: HeldRecord | None) -> str | None:
+    """A line naming the calibration ``out_dir`` holds before a run writes its own (None: none).
+
+    A run into the same ``--out`` replaces ``calibration.json``, ``.csv`` and ``curve.png``
+    whole (the earlier files stay until the new ones are complete); the user is told which
+    record went, so that an earlier display's curve is not lost without a word.
+
+    Args:
+        out_dir: the run's output folder, before the run.
+        held: its ``calibration.json`` as read before the run (:func:`held_record`).
+
+    Returns:
+        ``None`` without an earlier ``calibration.json``, ``.csv`` or ``curve.png``, else a
+        one-line note naming the record's creation time and device id ("unreadable" when it is
+        not a record), or, without a ``calibration.json``, the files replaced.
+    """
+    if held is None:
+        held_files = [n for n in ("calibration.csv", "curve.png") if (Path(out_dir) / n).is_file()]
+        if not held_files:
+            return None
+        return (
+            f"note: replaced the {' and '.join(held_files)} that {out_dir} held (no "
+            f"calibration.json beside {'them' if len(held_files) > 1 else 'it'}: not a "
+            "contactcal record); give each run its own --out to keep both"
+        )
+    if held.data is None or "created" not in held.data:
+        what = "unreadable as a record"
+    else:
+        device = held.data.get("device_id")
+        named = "no device id" if device is None else f"device id {device!r}"
+        what = f"created {held.data['created']}, {named}"
+    return (
+        f"note: replaced the calibration that {out_dir} held ({what}); give each run its own --out "
+        "to keep both"
+    )
 
 
 def check_reused_out(
@@ -34,8 +99,8 @@ def check_reused_out(
             :data:`~contactcal.infer.pipeline.args.NO_SCALE_NOTE` says it); None: it has one.
 
     Returns:
-        The note :func:`~contactcal.infer.calibration.record.earlier_record_note` gives (None:
-        nothing replaced), from the ``calibration.json`` read once for both.
+        The note :func:`earlier_record_note` gives (None: nothing replaced), from the
+        ``calibration.json`` read once for both.
 
     Raises:
         ValueError: ``out`` holds another display's calibration, one in mm² that this run
@@ -68,7 +133,7 @@ def check_same_device(
 
     Args:
         held: the ``--out`` folder's ``calibration.json`` as read before the run
-            (:func:`~contactcal.infer.calibration.record.held_record`; None: none).
+            (:func:`held_record`; None: none).
         device_id: this run's ``--device-id`` (None: not given).
         takes_device_id: whether the command has ``--device-id`` (``demo`` has none: the
             message then names no such option).
@@ -102,7 +167,7 @@ def check_same_unit(held: HeldRecord | None, no_scale: str | None, scale_from: s
 
     Args:
         held: the ``--out`` folder's ``calibration.json`` as read before the run
-            (:func:`~contactcal.infer.calibration.record.held_record`; None: none).
+            (:func:`held_record`; None: none).
         no_scale: where this run looked for a pixel scale and found none; None: it has one.
         scale_from: what to do to give this run the earlier run's scale (the command's own
             ways: ``demo`` reads only the rig.json beside its manifest).

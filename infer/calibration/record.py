@@ -19,9 +19,7 @@ from __future__ import annotations
 
 import csv
 import io
-import json
 import os
-from dataclasses import dataclass
 from datetime import datetime, timezone
 from pathlib import Path
 from typing import Any
@@ -39,7 +37,6 @@ from contactcal.infer.calibration.provenance import (
 from contactcal.infer.calibration.session import PhaseFit, SessionFit
 from contactcal.infer.files.atomic import OutputSet, run_outputs, write_synced
 from contactcal.infer.files.jsonable import finite_or_none, json_text, jsonable
-from contactcal.infer.files.regular import read_input_bytes
 
 # plot_curve is looked up here at call time, so tests can replace it.
 __all__ = ["Provenance", "check_device_id", "input_digests", "load_curve", "write_calibration"]
@@ -247,64 +244,3 @@ def write_calibration(
         write_synced(outs.stage(paths["csv"]), csv_text)
         write_synced(outs.stage(paths["json"]), text)  # staged last, so moved last
     return paths
-
-
-@dataclass(frozen=True)
-class HeldRecord:
-    """The ``calibration.json`` an output folder holds before a run, read once
-    (:func:`held_record`): the device check and the note on what the run replaces both see it."""
-
-    #: Its path.
-    path: Path
-    #: Its JSON object; None: unreadable (or a device, pipe, folder), or not a JSON object.
-    data: dict[str, Any] | None
-
-
-def held_record(out_dir: str | os.PathLike[str]) -> HeldRecord | None:
-    """The ``calibration.json`` ``out_dir`` holds, read once as inputs are; None: none."""
-    path = Path(out_dir) / "calibration.json"
-    try:
-        raw = read_input_bytes(path, "an earlier calibration.json", ValueError)
-        data = json.loads(raw.decode("utf-8"))
-    except (FileNotFoundError, NotADirectoryError):  # none there
-        return None
-    except (OSError, ValueError):
-        data = None
-    return HeldRecord(path, data if isinstance(data, dict) else None)
-
-
-def earlier_record_note(out_dir: str | os.PathLike[str], held: HeldRecord | None) -> str | None:
-    """A line naming the calibration ``out_dir`` holds before a run writes its own (None: none).
-
-    A run into the same ``--out`` replaces ``calibration.json``, ``.csv`` and ``curve.png``
-    whole (the earlier files stay until the new ones are complete); the user is told which
-    record went, so that an earlier display's curve is not lost without a word.
-
-    Args:
-        out_dir: the run's output folder, before the run.
-        held: its ``calibration.json`` as read before the run (:func:`held_record`).
-
-    Returns:
-        ``None`` without an earlier ``calibration.json``, ``.csv`` or ``curve.png``, else a
-        one-line note naming the record's creation time and device id ("unreadable" when it is
-        not a record), or, without a ``calibration.json``, the files replaced.
-    """
-    if held is None:
-        held_files = [n for n in ("calibration.csv", "curve.png") if (Path(out_dir) / n).is_file()]
-        if not held_files:
-            return None
-        return (
-            f"note: replaced the {' and '.join(held_files)} that {out_dir} held (no "
-            f"calibration.json beside {'them' if len(held_files) > 1 else 'it'}: not a "
-            "contactcal record); give each run its own --out to keep both"
-        )
-    if held.data is None or "created" not in held.data:
-        what = "unreadable as a record"
-    else:
-        device = held.data.get("device_id")
-        named = "no device id" if device is None else f"device id {device!r}"
-        what = f"created {held.data['created']}, {named}"
-    return (
-        f"note: replaced the calibration that {out_dir} held ({what}); give each run its own --out "
-        "to keep both"
-    )

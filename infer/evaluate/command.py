@@ -6,6 +6,7 @@ import argparse
 import json
 from pathlib import Path
 
+from contactcal.infer.files.regular import read_input_bytes
 from contactcal.infer.methods.registry import METHODS
 from contactcal.infer.pipeline.args import (
     change_gate_arg,
@@ -106,7 +107,8 @@ def earlier_evaluation_note(out: Path, manifest: Path) -> str | None:
     if not held:
         return None
     try:
-        record = json.loads((out / "evaluation.json").read_text(encoding="utf-8"))
+        raw = read_input_bytes(out / "evaluation.json", "an earlier evaluation", ValueError)
+        record = json.loads(raw.decode("utf-8"))
         earlier = Path(record["manifest"])
         what = (
             "an earlier evaluation of this manifest"

@@ -58,6 +58,11 @@ def _load(path: Path) -> dict[str, Any]:
     try:
         raw = read_input_bytes(file, "the evaluation.json of `contactcal evaluate`", ValueError)
         record = json.loads(raw.decode("utf-8"))
+    except (FileNotFoundError, NotADirectoryError):
+        raise ValueError(
+            f"{file}: missing; expected the evaluation.json that `contactcal evaluate ... --out "
+            "DIR` writes into DIR (give each session's DIR, or that file)"
+        ) from None
     except (OSError, UnicodeDecodeError, json.JSONDecodeError) as exc:
         raise ValueError(
             f"{file}: not a readable evaluation.json of `contactcal evaluate`"

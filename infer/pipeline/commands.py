@@ -144,11 +144,14 @@ def earlier_results_note(out: Path) -> str | None:
 
 
 def _results_held(out: Path) -> str:
-    """How many results the file ``out`` holds ("not a results list" when it is not one)."""
+    """How many results the file ``out`` holds ("not a results list" when it is not one), read
+    as inputs are (a device or pipe put there after the caller's check is not read)."""
     import json
 
+    from contactcal.infer.files.regular import read_input_bytes
+
     try:
-        old = json.loads(out.read_text(encoding="utf-8"))
+        old = json.loads(read_input_bytes(out, "earlier results", ValueError).decode("utf-8"))
     except (OSError, ValueError):
         return "unreadable as results"
     return f"{len(old)} result(s)" if isinstance(old, list) else "not a results list"
@@ -156,8 +159,12 @@ def _results_held(out: Path) -> str:
 
 def _cmd_demo(args: argparse.Namespace) -> int:
     from contactcal.infer.calibration.calibrate import SessionOptions
-    from contactcal.infer.calibration.out_folder import check_same_device, check_same_unit
-    from contactcal.infer.calibration.record import earlier_record_note, held_record
+    from contactcal.infer.calibration.out_folder import (
+        check_same_device,
+        check_same_unit,
+        earlier_record_note,
+        held_record,
+    )
     from contactcal.infer.files.atomic import run_outputs
     from contactcal.infer.files.stdout import printing_after
     from contactcal.infer.methods.registry import METHODS

@@ -15,6 +15,8 @@ from typing import Any
 
 import numpy as np
 
+from contactcal.infer.files.regular import refuse_non_file
+from contactcal.infer.image.gray import ImageError
 from contactcal.infer.image.read import (
     ImageFile,
     ImageSource,
@@ -191,6 +193,9 @@ def measure_files(
         BoundaryOffsetError: an offset measured for another model, or without a scale.
     """
     active = offset_for(method, boundary, scale)
+    if reference is not None and not isinstance(reference, ImageFile):  # not a frame's wording
+        expected = "the session's zero-pressure frame (an image file)"
+        refuse_non_file(reference, expected, ImageError)
     if contents is not None:  # read now: after the checks a run that holds none makes first
         reference = None if reference is None else sources_of([source_path(reference)], contents)[0]
         files = sources_of([source_path(f) for f in files], contents)
