@@ -20,14 +20,7 @@ from contactcal.infer.bench.config import BenchConfig
 from contactcal.infer.bench.crosscheck import labels
 from contactcal.infer.bench.onset import onset_errors, onset_table
 from contactcal.infer.bench.plots import pareto_points
-from contactcal.infer.bench.report import (
-    _timed_frames,
-    accuracy_tables,
-    coverage_table,
-    hard_table,
-    md_table,
-    report_text,
-)
+from contactcal.infer.bench.report import _timed_frames, md_table, report_text
 from contactcal.infer.bench.run import run_bench
 from contactcal.infer.bench.scoring import (
     PRESSURE_BINS,
@@ -36,6 +29,7 @@ from contactcal.infer.bench.scoring import (
     covering_bins,
     not_references,
 )
+from contactcal.infer.bench.tables import accuracy_tables, coverage_table, hard_table
 from contactcal.infer.cli import main
 from contactcal.infer.image.read import load_image
 

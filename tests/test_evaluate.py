@@ -16,7 +16,8 @@ import pytest
 
 from contactcal.infer.cli import main
 from contactcal.infer.evaluate.ellipse import ImageJEllipse, rasterise
-from contactcal.infer.evaluate.labels import label_mask, read_labels
+from contactcal.infer.evaluate.label_raster import label_mask
+from contactcal.infer.evaluate.labels import read_labels
 from contactcal.infer.pipeline.examples import EXAMPLE_SESSION
 from contactcal.infer.pipeline.manifest import read_session
 

@@ -15,7 +15,8 @@ import numpy as np
 import pytest
 
 from contactcal.infer.cli import main
-from contactcal.infer.evaluate.labels import Label, LabelError, LabelMask
+from contactcal.infer.evaluate.label_raster import LabelMask
+from contactcal.infer.evaluate.labels import Label, LabelError
 from contactcal.infer.evaluate.pool import pool_offsets
 from contactcal.infer.evaluate.window import Window, check_label_area, find_window
 from contactcal.infer.image.read import ImageFile

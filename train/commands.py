@@ -30,12 +30,32 @@ def add_parsers(sub: Any) -> None:
     Args:
         sub: what ``ArgumentParser.add_subparsers()`` returned.
     """
+    _add_train_parser(sub)
+    _add_export_parser(sub)
+    _add_quantize_parser(sub)
+
+
+def _add_train_parser(sub: Any) -> None:
+    """``contactcal train``: the U-Net contact segmenter trained on synthetic datasets."""
     t = sub.add_parser(
         "train",
         help="train the contact segmenter on synthetic datasets",
         description="Train the U-Net contact segmenter. Options left out take the defaults "
         "(or, with --resume, the run's saved settings).",
     )
+    _add_run_args(t)
+    _add_input_args(t)
+    add_reference_args(t)
+    add_ridge_args(t)
+    add_look_args(t)
+    _add_optimiser_args(t)
+    _add_model_args(t)
+    t.add_argument("--quiet", action="store_true", help="no progress bars")
+    t.set_defaults(func=_cmd_train)
+
+
+def _add_run_args(t: argparse.ArgumentParser) -> None:
+    """``train``'s datasets, run folder, epochs, device and ``--resume``."""
     t.add_argument(
         "--data", nargs="+", type=Path, required=True, metavar="DIR", help="dataset folder(s)"
     )
@@ -49,6 +69,10 @@ def add_parsers(sub: Any) -> None:
     t.add_argument("--epochs", type=int, help="number of epochs (default 40)")
     t.add_argument("--device", choices=("cpu", "cuda", "auto"), help="default auto")
     t.add_argument("--resume", action="store_true", help="continue from RUN_DIR/last.pt")
+
+
+def _add_input_args(t: argparse.ArgumentParser) -> None:
+    """``train``'s network input: its side and the normalisation's floor."""
     t.add_argument(
         "--input-size", type=int, metavar="S", help="network input side, px (default 256)"
     )
@@ -59,9 +83,10 @@ def add_parsers(sub: Any) -> None:
         help="percentile of the crop subtracted before the normalisation, as deployment will "
         "(u = (g - F)/(P - F): invariant to black level and contrast; default 0: none)",
     )
-    add_reference_args(t)
-    add_ridge_args(t)
-    add_look_args(t)
+
+
+def _add_optimiser_args(t: argparse.ArgumentParser) -> None:
+    """``train``'s optimisation: seed, batch size, weight average and torch's CPU threads."""
     t.add_argument("--seed", type=int, help="split/init/shuffle/augmentation seed (default 0)")
     t.add_argument("--batch-size", type=int, metavar="B", help="frames per step (default 16)")
     t.add_argument(
@@ -81,11 +106,16 @@ def add_parsers(sub: Any) -> None:
         metavar="T",
         help="torch CPU threads (default: torch's)",
     )
+
+
+def _add_model_args(t: argparse.ArgumentParser) -> None:
+    """``train``'s U-Net size: channels at the first level and resolution levels."""
     t.add_argument("--base", type=int, help="U-Net channels at the first level (default 8)")
     t.add_argument("--levels", type=int, help="U-Net resolution levels (default 3)")
-    t.add_argument("--quiet", action="store_true", help="no progress bars")
-    t.set_defaults(func=_cmd_train)
 
+
+def _add_export_parser(sub: Any) -> None:
+    """``contactcal export``: a trained run's model as ONNX."""
     e = sub.add_parser("export", help="export a trained run to ONNX")
     e.add_argument("run_dir", type=Path, metavar="RUN_DIR", help="run folder with best.pt")
     e.add_argument("--out", type=Path, required=True, metavar="MODEL.onnx", help="output model")
@@ -101,7 +131,6 @@ def add_parsers(sub: Any) -> None:
         help="choose the no-contact minimum area on the run's validation fingers",
     )
     e.set_defaults(func=_cmd_export)
-    _add_quantize_parser(sub)
 
 
 def _add_quantize_parser(sub: Any) -> None:

@@ -17,7 +17,7 @@ from contactcal.infer.bench.dataset import IndexRow, read_index, sessions_of
 from contactcal.infer.bench.markdown import md_table
 from contactcal.infer.bench.models import BenchModel
 from contactcal.infer.bench.onset import ONSET_COLUMNS, onset_errors, onset_shown
-from contactcal.infer.bench.report import BIN_COLUMNS, HARD_COLUMNS, accuracy_tables
+from contactcal.infer.bench.report import BIN_COLUMNS, HARD_COLUMNS
 from contactcal.infer.bench.scoring import (
     ScoredFrame,
     bin_label,
@@ -25,6 +25,7 @@ from contactcal.infer.bench.scoring import (
     covering_bins,
     not_references,
 )
+from contactcal.infer.bench.tables import accuracy_tables
 
 #: Bin of the side-by-side table that pools every frame at or above 5 kPa, kPa.
 POOLED_FROM_KPA = 5.0

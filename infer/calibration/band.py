@@ -11,7 +11,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from contactcal.infer.calibration.curve import highest_at, lowest_reaching
+from contactcal.infer.calibration.piecewise import highest_at, lowest_reaching
 
 
 @dataclass(frozen=True, eq=False)
@@ -68,7 +68,7 @@ class Band:
         does not reach within its grid is clamped to the grid's top pressure, and the warning
         says so; otherwise the warning is None. ``above``: the bounds just above ``area``
         (where an edge holds ``area`` over a pressure range, the range's end, where the edge
-        rises again; :func:`~contactcal.infer.calibration.curve.highest_at`).
+        rises again; :func:`~contactcal.infer.calibration.piecewise.highest_at`).
         """
         x = self.pressures_kpa
         # area 0: where each edge leaves 0 (its onset), not the grid's first pressure

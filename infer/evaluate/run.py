@@ -15,13 +15,8 @@ from typing import Any
 
 from contactcal.infer.bench.scoring import OPEN_BINS, ScoredFrame, bin_table
 from contactcal.infer.evaluate.identity import input_digests
-from contactcal.infer.evaluate.labels import (
-    Label,
-    LabelError,
-    LabelMask,
-    label_mask,
-    read_labels,
-)
+from contactcal.infer.evaluate.label_raster import LabelMask, label_mask
+from contactcal.infer.evaluate.labels import Label, LabelError, read_labels
 from contactcal.infer.evaluate.offset import current_offset, offset_line, unet_offset
 from contactcal.infer.evaluate.plots import plot_evaluation
 from contactcal.infer.evaluate.report import format_table

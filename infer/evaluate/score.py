@@ -14,7 +14,7 @@ from typing import Any
 from contactcal.infer.bench.scoring import ScoredFrame, outline_iou, session_revised
 from contactcal.infer.calibration.fit import estimate_onset
 from contactcal.infer.calibration.steps import pool
-from contactcal.infer.evaluate.labels import LabelMask
+from contactcal.infer.evaluate.label_raster import LabelMask
 from contactcal.infer.pipeline.manifest_rows import listed_name
 from contactcal.infer.pipeline.measure import Measured
 from contactcal.infer.pipeline.scale import PixelScale

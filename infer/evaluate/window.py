@@ -17,7 +17,8 @@ from pathlib import Path
 
 import numpy as np
 
-from contactcal.infer.evaluate.labels import Label, LabelError, LabelMask
+from contactcal.infer.evaluate.label_raster import LabelMask
+from contactcal.infer.evaluate.labels import Label, LabelError
 from contactcal.infer.image.read import ImageFile
 from contactcal.infer.methods.unet.ring import locate_ring
 from contactcal.infer.pipeline.frame_check import RING_RADIUS_TOLERANCE
@@ -64,7 +65,7 @@ def check_label_area(
         mask: its rasterised mask.
         frame_size: its frame's ``(width, height)``, px.
         window: the reference frame's ring (None: no check here; the frame bounds a label,
-            :mod:`~contactcal.infer.evaluate.labels`).
+            :mod:`~contactcal.infer.evaluate.label_raster`).
 
     Raises:
         LabelError: the label covers more than the window ring's area, or lies mostly

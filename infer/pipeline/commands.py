@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import argparse
 import sys
+from dataclasses import dataclass
 from pathlib import Path
 from typing import TYPE_CHECKING
 
@@ -28,6 +29,9 @@ from contactcal.infer.pipeline.overlay_measure import (
 
 if TYPE_CHECKING:
     from contactcal.infer.files.atomic import OutputSet
+    from contactcal.infer.image.read import ImageFile
+    from contactcal.infer.pipeline.measure import Measured
+    from contactcal.infer.pipeline.options import MeasureOptions
 
 
 def add_parsers(sub: argparse._SubParsersAction) -> None:
@@ -50,32 +54,49 @@ def add_parsers(sub: argparse._SubParsersAction) -> None:
 
 
 def _cmd_measure(args: argparse.Namespace) -> int:
+    """``contactcal measure``: the checks before the work, the run, then its report."""
     from contactcal.infer.calibration.provenance import check_device_id
-    from contactcal.infer.files.atomic import run_outputs, write_synced
-    from contactcal.infer.files.jsonable import json_text
-    from contactcal.infer.files.stdout import printing_after
-    from contactcal.infer.image.read import SUPPORTED_SUFFIXES, sources_of
-    from contactcal.infer.pipeline.measure import note_self_reference
-    from contactcal.infer.pipeline.overlay import (
-        earlier_overlays_note,
-        overlay_names,
-        write_overlays,
-    )
+    from contactcal.infer.pipeline.overlay import overlay_names
 
     check_device_id(args.device_id)
     check_change_gate(args)
     named_as = tuple(overlay_names(args.images))
     check_output_folder("--overlay", args.overlay, named_as)  # before the work
-    to_stdout = str(args.out) == "-"
+    to_stdout = _results_to_stdout(args.out)
+    replaced = None if to_stdout else earlier_results_note(args.out)
+    run = _measure_run(args, to_stdout)
+    _print_measured(args, run, to_stdout, replaced)
+    return 0
+
+
+@dataclass(frozen=True)
+class _MeasureRun:
+    """What a ``measure`` run measured and wrote."""
+
+    measured: list[Measured]  # the frames, as noted by note_self_reference
+    warnings: list[str]  # note_self_reference's lines
+    text: str  # the results JSON
+    written: list[Path]  # the overlay files written (none without --overlay)
+
+
+def _results_to_stdout(out: Path) -> bool:
+    """Whether ``measure --out`` is ``-`` (standard output), once checked before the work.
+
+    Raises:
+        ValueError: ``--out -`` with standard output closed, or a file name not ending in .json.
+    """
+    from contactcal.infer.image.read import SUPPORTED_SUFFIXES
+
+    to_stdout = str(out) == "-"
     if to_stdout and sys.stdout is None:
         raise ValueError(
             "--out -: standard output is closed (the command was started with it closed); "
             "give --out results.json, or run it with standard output open"
         )
-    if not to_stdout and args.out.suffix.lower() != ".json":
-        image = args.out.suffix.lower() in SUPPORTED_SUFFIXES
+    if not to_stdout and out.suffix.lower() != ".json":
+        image = out.suffix.lower() in SUPPORTED_SUFFIXES
         raise ValueError(
-            f"--out {args.out}: expected a JSON file name ending in .json (results.json) or - "
+            f"--out {out}: expected a JSON file name ending in .json (results.json) or - "
             "for standard output"
             + (
                 ", got an image name (did the shell expand a pattern right after --out?)"
@@ -83,7 +104,16 @@ def _cmd_measure(args: argparse.Namespace) -> int:
                 else " (measure writes JSON; a name like a manifest's would replace that file)"
             )
         )
-    replaced = None if to_stdout else earlier_results_note(args.out)
+    return to_stdout
+
+
+def _measure_run(args: argparse.Namespace, to_stdout: bool) -> _MeasureRun:
+    """Measure ``args.images`` and write the results (``--out``, unless ``to_stdout``) and the
+    overlays (``--overlay``), all or nothing."""
+    from contactcal.infer.files.atomic import run_outputs, write_synced
+    from contactcal.infer.files.jsonable import json_text
+    from contactcal.infer.pipeline.measure import note_self_reference
+
     named = {"--out": None if to_stdout else args.out, "--overlay": args.overlay}
     with run_outputs([*args.images, *run_inputs(args)], options=named) as outs:
         json_path = None if to_stdout else _stage_results(outs, args.out)  # before the work
@@ -98,29 +128,53 @@ def _cmd_measure(args: argparse.Namespace) -> int:
         text = json_text(rows)
         if json_path is not None:
             write_synced(json_path, text)
-        written: list[Path] = []
-        if read is not None:
-            images = sources_of(args.images, read)  # the contents measured, not read again
-            reference = None if ref is None else read[ref]
-            drawn = overlay_methods(args, options)
-            runs = overlay_runs(args, options, measured, images, reference, drawn)
-            bits = args.bit_depth
-            written = write_overlays(runs, read, args.overlay, outputs=outs, bit_depth=bits)
+        written = [] if read is None else _write_overlays(args, options, measured, read, outs)
+    return _MeasureRun(measured, warnings, text, written)
+
+
+def _write_overlays(
+    args: argparse.Namespace,
+    options: MeasureOptions,
+    measured: list[Measured],
+    read: dict[Path, ImageFile],
+    outs: OutputSet,
+) -> list[Path]:
+    """``measure --overlay``: every method's outline on the frames ``measured`` (from the
+    contents ``read`` as they were measured, not read again), staged into ``outs``."""
+    from contactcal.infer.image.read import sources_of
+    from contactcal.infer.pipeline.overlay import write_overlays
+
+    images = sources_of(args.images, read)  # the contents measured, not read again
+    ref = args.reference
+    reference = None if ref is None else read[ref]
+    drawn = overlay_methods(args, options)
+    runs = overlay_runs(args, options, measured, images, reference, drawn)
+    bits = args.bit_depth
+    return write_overlays(runs, read, args.overlay, outputs=outs, bit_depth=bits)
+
+
+def _print_measured(
+    args: argparse.Namespace, run: _MeasureRun, to_stdout: bool, replaced: str | None
+) -> None:
+    """``measure``'s report: the results JSON on standard output with ``--out -``, a line per
+    frame (on standard error then), the warnings, and the notes of the files replaced."""
+    from contactcal.infer.files.stdout import printing_after
+    from contactcal.infer.pipeline.overlay import earlier_overlays_note
+
     overlays = [] if args.overlay is None else [args.overlay]
     with printing_after([*([] if to_stdout else [args.out]), *overlays], [replaced]):
         if to_stdout:
-            sys.stdout.write(text)
-        for m in measured:
+            sys.stdout.write(run.text)
+        for m in run.measured:
             mm2 = m.area_mm2
             area = f"{mm2:8.1f} mm²" if mm2 is not None else f"{m.result.area_px:10.0f} px"
             line = f"{m.file}  contact={'yes' if m.result.contact else 'no ':3s} area={area}"
             print(line, file=sys.stderr if to_stdout else sys.stdout)
-        for line in warnings:
+        for line in run.warnings:
             print(line, file=sys.stderr)
-        for note in (earlier_overlays_note(written), replaced):
+        for note in (earlier_overlays_note(run.written), replaced):
             if note is not None:
                 print(note, file=sys.stderr if to_stdout else sys.stdout)
-    return 0
 
 
 def _stage_results(outs: OutputSet, out: Path) -> Path:
