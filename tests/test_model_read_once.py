@@ -8,9 +8,11 @@ import json
 import os
 import shutil
 from pathlib import Path
+from typing import Any, BinaryIO
 
 import pytest
 
+from contactcal.infer.files import regular
 from contactcal.infer.files.digest import sha256_file
 from contactcal.infer.methods.unet.method import UnetMethod
 from contactcal.infer.methods.unet.runner import DEFAULT_MODEL
@@ -59,19 +61,34 @@ def test_a_model_that_cannot_be_read_is_one_model_error(
 
 
 def _replaced_after_each_read(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> Path:
-    """A copy of the shipped model that turns to junk right after each ``read_bytes`` of it (a
-    re-export into the same path, half done)."""
+    """A copy of the shipped model that turns to junk right after each read of it (a re-export
+    into the same path, half done): after each ``Path.read_bytes``, and after each opening by
+    the shared reader every input goes through (:func:`~contactcal.infer.files.regular.open_input`,
+    behind ``read_input_bytes``: the file opened is replaced, so that reading goes on)."""
     model = tmp_path / "model.onnx"
     shutil.copyfile(DEFAULT_MODEL, model)
-    real = Path.read_bytes
+    junk = tmp_path / "junk.onnx"
+
+    def replace_model() -> None:
+        junk.write_bytes(b"not a model any more")
+        os.replace(junk, model)
+
+    real_read, real_open = Path.read_bytes, regular.open_input
 
     def read_then_replace(self: Path) -> bytes:
-        content = real(self)
+        content = real_read(self)
         if self == model:
-            model.write_bytes(b"not a model any more")
+            replace_model()
         return content
 
+    def open_then_replace(path: str | os.PathLike[str], *args: Any) -> BinaryIO:
+        opened = real_open(path, *args)
+        if Path(path) == model:
+            replace_model()
+        return opened
+
     monkeypatch.setattr(Path, "read_bytes", read_then_replace)
+    monkeypatch.setattr(regular, "open_input", open_then_replace)
     return model
 
 

@@ -129,6 +129,11 @@ def test_bad_sets_of_evaluations(tmp_path: Path) -> None:
     (tmp_path / "empty" / "evaluation.json").write_text("{")
     with pytest.raises(ValueError, match="empty/evaluation.json: not a readable evaluation.json"):
         pool_offsets([*good[:4], tmp_path / "empty"])
+    (tmp_path / "nested" / "evaluation.json").mkdir(parents=True)  # was ".../evaluation.json
+    folder = tmp_path / "nested" / "evaluation.json"  # /evaluation.json: missing", joined twice
+    said = f"{folder}: is a folder; expected the evaluation.json of `contactcal evaluate`"
+    with pytest.raises(ValueError, match=f"^{re.escape(said)}$"):
+        pool_offsets([*good[:4], tmp_path / "nested"])
 
 
 def test_cli(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:

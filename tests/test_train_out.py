@@ -7,6 +7,7 @@ is by --resume."""
 from __future__ import annotations
 
 import json
+import os
 import shlex
 import subprocess
 import sys
@@ -207,3 +208,23 @@ def test_the_epoch_rows_are_progress_on_stderr(
     out, err = capsys.readouterr()
     assert out.count("\n") == 1 and out.startswith(f"{tmp_path / 'r'}: best epoch")
     assert "epoch 1  train_loss=" in err and "epoch 2  train_loss=" in err
+
+
+@pytest.mark.parametrize("kind", ["folder", "pipe"])
+def test_a_resume_refuses_a_config_json_that_is_not_a_file(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str], kind: str
+) -> None:
+    """A config.json that is a folder or a pipe was taken for none: a resume of a real run said it
+    "was stopped before its config.json ... was written" and asked for every setting."""
+    if kind == "pipe" and not hasattr(os, "mkfifo"):
+        pytest.skip("no FIFOs here")
+    d = write_dataset(tmp_path / "d", fingers=3)
+    run, config = tmp_path / "run", tmp_path / "run" / "config.json"
+    run.mkdir()
+    (run / "last.pt").write_bytes(b"")  # never loaded: the config is read first
+    config.mkdir() if kind == "folder" else os.mkfifo(config)
+    assert main(["train", "--data", str(d), "--out", str(run), "--quiet", "--resume"]) == 2
+    err = capsys.readouterr().err
+    one_line_naming(err, config)
+    says = "is a folder" if kind == "folder" else "not a regular file (a device, pipe or socket)"
+    assert f"{config}: {says}; expected the config.json a `contactcal train` run wrote" in err

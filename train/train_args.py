@@ -25,7 +25,9 @@ def build_config(args: argparse.Namespace) -> Any:
 
     base = TrainConfig()
     saved = args.out / "config.json"
-    if args.resume and saved.is_file():
+    # exists, not is_file: a folder or pipe there is refused (read_run_info), not taken for a
+    # run stopped before its config.json was written
+    if args.resume and saved.exists():
         base = saved_train_config(read_run_info(args.out).get("train"), str(saved))
     given = {
         "epochs": args.epochs,

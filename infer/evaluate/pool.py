@@ -52,9 +52,9 @@ def _finite_list(value: object) -> bool:
     )
 
 
-def _load(path: Path) -> dict[str, Any]:
-    """An evaluation's ``boundary_offset``, checked; ValueError naming the file otherwise."""
-    file = path / "evaluation.json" if path.is_dir() else path
+def _load(file: Path) -> dict[str, Any]:
+    """The ``boundary_offset`` of the evaluation ``file`` (a folder given was mapped to its
+    ``evaluation.json`` by :func:`_sessions`), checked; ValueError naming the file otherwise."""
     try:
         raw = read_input_bytes(file, "the evaluation.json of `contactcal evaluate`", ValueError)
         record = json.loads(raw.decode("utf-8"))
