@@ -11,6 +11,9 @@ error is at most A's + 0.2 points. Exit 0 whatever the reading, 2 on unreadable 
 
     .venv/bin/python docs/scripts/h18ab_report.py out/h18ab_rob_A/results.json \
         out/h18ab_rob_B/results.json
+
+The follow-up on 1296-px frames (``docs/scripts/h18ab_hires.sh``): ``out/h18ab_hr_A``,
+``out/h18ab_hr_B``, ``--frames 40 --data h18ab_test_hr``.
 """
 
 from __future__ import annotations
@@ -65,14 +68,13 @@ def blur_rows(run: dict[str, Any]) -> list[dict[str, Any]]:
     ]
 
 
-def check(a: dict[str, Any], b: dict[str, Any]) -> None:
-    """Refuse runs other than the script's: both on ``data/h18ab_test``, the same 120 frames."""
+def check(a: dict[str, Any], b: dict[str, Any], frames: int = FRAMES, data: str = DATA) -> None:
+    """Refuse runs other than the script's: both on ``data/DATA``, the same ``frames`` frames."""
     for name, run in (("A", a), ("B", b)):
         n = len(run["robustness"]["frames"])
-        if not str(run["data"]).rstrip("/").endswith(DATA) or n != FRAMES:
-            raise ValueError(
-                f"{name}: expected {FRAMES} frames of data/{DATA}, got {n} of {run['data']}"
-            )
+        if not str(run["data"]).rstrip("/").endswith(data) or n != frames:
+            got = f"got {n} of {run['data']}"
+            raise ValueError(f"{name}: expected {frames} frames of data/{data}, {got}")
     if a["robustness"]["frames"] != b["robustness"]["frames"]:
         raise ValueError("the two robustness runs perturbed different frames")
 
@@ -81,10 +83,12 @@ def main(argv: list[str] | None = None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("run_a", type=Path)
     ap.add_argument("run_b", type=Path)
+    ap.add_argument("--frames", type=int, default=FRAMES, help=f"frames sampled (default {FRAMES})")
+    ap.add_argument("--data", default=DATA, help=f"held-out set's folder name (default {DATA})")
     args = ap.parse_args(argv)
     try:
         a, b = (json.loads(p.read_text(encoding="utf-8")) for p in (args.run_a, args.run_b))
-        check(a, b)
+        check(a, b, args.frames, args.data)
         judged = {}
         for name, run in (("A", a), ("B", b)):
             e = errors(run)
