@@ -215,16 +215,53 @@ def test_a_resume_refuses_a_config_json_that_is_not_a_file(
     tmp_path: Path, capsys: pytest.CaptureFixture[str], kind: str
 ) -> None:
     """A config.json that is a folder or a pipe was taken for none: a resume of a real run said it
-    "was stopped before its config.json ... was written" and asked for every setting."""
+    "was stopped before its config.json ... was written" and asked for every setting. A finished
+    run's (an unfinished one's is refused as a file the run replaces: the test below)."""
     if kind == "pipe" and not hasattr(os, "mkfifo"):
         pytest.skip("no FIFOs here")
     d = write_dataset(tmp_path / "d", fingers=3)
     run, config = tmp_path / "run", tmp_path / "run" / "config.json"
     run.mkdir()
     (run / "last.pt").write_bytes(b"")  # never loaded: the config is read first
+    (run / "val_bins.csv").write_text("")  # finished
     config.mkdir() if kind == "folder" else os.mkfifo(config)
     assert main(["train", "--data", str(d), "--out", str(run), "--quiet", "--resume"]) == 2
     err = capsys.readouterr().err
     one_line_naming(err, config)
     says = "is a folder" if kind == "folder" else "not a regular file (a device, pipe or socket)"
     assert f"{config}: {says}; expected the config.json a `contactcal train` run wrote" in err
+
+
+@pytest.mark.parametrize(
+    ("name", "kind"),
+    [
+        ("config.json", "dangling link"),
+        ("metrics.csv", "link"),
+        ("best.pt", "link"),
+        ("curves.png", "folder"),
+    ],
+)
+def test_a_resume_refuses_a_run_file_that_is_a_link_or_folder_before_an_epoch(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str], name: str, kind: str
+) -> None:
+    """An unfinished run's file that the resume replaces, a link or a folder, was refused only
+    when written, after an epoch (last.pt replaced by then); a config.json linked to a missing
+    file was moreover taken for none (a run stopped before its config.json was written)."""
+    d = write_dataset(tmp_path / "d", fingers=3)
+    run, path = tmp_path / "run", tmp_path / "run" / name
+    run.mkdir()
+    (run / "last.pt").write_bytes(b"")  # never loaded: refused before
+    if kind == "folder":
+        path.mkdir()
+    else:
+        target = tmp_path / "elsewhere"
+        if kind == "link":
+            target.write_text("")
+        path.symlink_to(target)
+    before = _snapshot(tmp_path)
+    assert main(["train", "--data", str(d), "--out", str(run), "--quiet", "--resume"]) == 2
+    err = capsys.readouterr().err
+    one_line_naming(err, path)
+    says = "is a symbolic link" if kind != "folder" else "exists and is not a regular file"
+    assert f"--out {run}: {path}: {says}" in err
+    assert _snapshot(tmp_path) == before

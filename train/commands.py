@@ -223,7 +223,7 @@ def _cmd_export(args: argparse.Namespace) -> int:
     from contactcal.infer.files.stdout import printing_after
     from contactcal.train.export import export_onnx
     from contactcal.train.export_check import ExportCheckError
-    from contactcal.train.resume import ran_to_end
+    from contactcal.train.run_folder import ran_to_end
 
     min_area = None
     if args.tune_min_area:

@@ -14,14 +14,8 @@ from typing import Any
 from contactcal.infer.errors import config_changes
 from contactcal.train.checkpoint import config_to_dict, load_checkpoint
 from contactcal.train.config import TrainConfig, saved_train_config
-from contactcal.train.run_folder import read_run_info
+from contactcal.train.run_folder import ran_to_end, read_run_info
 from contactcal.train.split import Split, check_same_split, recorded_split
-
-
-def ran_to_end(out: Path) -> bool:
-    """Whether the run in ``out`` ran to its last epoch: it holds ``val_bins.csv``, written after
-    it (whether or not its ``last.pt`` was kept; ``export`` needs only ``best.pt``)."""
-    return (out / "val_bins.csv").is_file()
 
 
 def is_finished(out: Path) -> bool:

@@ -16,9 +16,18 @@ from pathlib import Path
 from typing import Any
 
 from contactcal.infer.errors import few
-from contactcal.infer.files.destination import check_receiving_folder
+from contactcal.infer.files.destination import check_destination, check_receiving_folder
 from contactcal.infer.files.regular import read_input_bytes
 from contactcal.infer.files.temporaries import TEMP_NAME
+
+#: The files ``train`` writes into its run folder, each replaced whole as the run goes on.
+RUN_FILES = ("config.json", "last.pt", "best.pt", "metrics.csv", "curves.png", "val_bins.csv")
+
+
+def ran_to_end(out: Path) -> bool:
+    """Whether the run in ``out`` ran to its last epoch: it holds ``val_bins.csv``, written after
+    it (whether or not its ``last.pt`` was kept; ``export`` needs only ``best.pt``)."""
+    return (out / "val_bins.csv").is_file()
 
 
 def read_run_info(run_dir: str | os.PathLike[str]) -> dict[str, Any]:
@@ -52,12 +61,17 @@ def check_run_folder(out: Path, resume: bool) -> None:
     """Refuse an ``out`` that ``train`` would write over, or could not write into (under a file
     or a link: :func:`~contactcal.infer.files.destination.check_receiving_folder`, checked for the
     files it writes): a new run needs a new or empty folder (staged temporaries of a killed write
-    aside), ``resume`` a run that holds ``last.pt``.
+    aside), ``resume`` a run that holds ``last.pt``, and, where that run is unfinished (not
+    :func:`ran_to_end`), none of its :data:`RUN_FILES` a link, a folder or a pipe
+    (:func:`~contactcal.infer.files.destination.check_destination`: the files it replaces).
 
     Raises:
         ValueError: naming the folder, what was expected and how to go on.
     """
     if resume and (out / "last.pt").is_file():
+        if not ran_to_end(out):  # continued: its files replaced, none a link or a folder
+            for name in RUN_FILES:  # refused now, not after an epoch (last.pt replaced by then)
+                check_destination(out / name)
         return
     if out.exists() and not out.is_dir():
         raise ValueError(f"{out}: not a folder; expected a run folder, e.g. runs/r1")
