@@ -14,3 +14,10 @@ for m in A B; do
     --robustness --robustness-frames 40 --repeats 1 --timing-frames 1 --out out/h18ab_hr_$m & p+=($!)
 done
 for q in "${p[@]}"; do wait "$q"; done
+# Report only: the shipped v2.4 (trained on 1296-px sets too) on both H18-ab sets, the same frames.
+[[ -f out/h18ab_rob_v24/results.json ]] || $C bench --data data/h18ab_test \
+  --model models/contact_unet.onnx --robustness --robustness-frames 120 --repeats 1 \
+  --timing-frames 1 --out out/h18ab_rob_v24 & a=$!
+[[ -f out/h18ab_hr_v24/results.json ]] || $C bench --data $T --model models/contact_unet.onnx \
+  --robustness --robustness-frames 40 --repeats 1 --timing-frames 1 --out out/h18ab_hr_v24 & b=$!
+wait $a; wait $b
