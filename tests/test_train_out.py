@@ -210,11 +210,11 @@ def test_the_epoch_rows_are_progress_on_stderr(
     assert "epoch 1  train_loss=" in err and "epoch 2  train_loss=" in err
 
 
-@pytest.mark.parametrize("kind", ["folder", "pipe"])
+@pytest.mark.parametrize("kind", ["folder", "pipe", "dangling link"])
 def test_a_resume_refuses_a_config_json_that_is_not_a_file(
     tmp_path: Path, capsys: pytest.CaptureFixture[str], kind: str
 ) -> None:
-    """A config.json that is a folder or a pipe was taken for none: a resume of a real run said it
+    """A config.json that is a folder, a pipe or a link to nothing was taken for none: a resume of a real run said it
     "was stopped before its config.json ... was written" and asked for every setting. A finished
     run's (an unfinished one's is refused as a file the run replaces: the test below)."""
     if kind == "pipe" and not hasattr(os, "mkfifo"):
@@ -224,11 +224,18 @@ def test_a_resume_refuses_a_config_json_that_is_not_a_file(
     run.mkdir()
     (run / "last.pt").write_bytes(b"")  # never loaded: the config is read first
     (run / "val_bins.csv").write_text("")  # finished
-    config.mkdir() if kind == "folder" else os.mkfifo(config)
+    if kind == "dangling link":
+        config.symlink_to(tmp_path / "moved.json")
+    else:
+        config.mkdir() if kind == "folder" else os.mkfifo(config)
     assert main(["train", "--data", str(d), "--out", str(run), "--quiet", "--resume"]) == 2
     err = capsys.readouterr().err
     one_line_naming(err, config)
-    says = "is a folder" if kind == "folder" else "not a regular file (a device, pipe or socket)"
+    says = {
+        "folder": "is a folder",
+        "pipe": "not a regular file (a device, pipe or socket)",
+        "dangling link": f"a link to {tmp_path / 'moved.json'}, which does not exist",
+    }[kind]
     assert f"{config}: {says}; expected the config.json a `contactcal train` run wrote" in err
 
 

@@ -44,6 +44,11 @@ def read_run_info(run_dir: str | os.PathLike[str]) -> dict[str, Any]:
         raw = read_input_bytes(path, "the config.json a `contactcal train` run wrote", ValueError)
         info = json.loads(raw.decode("utf-8"))
     except (FileNotFoundError, NotADirectoryError):
+        if path.is_symlink():  # a link to nothing: the run's config is not "missing" but lost
+            raise ValueError(
+                f"{path}: a link to {os.readlink(path)}, which does not exist; expected the "
+                "config.json a `contactcal train` run wrote (put the file there)"
+            ) from None
         raise ValueError(
             f"{path}: missing run config (is {run} a `contactcal train` run folder?)"
         ) from None

@@ -7,6 +7,7 @@ Like :mod:`contactcal.train.commands`, it imports neither torch nor onnx at impo
 from __future__ import annotations
 
 import argparse
+import os
 from typing import Any
 
 from contactcal.infer.pipeline.args import check_cpu_count
@@ -25,9 +26,9 @@ def build_config(args: argparse.Namespace) -> Any:
 
     base = TrainConfig()
     saved = args.out / "config.json"
-    # exists, not is_file: a folder or pipe there is refused (read_run_info), not taken for a
-    # run stopped before its config.json was written
-    if args.resume and saved.exists():
+    # lexists, not is_file: a folder, a pipe or a link to nothing there is refused
+    # (read_run_info), not taken for a run stopped before its config.json was written
+    if args.resume and os.path.lexists(saved):
         base = saved_train_config(read_run_info(args.out).get("train"), str(saved))
     given = {
         "epochs": args.epochs,
