@@ -214,9 +214,10 @@ def test_the_epoch_rows_are_progress_on_stderr(
 def test_a_resume_refuses_a_config_json_that_is_not_a_file(
     tmp_path: Path, capsys: pytest.CaptureFixture[str], kind: str
 ) -> None:
-    """A config.json that is a folder, a pipe or a link to nothing was taken for none: a resume of a real run said it
-    "was stopped before its config.json ... was written" and asked for every setting. A finished
-    run's (an unfinished one's is refused as a file the run replaces: the test below)."""
+    """A config.json that is a folder, a pipe or a link to nothing was taken for none: a resume
+    of a real run said it "was stopped before its config.json ... was written" and asked for
+    every setting. A finished run's (an unfinished one's is refused as a file the run replaces:
+    the test below)."""
     if kind == "pipe" and not hasattr(os, "mkfifo"):
         pytest.skip("no FIFOs here")
     d = write_dataset(tmp_path / "d", fingers=3)
