@@ -166,3 +166,26 @@ def test_the_agreement_is_checked_on_frames_not_used_to_calibrate(
     (one / "index.csv").write_text("\n".join(rows[:2]) + "\n")  # the header and one frame
     with pytest.raises(ValueError, match=r"1 frame\(s\) in .*expected at least 2 \(one to"):
         quantize_model(DEFAULT_MODEL, tmp_path / "q2.onnx", [one], frames=3)
+
+
+def test_the_float_model_is_read_once(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    """The float model is read once, through the checked reader: the model checked, calibrated
+    and whose metadata the INT8 model carries is that content. It was read three times (the
+    float session, ``onnx.load``, ``quantize_static``), the last two unchecked: a model
+    re-exported meanwhile (here: replaced by junk after the first read) was quantized as another."""
+    from read_counts import count_reads
+
+    from contactcal.infer.methods.unet import runner
+
+    data = _example_dataset(tmp_path / "data")
+    model = tmp_path / "float.onnx"
+    shutil.copyfile(DEFAULT_MODEL, model)
+    reads = count_reads(
+        monkeypatch,
+        (runner, "read_input_bytes"),
+        only={model},
+        after=lambda path, _: path.write_bytes(b"not a model"),
+    )
+    quantize_model(model, tmp_path / "q.onnx", [data], frames=2)
+    assert reads[model] == 1
+    assert OnnxSegmenter(tmp_path / "q.onnx").spec == OnnxSegmenter(DEFAULT_MODEL).spec

@@ -26,7 +26,7 @@ from contactcal.infer.errors import RunError
 from contactcal.infer.files.atomic import atomic_path
 from contactcal.infer.methods.unet.config import PreprocessConfig
 from contactcal.infer.methods.unet.prepare import SessionReference, prepare
-from contactcal.infer.methods.unet.runner import OnnxSegmenter
+from contactcal.infer.methods.unet.runner import OnnxSegmenter, read_model
 from contactcal.train.sessions import session_inputs
 
 __all__ = ["calibration_frames", "quantize_model"]
@@ -85,13 +85,15 @@ def quantize_model(
         ValueError: ``out`` is the input, ``model`` is already quantized, ``frames`` < 1, or
             fewer than two frames in ``data`` (one to calibrate, one to check).
     """
-    from onnx import load, save
+    from onnx import load, load_from_string, save
     from onnxruntime.quantization import QuantFormat, QuantType, quantize_static
 
     if Path(out).resolve() == Path(model).resolve():
         raise ValueError(f"{out}: would overwrite the float model; choose another --out")
-    float_seg = OnnxSegmenter(model, threads=1)
-    fm = load(str(model))
+    # read once: the float model checked, calibrated and copied is this content
+    content = read_model(Path(model))
+    float_seg = OnnxSegmenter(model, threads=1, content=content)
+    fm = load_from_string(content)
     if any(n.op_type in QDQ_OPS for n in fm.graph.node):
         raise ValueError(
             f"{model}: already quantized (it holds QuantizeLinear/DequantizeLinear nodes); "
@@ -112,7 +114,7 @@ def quantize_model(
         q = Path(tmp) / "q.onnx"
         with _quiet_root_warnings():
             quantize_static(
-                str(model),
+                load_from_string(content),  # a copy: fm keeps the metadata copied below
                 str(q),
                 _Reader(float_seg.input_name, inputs),
                 quant_format=QuantFormat.QDQ,
