@@ -54,6 +54,15 @@ def _refuse_mode(
         raise error(not_regular_message(path, expected))
 
 
+def _mode(path: str | os.PathLike[str]) -> int | None:
+    """``path``'s mode, links followed; None: missing or unstatable (the caller's own open or
+    check reports it)."""
+    try:
+        return os.stat(path).st_mode
+    except (OSError, ValueError):
+        return None
+
+
 def refuse_special(
     path: str | os.PathLike[str], expected: str, error: Callable[[str], Exception]
 ) -> None:
@@ -65,11 +74,8 @@ def refuse_special(
         expected: what was expected there (:func:`not_regular_message`).
         error: the caller's exception type, built from the message line.
     """
-    try:
-        mode = os.stat(path).st_mode
-    except (OSError, ValueError):
-        return
-    if _special(mode):
+    mode = _mode(path)
+    if mode is not None and _special(mode):
         raise error(not_regular_message(path, expected))
 
 
@@ -85,11 +91,9 @@ def refuse_non_file(
         expected: what was expected there, e.g. ``"the manifest CSV"``.
         error: the caller's exception type, built from the message line.
     """
-    try:
-        mode = os.stat(path).st_mode
-    except (OSError, ValueError):
-        return
-    _refuse_mode(path, mode, expected, error)
+    mode = _mode(path)
+    if mode is not None:
+        _refuse_mode(path, mode, expected, error)
 
 
 def open_input(
