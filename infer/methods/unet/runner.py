@@ -135,10 +135,10 @@ def read_model(path: Path) -> bytes:
     """The content of model file ``path``, read once for everything built from it (pass it as
     :class:`OnnxSegmenter`'s ``content``); ModelError (naming it) when missing, a folder or
     unreadable."""
-    if not path.exists():
-        raise ModelError(f"{path}: no such model file")
     try:
         return read_input_bytes(path, "the ONNX model file (e.g. contact_unet.onnx)", ModelError)
+    except (FileNotFoundError, NotADirectoryError):  # also a link to nothing, a path under a file
+        raise ModelError(f"{path}: no such model file") from None
     except OSError as exc:
         raise ModelError(f"{path}: cannot read the model ({exc.strerror})") from None
 
