@@ -29,9 +29,10 @@ def check_files(where: str, frames: list[Frame], base: Path) -> None:
     Raises:
         ManifestError: naming the rows and files, and how relative paths are resolved.
     """
-    for f in sorted(frames, key=lambda f: f.row):
+    by_row = sorted(frames, key=lambda f: f.row)
+    for f in by_row:
         refuse_special(f.file, f"an image file (row {f.row} of {where})", ManifestError)
-    missing = [f for f in sorted(frames, key=lambda f: f.row) if not f.file.is_file()]
+    missing = [f for f in by_row if not f.file.is_file()]
     if missing:
         listed = few(
             [f"row {f.row}: {f.file}{' (a folder)' if f.file.is_dir() else ''}" for f in missing],
