@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import csv
+import hashlib
 import json
 import shutil
 from pathlib import Path
@@ -14,6 +15,7 @@ import pytest
 from contactcal.infer import cli
 from contactcal.infer.cli import main
 from contactcal.infer.methods.registry import METHODS
+from contactcal.infer.methods.unet.runner import DEFAULT_MODEL
 
 EXAMPLE = Path(__file__).resolve().parents[1] / "examples" / "session"
 
@@ -146,6 +148,38 @@ def test_measure_says_which_reference_mode_ran(tmp_path: Path) -> None:
         )
         row = json.loads(out.read_text())[0]
         assert row["reference"] == ref and "no reference frame" not in row["note"]
+
+
+def test_measure_records_the_models_that_measured(tmp_path: Path) -> None:
+    """Each result names the model that measured it (its file and the sha256 of its content, as
+    ``calibration.json``'s ``method_config``), with ``--overlay`` the one that only drew the
+    outlines (``overlay_methods``); the classical routine has none (null)."""
+    other = tmp_path / "other.onnx"  # another loadable model: a doc_string (field 6) appended
+    other.write_bytes(DEFAULT_MODEL.read_bytes() + b"\x32\x01x")
+    model = {
+        m: {"model": str(m.resolve()), "model_sha256": hashlib.sha256(m.read_bytes()).hexdigest()}
+        for m in (DEFAULT_MODEL, other)
+    }
+    assert model[other]["model_sha256"] != model[DEFAULT_MODEL]["model_sha256"]
+    frame, out = str(EXAMPLE / "p12.0kpa.jpg"), tmp_path / "r.json"
+    none = {"model": None, "model_sha256": None}
+    runs = [
+        ([], {**model[DEFAULT_MODEL], "overlay_methods": None}),
+        (["--model", str(other)], {**model[other], "overlay_methods": None}),
+        (["--method", "classical"], {**none, "overlay_methods": None}),
+        (
+            ["--method", "classical", "--model", str(other), "--overlay", str(tmp_path / "ov")],
+            {**none, "overlay_methods": {"unet": model[other]}},
+        ),
+        (
+            ["--overlay", str(tmp_path / "ov")],
+            {**model[DEFAULT_MODEL], "overlay_methods": {"classical": none}},
+        ),
+    ]
+    for options, recorded in runs:
+        assert main(["measure", *options, "--out", str(out), frame]) == 0
+        row = json.loads(out.read_text())[0]
+        assert {k: row[k] for k in recorded} == recorded, options
 
 
 def test_core_commands_skip_the_plugin_commands(monkeypatch: pytest.MonkeyPatch) -> None:

@@ -100,11 +100,25 @@ class Method(Protocol):
         """Measure one ``(H, W) uint8`` frame; areas in pixels of the undecimated file."""
 
     def describe(self) -> dict[str, Any]:
-        """The method's configuration as plain JSON values, for records (``calibration.json``)."""
+        """The method's configuration as plain JSON values, for records (``calibration.json``);
+        a method with a model file states it as :data:`MODEL_KEYS`."""
 
     #: What the method does without the session's reference frame: the pipeline (``measure``,
     #: ``calibrate``) notes it in every result then; ``measure()`` itself does not.
     NO_REFERENCE: str
+
+
+#: The keys of ``describe()`` that name a method's model: its file (absolute path) and the
+#: sha256 of the content loaded (the U-Net's; a method without a model states neither).
+MODEL_KEYS = ("model", "model_sha256")
+
+
+def model_identity(method: Method) -> dict[str, str | None]:
+    """The model ``method`` measures with, as its ``describe()`` states it (``calibration.json``
+    ``method_config``): ``{"model": path, "model_sha256": sha256}``, both None for a method
+    without a model (the classical routine)."""
+    described = method.describe()
+    return {key: described.get(key) for key in MODEL_KEYS}
 
 
 def load_reference(

@@ -6,7 +6,7 @@ import argparse
 import sys
 from dataclasses import dataclass
 from pathlib import Path
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Any
 
 from contactcal.infer.calibration.command import add_step_tolerance_arg, step_tolerance
 from contactcal.infer.pipeline.args import (
@@ -30,6 +30,7 @@ from contactcal.infer.pipeline.overlay_measure import (
 if TYPE_CHECKING:
     from contactcal.infer.files.atomic import OutputSet
     from contactcal.infer.image.read import ImageFile
+    from contactcal.infer.methods.base import Method
     from contactcal.infer.pipeline.measure import Measured
     from contactcal.infer.pipeline.options import MeasureOptions
 
@@ -120,16 +121,35 @@ def _measure_run(args: argparse.Namespace, to_stdout: bool) -> _MeasureRun:
         options = measure_options(args, read_rig(args))
         method = options.method(args.method)
         read = overlay_contents(args)  # None: no --overlay; filled as the frames are measured
+        # the methods drawing only outlines, built (a --model loaded) before a frame is read
+        drawn = {} if read is None else overlay_methods(args, options)
         ref = args.reference
         measured = options.measure(args.images, method, ref, read is not None, read)
         measured, warnings = note_self_reference(measured, args.reference)
-        # device_id: the display measured, per object (the output stays a list of objects).
-        rows = [{**m.to_json(method.name), "device_id": args.device_id} for m in measured]
-        text = json_text(rows)
+        # the models and device_id, per object (the output stays a list of objects)
+        made = {
+            **_models_used(method, None if read is None else drawn),
+            "device_id": args.device_id,
+        }
+        text = json_text([{**m.to_json(method.name), **made} for m in measured])
         if json_path is not None:
             write_synced(json_path, text)
-        written = [] if read is None else _write_overlays(args, options, measured, read, outs)
+        written = (
+            [] if read is None else _write_overlays(args, options, measured, read, drawn, outs)
+        )
     return _MeasureRun(measured, warnings, text, written)
+
+
+def _models_used(method: Method, drawn: dict[str, Method] | None) -> dict[str, Any]:
+    """What each result of ``measure`` records of the models that ran, as ``calibration.json``
+    names them (:func:`~contactcal.infer.methods.base.model_identity`): ``model`` and
+    ``model_sha256`` of ``method`` (None: a method without a model), and ``overlay_methods``:
+    each method that only drew the overlays' outlines (``drawn``) with its own (None: no
+    ``--overlay``)."""
+    from contactcal.infer.methods.base import model_identity
+
+    overlays = None if drawn is None else {n: model_identity(m) for n, m in drawn.items()}
+    return {**model_identity(method), "overlay_methods": overlays}
 
 
 def _write_overlays(
@@ -137,17 +157,18 @@ def _write_overlays(
     options: MeasureOptions,
     measured: list[Measured],
     read: dict[Path, ImageFile],
+    drawn: dict[str, Method],
     outs: OutputSet,
 ) -> list[Path]:
-    """``measure --overlay``: every method's outline on the frames ``measured`` (from the
-    contents ``read`` as they were measured, not read again), staged into ``outs``."""
+    """``measure --overlay``: every method's outline (``measured``'s, and those of the methods
+    ``drawn`` that only draw) on the frames (from the contents ``read`` as they were measured,
+    not read again), staged into ``outs``."""
     from contactcal.infer.image.read import sources_of
     from contactcal.infer.pipeline.overlay import write_overlays
 
     images = sources_of(args.images, read)  # the contents measured, not read again
     ref = args.reference
     reference = None if ref is None else read[ref]
-    drawn = overlay_methods(args, options)
     runs = overlay_runs(args, options, measured, images, reference, drawn)
     bits = args.bit_depth
     return write_overlays(runs, read, args.overlay, outputs=outs, bit_depth=bits)

@@ -24,7 +24,7 @@ from contactcal.infer.image.read import (
     source_path,
     sources_of,
 )
-from contactcal.infer.methods.base import UNCHANGED_NOTE, AreaResult, Method
+from contactcal.infer.methods.base import UNCHANGED_NOTE, AreaResult, Method, model_identity
 from contactcal.infer.pipeline.boundary import BoundaryOffset, BoundaryOffsetError, apply_offset
 from contactcal.infer.pipeline.frame_check import (
     FrameReference,
@@ -128,7 +128,7 @@ def offset_for(
     """
     if boundary is None:
         return None
-    sha = method.describe().get("model_sha256")  # hashes the model file: only when needed
+    sha = model_identity(method)["model_sha256"]
     if sha is None:
         return None
     if sha != boundary.model_sha256:

@@ -31,8 +31,9 @@ def overlay_contents(args: argparse.Namespace) -> dict[Path, ImageFile] | None:
 
 def overlay_methods(args: argparse.Namespace, options: MeasureOptions) -> dict[str, Method]:
     """The methods that only draw the overlays' outlines (every method but ``--method``), built
-    once: a run records their ``describe()`` (the U-Net's model and its sha256, of the content
-    loaded) and :func:`overlay_runs` measures with them."""
+    once, before a frame is read: a run records them (``calibrate`` their ``describe()``,
+    ``measure`` their model; the U-Net's model and its sha256, of the content loaded) and
+    :func:`overlay_runs` measures with them."""
     return {n: options.method(n, outline=True) for n in METHODS if n != args.method}
 
 
