@@ -3,10 +3,9 @@
 from __future__ import annotations
 
 import argparse
-import json
 from pathlib import Path
 
-from contactcal.infer.files.regular import read_input_bytes
+from contactcal.infer.files.regular import read_input_json
 from contactcal.infer.methods.registry import METHODS
 from contactcal.infer.pipeline.args import (
     change_gate_arg,
@@ -107,8 +106,7 @@ def earlier_evaluation_note(out: Path, manifest: Path) -> str | None:
     if not held:
         return None
     try:
-        raw = read_input_bytes(out / "evaluation.json", "an earlier evaluation", ValueError)
-        record = json.loads(raw.decode("utf-8"))
+        record = read_input_json(out / "evaluation.json", "an earlier evaluation", ValueError)
         earlier = Path(record["manifest"])
         what = (
             "an earlier evaluation of this manifest"

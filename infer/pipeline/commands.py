@@ -200,12 +200,10 @@ def earlier_results_note(out: Path) -> str | None:
 def _results_held(out: Path) -> str:
     """How many results the file ``out`` holds ("not a results list" when it is not one), read
     as inputs are (a device or pipe put there after the caller's check is not read)."""
-    import json
-
-    from contactcal.infer.files.regular import read_input_bytes
+    from contactcal.infer.files.regular import read_input_json
 
     try:
-        old = json.loads(read_input_bytes(out, "earlier results", ValueError).decode("utf-8"))
+        old = read_input_json(out, "earlier results", ValueError)
     except (OSError, ValueError):
         return "unreadable as results"
     return f"{len(old)} result(s)" if isinstance(old, list) else "not a results list"
