@@ -9,6 +9,7 @@ from pathlib import Path
 from typing import TYPE_CHECKING
 
 from contactcal.infer.calibration.command import add_step_tolerance_arg, step_tolerance
+from contactcal.infer.parser import folder_arg
 from contactcal.infer.pipeline.args import (
     bit_depth_arg,
     check_bit_depth,
@@ -46,7 +47,7 @@ def add_parsers(sub: argparse._SubParsersAction) -> None:
     scale_args(m)
     m.set_defaults(func=_cmd_measure)
     d = sub.add_parser("demo", help="calibrate the bundled example session with both methods")
-    d.add_argument("--out", type=Path, default=Path("out/demo"), help="output folder")
+    d.add_argument("--out", type=folder_arg, default=Path("out/demo"), help="output folder")
     d.add_argument("--manifest", type=Path, help="another session instead of the example")
     add_step_tolerance_arg(d)
     bit_depth_arg(d)
