@@ -6,6 +6,7 @@ import argparse
 from pathlib import Path
 
 from contactcal.infer.errors import require_extra
+from contactcal.infer.parser import folder_arg
 from contactcal.infer.pipeline.args import check_cpu_count, check_out_folder
 
 
@@ -41,7 +42,7 @@ def add_parsers(sub: argparse._SubParsersAction) -> None:
         help="share of the sessions whose membrane leaves the contact edge at a drawn slope "
         "(the inner ring then closes on the contact edge, or leaves it; docs/synth.md)",
     )
-    s.add_argument("--out", type=Path, required=True, help="dataset folder")
+    s.add_argument("--out", type=folder_arg, required=True, help="dataset folder")
     s.add_argument("--workers", type=int, default=1, help="worker processes (default 1)")
     s.add_argument("--shard", default="0/1", help="render only shard i of n (i/n)")
     s.add_argument("--variant", default="auto", choices=("auto", "llvm_ad_rgb", "scalar_rgb"))
@@ -112,7 +113,9 @@ def add_fidelity_parser(sub: argparse._SubParsersAction) -> None:
     s.add_argument("--spp", type=int, default=8, help="samples per pixel (default 8)")
     s.add_argument("--pressures", default="0,1,2,3,4,5,7.5,10,12.5,15,17.5,20", help="kPa")
     s.add_argument("--workers", type=int, default=1, help="worker processes (default 1)")
-    s.add_argument("--out", type=Path, required=True, help="folder for fidelity.json/.md/.jpg")
+    s.add_argument(
+        "--out", type=folder_arg, required=True, help="folder for fidelity.json/.md/.jpg"
+    )
     s.set_defaults(func=_cmd_fidelity)
 
 

@@ -17,7 +17,7 @@ from typing import TYPE_CHECKING, Any
 from contactcal.infer.errors import config_changes, few
 from contactcal.infer.files.atomic import write_json
 from contactcal.infer.files.jsonable import jsonable
-from contactcal.infer.files.regular import read_input_bytes
+from contactcal.infer.files.regular import read_input_json
 from contactcal.infer.files.temporaries import TEMP_NAME
 from contactcal.synth.layout import INDEX_COLUMNS
 from contactcal.synth.variant import VARIANTS
@@ -41,9 +41,8 @@ def read_json(path: Path, expected: str) -> Any:
     """The JSON in ``path``, read as inputs are; ValueError naming it and ``expected`` if it is
     not valid JSON, or not a regular file (a folder, a device or pipe: never read nor waited on).
     """
-    raw = read_input_bytes(path, expected, ValueError)
     try:
-        return json.loads(raw.decode("utf-8"))
+        return read_input_json(path, expected, ValueError)
     except UnicodeDecodeError:
         why = "not UTF-8 text"
     except json.JSONDecodeError as exc:

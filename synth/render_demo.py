@@ -18,7 +18,7 @@ from pathlib import Path
 
 import numpy as np
 
-from contactcal.infer.parser import Parser
+from contactcal.infer.parser import Parser, folder_arg
 from contactcal.synth.rig import RigGeometry
 
 __all__ = ["demo_states", "tonemap"]
@@ -177,7 +177,7 @@ def main(argv: list[str] | None = None) -> None:
     """Command line entry (see module docstring)."""
     ap = Parser(prog="python -m contactcal.synth.render_demo")
     ap.add_argument("what", choices=("figures", "bench", "spp"))
-    ap.add_argument("--out", type=Path, default=Path("docs"))
+    ap.add_argument("--out", type=folder_arg, default=Path("docs"))
     ap.add_argument("--width", type=int, default=648)
     ap.add_argument("--height", type=int, default=486)
     ap.add_argument("--spp", type=int, default=16)

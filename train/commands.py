@@ -12,6 +12,7 @@ from pathlib import Path
 from typing import Any
 
 from contactcal.infer.errors import option_error, require_extra
+from contactcal.infer.parser import folder_arg
 from contactcal.train.train_args import (
     add_look_args,
     add_reference_args,
@@ -57,11 +58,11 @@ def _add_train_parser(sub: Any) -> None:
 def _add_run_args(t: argparse.ArgumentParser) -> None:
     """``train``'s datasets, run folder, epochs, device and ``--resume``."""
     t.add_argument(
-        "--data", nargs="+", type=Path, required=True, metavar="DIR", help="dataset folder(s)"
+        "--data", nargs="+", type=folder_arg, required=True, metavar="DIR", help="dataset folder(s)"
     )
     t.add_argument(
         "--out",
-        type=Path,
+        type=folder_arg,
         required=True,
         metavar="RUN_DIR",
         help="run folder: new or empty, or with --resume an unfinished run's (holding last.pt)",
@@ -117,7 +118,7 @@ def _add_model_args(t: argparse.ArgumentParser) -> None:
 def _add_export_parser(sub: Any) -> None:
     """``contactcal export``: a trained run's model as ONNX."""
     e = sub.add_parser("export", help="export a trained run to ONNX")
-    e.add_argument("run_dir", type=Path, metavar="RUN_DIR", help="run folder with best.pt")
+    e.add_argument("run_dir", type=folder_arg, metavar="RUN_DIR", help="run folder with best.pt")
     e.add_argument("--out", type=Path, required=True, metavar="MODEL.onnx", help="output model")
     e.add_argument(
         "--opset",
@@ -141,7 +142,7 @@ def _add_quantize_parser(sub: Any) -> None:
     q.add_argument(
         "--data",
         nargs="+",
-        type=Path,
+        type=folder_arg,
         required=True,
         metavar="DIR",
         help="calibration datasets (validation renders; never the benchmark or cross-check sets)",

@@ -12,12 +12,11 @@ where a synth dataset's records its ``render`` settings. Imports no torch.
 
 from __future__ import annotations
 
-import json
 from collections.abc import Sequence
 from pathlib import Path
 
 from contactcal.infer.bench.dataset import check_dataset_folder
-from contactcal.infer.files.regular import read_input_bytes
+from contactcal.infer.files.regular import read_input_json
 
 #: A ``config.json`` key of ``contactcal procedural`` sets (its frames are drawn supersampled),
 #: absent from ``contactcal synth`` datasets, whose rendering is under ``render``.
@@ -28,8 +27,7 @@ def is_procedural_set(folder: Path) -> bool:
     """Whether ``folder``'s ``config.json`` is a ``contactcal procedural`` set's (an unreadable
     or absent one is not: the readers name whatever else is wrong with the folder)."""
     try:
-        raw = read_input_bytes(folder / "config.json", "the set's config.json", ValueError)
-        config = json.loads(raw.decode("utf-8"))
+        config = read_input_json(folder / "config.json", "the set's config.json", ValueError)
     except (OSError, ValueError):
         return False
     return isinstance(config, dict) and PROCEDURAL_KEY in config and "render" not in config

@@ -25,7 +25,7 @@ from contactcal.infer.files.digest import sha256_file
 from contactcal.infer.files.regular import read_input_bytes
 from contactcal.infer.files.replaced import replaced_file_note
 from contactcal.infer.methods.unet.spec import ModelSpec, read_spec
-from contactcal.infer.parser import Parser
+from contactcal.infer.parser import Parser, folder_arg
 
 #: Each calibrated metadata entry: what it is, and the tool that calibrates it; in the order to
 #: rerun them (the interval is calibrated with the model's change gate on, the gate with it off).
@@ -171,7 +171,7 @@ def restating_parser(prog: str, description: str) -> argparse.ArgumentParser:
     """The command line every restating tool shares: ``MODEL --data DIR... --out NEW.onnx``."""
     ap = Parser(prog=prog, description=description)
     ap.add_argument("model", type=Path, help="exported .onnx model")
-    ap.add_argument("--data", type=Path, nargs="+", required=True, help="dataset folder(s)")
+    ap.add_argument("--data", type=folder_arg, nargs="+", required=True, help="dataset folder(s)")
     ap.add_argument("--out", type=Path, required=True, help="new .onnx file")
     return ap
 

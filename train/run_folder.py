@@ -17,7 +17,7 @@ from typing import Any
 
 from contactcal.infer.errors import few
 from contactcal.infer.files.destination import check_destination, check_receiving_folder
-from contactcal.infer.files.regular import read_input_bytes
+from contactcal.infer.files.regular import read_input_json
 from contactcal.infer.files.temporaries import TEMP_NAME
 
 #: The files ``train`` writes into its run folder, each replaced whole as the run goes on.
@@ -41,8 +41,7 @@ def read_run_info(run_dir: str | os.PathLike[str]) -> dict[str, Any]:
     run = Path(run_dir)
     path = run / "config.json"
     try:
-        raw = read_input_bytes(path, "the config.json a `contactcal train` run wrote", ValueError)
-        info = json.loads(raw.decode("utf-8"))
+        info = read_input_json(path, "the config.json a `contactcal train` run wrote", ValueError)
     except (FileNotFoundError, NotADirectoryError):
         if path.is_symlink():  # a link to nothing: the run's config is not "missing" but lost
             raise ValueError(

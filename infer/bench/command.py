@@ -8,6 +8,8 @@ import sys
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
+from contactcal.infer.parser import folder_arg
+
 if TYPE_CHECKING:
     from contactcal.infer.bench.models import BenchModel
 
@@ -18,16 +20,16 @@ DEFAULT_ROBUSTNESS_FRAMES = 40
 def add_parsers(sub: argparse._SubParsersAction) -> None:
     """Add ``bench`` to the ``contactcal`` subcommands."""
     b = sub.add_parser("bench", help="accuracy and speed of every method on rendered sessions")
-    b.add_argument("--data", type=Path, required=True, help="dataset folder (index.csv)")
+    b.add_argument("--data", type=folder_arg, required=True, help="dataset folder (index.csv)")
     b.add_argument(
         "--crosscheck",
-        type=Path,
+        type=folder_arg,
         action="append",
         default=[],
         metavar="DIR",
         help="another dataset scored beside --data (e.g. `contactcal procedural`); repeatable",
     )
-    b.add_argument("--out", type=Path, required=True, help="report folder")
+    b.add_argument("--out", type=folder_arg, required=True, help="report folder")
     b.add_argument("--model", type=Path, help="ONNX model (default: shipped)")
     b.add_argument(
         "--variant",

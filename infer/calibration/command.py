@@ -8,6 +8,7 @@ from dataclasses import replace
 from pathlib import Path
 from typing import TYPE_CHECKING
 
+from contactcal.infer.parser import folder_arg
 from contactcal.infer.pipeline.args import (
     MANIFEST_SCALE,
     NO_SCALE_NOTE,
@@ -42,7 +43,7 @@ def add_parsers(sub: argparse._SubParsersAction) -> None:
     c = sub.add_parser("calibrate", help="calibrate a session: area vs pressure and its inverse")
     c.add_argument("manifest", type=Path, nargs="?", metavar="MANIFEST.csv")
     method_args(c)
-    c.add_argument("--out", type=Path, required=True, help="output folder")
+    c.add_argument("--out", type=folder_arg, required=True, help="output folder")
     c.add_argument(
         "--inverse-phase",
         choices=("loading", "unloading"),

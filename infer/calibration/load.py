@@ -14,7 +14,7 @@ from contactcal.infer.calibration.band import Band
 from contactcal.infer.calibration.curve import MM2, PX, Curve
 from contactcal.infer.calibration.parametric import Saturating
 from contactcal.infer.calibration.phases import LOADING
-from contactcal.infer.files.regular import read_input_bytes
+from contactcal.infer.files.regular import read_input_json
 
 FORMAT = "contactcal.calibration"
 FORMAT_VERSION = 3
@@ -172,29 +172,36 @@ def _check_unit(area_unit: str | None) -> str | None:
     raise ValueError(f"area_unit {area_unit!r}: expected {MM2!r} (or 'mm2'), {PX!r} or None")
 
 
-def _read_record(path: str | os.PathLike[str]) -> bytes:
-    """The content of the record file ``path``, read as every input is (a folder, device or
-    pipe refused unread: :func:`~contactcal.infer.files.regular.read_input_bytes`).
+def _not_a_record(path: str | os.PathLike[str], why: Exception) -> ValueError:
+    """The refusal of the record file ``path``, which ``why`` shows is no contactcal record."""
+    return ValueError(f"{path}: not a readable contactcal calibration ({why})")
+
+
+def _read_record(path: str | os.PathLike[str]) -> Any:
+    """The JSON value in the record file ``path``, read as every input is (a folder, device or
+    pipe refused unread: :func:`~contactcal.infer.files.regular.read_input_json`).
 
     Raises:
         CalibrationNotFoundError: no file at ``path``.
-        ValueError: a folder, not a regular file, or unreadable; one line naming ``path``.
+        ValueError: a folder, not a regular file, unreadable, not UTF-8 or not JSON; one line
+            naming ``path``.
     """
     try:
-        return read_input_bytes(path, _EXPECTED, ValueError)
+        return read_input_json(path, _EXPECTED, ValueError)
     except FileNotFoundError:
         raise CalibrationNotFoundError(
             errno.ENOENT, f"{path}: no such file; expected {_EXPECTED}"
         ) from None
     except OSError as exc:
         raise ValueError(f"{path}: cannot read the calibration ({exc.strerror or exc})") from None
+    except (UnicodeDecodeError, json.JSONDecodeError) as exc:
+        raise _not_a_record(path, exc) from exc
 
 
 def _read_curve(path: str | os.PathLike[str], phase: str | None, allow_unresolved: bool) -> Curve:
     """:func:`load_curve` without the unit check."""
-    raw = _read_record(path)
+    data = _read_record(path)
     try:
-        data = json.loads(raw.decode("utf-8"))
         if data.get("format") != FORMAT:
             raise ValueError(f"format {data.get('format')!r}, expected {FORMAT!r}")
         version = data.get("format_version")
@@ -214,4 +221,4 @@ def _read_curve(path: str | os.PathLike[str], phase: str | None, allow_unresolve
     except (UnresolvedCurveError, NoContactCurveError, NoSuchPhaseError) as exc:
         raise type(exc)(f"{path}: {exc}") from exc
     except (ValueError, KeyError, TypeError, AttributeError) as exc:
-        raise ValueError(f"{path}: not a readable contactcal calibration ({exc})") from exc
+        raise _not_a_record(path, exc) from exc

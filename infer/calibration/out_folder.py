@@ -10,7 +10,6 @@ calibration made of other frames. The ``calibration.json`` held is read once, as
 
 from __future__ import annotations
 
-import json
 import os
 import shlex
 from dataclasses import dataclass
@@ -18,7 +17,7 @@ from pathlib import Path
 from typing import Any
 
 from contactcal.infer.calibration.curve import MM2
-from contactcal.infer.files.regular import read_input_bytes
+from contactcal.infer.files.regular import read_input_json
 from contactcal.infer.files.temporaries import TEMP_NAME
 from contactcal.infer.video.preview_files import previews_in
 
@@ -38,8 +37,7 @@ def held_record(out_dir: str | os.PathLike[str]) -> HeldRecord | None:
     """The ``calibration.json`` ``out_dir`` holds, read once as inputs are; None: none."""
     path = Path(out_dir) / "calibration.json"
     try:
-        raw = read_input_bytes(path, "an earlier calibration.json", ValueError)
-        data = json.loads(raw.decode("utf-8"))
+        data = read_input_json(path, "an earlier calibration.json", ValueError)
     except (FileNotFoundError, NotADirectoryError):  # none there
         return None
     except (OSError, ValueError):

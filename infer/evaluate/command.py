@@ -3,11 +3,11 @@
 from __future__ import annotations
 
 import argparse
-import json
 from pathlib import Path
 
-from contactcal.infer.files.regular import read_input_bytes
+from contactcal.infer.files.regular import read_input_json
 from contactcal.infer.methods.registry import METHODS
+from contactcal.infer.parser import folder_arg
 from contactcal.infer.pipeline.args import (
     change_gate_arg,
     check_change_gate,
@@ -24,12 +24,12 @@ def add_parsers(sub: argparse._SubParsersAction) -> None:
     e.add_argument("manifest", type=Path, metavar="MANIFEST.csv")
     e.add_argument(
         "--labels",
-        type=Path,
+        type=folder_arg,
         required=True,
         help="folder of <frame stem>.png masks, or an ImageJ ellipse CSV "
         "(file,cx,cy,major,minor,angle_deg; see docs/evaluate.md)",
     )
-    e.add_argument("--out", type=Path, required=True, help="output folder")
+    e.add_argument("--out", type=folder_arg, required=True, help="output folder")
     e.add_argument(
         "--method", choices=(*METHODS, "both"), default=METHODS[0], help="default %(default)s"
     )
@@ -44,7 +44,7 @@ def add_parsers(sub: argparse._SubParsersAction) -> None:
     b.add_argument(
         "evaluations",
         nargs="+",
-        type=Path,
+        type=folder_arg,
         metavar="EVAL_DIR",
         help="`contactcal evaluate` output folders (or their evaluation.json), one per session",
     )
@@ -107,8 +107,7 @@ def earlier_evaluation_note(out: Path, manifest: Path) -> str | None:
     if not held:
         return None
     try:
-        raw = read_input_bytes(out / "evaluation.json", "an earlier evaluation", ValueError)
-        record = json.loads(raw.decode("utf-8"))
+        record = read_input_json(out / "evaluation.json", "an earlier evaluation", ValueError)
         earlier = Path(record["manifest"])
         what = (
             "an earlier evaluation of this manifest"

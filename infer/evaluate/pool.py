@@ -39,7 +39,7 @@ from contactcal.infer.evaluate.offset import (
     median_interval,
     rig_total,
 )
-from contactcal.infer.files.regular import read_input_bytes
+from contactcal.infer.files.regular import read_input_json
 from contactcal.infer.pipeline.boundary import MAX_OFFSET_MM, MODEL_KEY, OFFSET_KEY
 
 #: Fewest sessions pooled: the median's 90 % interval needs five values.
@@ -56,8 +56,7 @@ def _load(file: Path) -> dict[str, Any]:
     """The ``boundary_offset`` of the evaluation ``file`` (a folder given was mapped to its
     ``evaluation.json`` by :func:`_sessions`), checked; ValueError naming the file otherwise."""
     try:
-        raw = read_input_bytes(file, "the evaluation.json of `contactcal evaluate`", ValueError)
-        record = json.loads(raw.decode("utf-8"))
+        record = read_input_json(file, "the evaluation.json of `contactcal evaluate`", ValueError)
     except (FileNotFoundError, NotADirectoryError):
         raise ValueError(
             f"{file}: missing; expected the evaluation.json that `contactcal evaluate ... --out "

@@ -7,6 +7,7 @@ naming it and what was expected, as a folder is. A FIFO is never opened in block
 
 from __future__ import annotations
 
+import json
 import os
 import stat
 from collections.abc import Callable
@@ -131,3 +132,26 @@ def read_input_bytes(
     it does)."""
     with open_input(path, expected, error) as fh:
         return fh.read()
+
+
+def read_input_json(
+    path: str | os.PathLike[str], expected: str, error: Callable[[str], Exception]
+) -> Any:
+    """The JSON value in a user-given input file: its content, read once
+    (:func:`read_input_bytes`), decoded as UTF-8 and parsed.
+
+    A decode or syntax error is raised as Python's own (both are ValueError), unwrapped: each
+    caller words the refusal of a damaged file its own way (or reads it as "no record there").
+
+    Args:
+        path: the input file.
+        expected: what was expected there, e.g. ``"an earlier calibration.json"``.
+        error: the caller's exception type, built from the message line.
+
+    Raises:
+        error: ``path`` is a folder or not a regular file.
+        OSError: as ``open`` raises it (FileNotFoundError, PermissionError, ...).
+        UnicodeDecodeError: the content is not UTF-8 text.
+        json.JSONDecodeError: the text is not valid JSON.
+    """
+    return json.loads(read_input_bytes(path, expected, error).decode("utf-8"))

@@ -8,6 +8,7 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any, NamedTuple
 
 from contactcal.infer.methods.registry import METHODS
+from contactcal.infer.parser import folder_arg
 
 if TYPE_CHECKING:
     from contactcal.infer.pipeline.boundary import BoundaryOffset
@@ -92,7 +93,7 @@ def method_args(p: argparse.ArgumentParser) -> None:
     )
     p.add_argument(
         "--overlay",
-        type=Path,
+        type=folder_arg,
         metavar="DIR",
         help="also write each frame with the learned and classical outlines to DIR",
     )

@@ -9,6 +9,7 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 from contactcal.infer.calibration.command import add_step_tolerance_arg, step_tolerance
+from contactcal.infer.parser import folder_arg
 from contactcal.infer.pipeline.args import (
     bit_depth_arg,
     check_bit_depth,
@@ -47,7 +48,7 @@ def add_parsers(sub: argparse._SubParsersAction) -> None:
     scale_args(m)
     m.set_defaults(func=_cmd_measure)
     d = sub.add_parser("demo", help="calibrate the bundled example session with both methods")
-    d.add_argument("--out", type=Path, default=Path("out/demo"), help="output folder")
+    d.add_argument("--out", type=folder_arg, default=Path("out/demo"), help="output folder")
     d.add_argument("--manifest", type=Path, help="another session instead of the example")
     add_step_tolerance_arg(d)
     bit_depth_arg(d)
@@ -221,12 +222,10 @@ def earlier_results_note(out: Path) -> str | None:
 def _results_held(out: Path) -> str:
     """How many results the file ``out`` holds ("not a results list" when it is not one), read
     as inputs are (a device or pipe put there after the caller's check is not read)."""
-    import json
-
-    from contactcal.infer.files.regular import read_input_bytes
+    from contactcal.infer.files.regular import read_input_json
 
     try:
-        old = json.loads(read_input_bytes(out, "earlier results", ValueError).decode("utf-8"))
+        old = read_input_json(out, "earlier results", ValueError)
     except (OSError, ValueError):
         return "unreadable as results"
     return f"{len(old)} result(s)" if isinstance(old, list) else "not a results list"

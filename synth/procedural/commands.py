@@ -3,7 +3,8 @@
 from __future__ import annotations
 
 import argparse
-from pathlib import Path
+
+from contactcal.infer.parser import folder_arg
 
 
 def add_parsers(sub: argparse._SubParsersAction) -> None:
@@ -21,7 +22,7 @@ def add_parsers(sub: argparse._SubParsersAction) -> None:
     )
     s.add_argument("--seed", type=int, default=7000, help="dataset seed (default 7000)")
     s.add_argument("--hard-fraction", type=float, default=0.25, help="share of hard sessions")
-    s.add_argument("--out", type=Path, required=True, help="dataset folder (must not exist)")
+    s.add_argument("--out", type=folder_arg, required=True, help="dataset folder (must not exist)")
     s.set_defaults(func=_cmd_procedural)
 
 
