@@ -91,8 +91,8 @@ def test_the_same_display_or_none_is_replaced_with_a_note(
 
 #: calibration.json contents that are no record, and what the refusal says was found there.
 NO_RECORD = {
-    "damaged": (b'{"device_id": "display-07", "crea', "not JSON ("),
-    "not UTF-8": (b"\xff\xfe", "not JSON ("),
+    "damaged": (b'{"device_id": "display-07", "crea', "not valid JSON ("),
+    "not UTF-8": (b"\xff\xfe", "not valid JSON ("),
     "not an object": (b'["display-07"]', "not a contactcal calibration record"),
     "no format": (
         b'{"created": "2024-05-01T10:00:00+00:00", "device_id": "display-07"}',

@@ -21,7 +21,7 @@ from typing import Any
 
 from contactcal.infer.calibration.curve import MM2
 from contactcal.infer.calibration.load import FORMAT
-from contactcal.infer.files.regular import read_input_json
+from contactcal.infer.files.regular import read_input_json, unreadable_message
 from contactcal.infer.files.temporaries import TEMP_NAME
 from contactcal.infer.video.preview_files import previews_in
 
@@ -60,10 +60,9 @@ def held_record(out_dir: str | os.PathLike[str]) -> HeldRecord | None:
     except (FileNotFoundError, NotADirectoryError):  # none there
         return None
     except OSError as exc:
-        found = f"cannot be read ({exc.strerror or exc})"
-        raise ValueError(f"{path}: {found}; expected {HELD_EXPECTED}") from None
+        raise ValueError(unreadable_message(path, exc, HELD_EXPECTED)) from None
     except (UnicodeDecodeError, json.JSONDecodeError) as exc:
-        raise ValueError(f"{path}: not JSON ({exc}); expected {HELD_EXPECTED}") from None
+        raise ValueError(f"{path}: not valid JSON ({exc}); expected {HELD_EXPECTED}") from None
     if not isinstance(data, dict) or data.get("format") != FORMAT:
         found = f'not a contactcal calibration record (no "format": "{FORMAT}")'
         raise ValueError(f"{path}: {found}; expected {HELD_EXPECTED}")
