@@ -17,7 +17,7 @@ from typing import TYPE_CHECKING, Any
 from contactcal.infer.errors import config_changes, few
 from contactcal.infer.files.atomic import write_json
 from contactcal.infer.files.jsonable import jsonable
-from contactcal.infer.files.regular import read_input_json
+from contactcal.infer.files.regular import read_input_json, unreadable_message
 from contactcal.infer.files.temporaries import TEMP_NAME
 from contactcal.synth.layout import INDEX_COLUMNS
 from contactcal.synth.variant import VARIANTS
@@ -38,8 +38,9 @@ FRAME_KEYS = ("finger", "pressure_kpa", "contact", "mm_per_px")
 
 
 def read_json(path: Path, expected: str) -> Any:
-    """The JSON in ``path``, read as inputs are; ValueError naming it and ``expected`` if it is
-    not valid JSON, or not a regular file (a folder, a device or pipe: never read nor waited on).
+    """The JSON in ``path``, read as inputs are; ValueError naming it and ``expected`` (what a
+    run wrote there, and what to do) if it is not valid JSON, not a regular file (a folder, a
+    device or pipe: never read nor waited on), or cannot be read (e.g. a permission error).
     """
     try:
         return read_input_json(path, expected, ValueError)
@@ -47,6 +48,8 @@ def read_json(path: Path, expected: str) -> Any:
         why = "not UTF-8 text"
     except json.JSONDecodeError as exc:
         why = f"{exc.msg} at line {exc.lineno} column {exc.colno}"
+    except OSError as exc:
+        raise ValueError(unreadable_message(path, exc, expected)) from None
     raise ValueError(f"{path}: not valid JSON ({why}); expected {expected}")
 
 
@@ -54,12 +57,12 @@ def read_frame_record(path: Path) -> dict[str, Any]:
     """A finished frame's truth JSON (its ``index.csv`` row), checked.
 
     Raises:
-        ValueError: naming the file as a damaged frame record (removed, it is rendered again
-            by a resume).
+        ValueError: naming the file, what it is (not JSON, a FIFO, ...), and the remedy:
+            removed, it is rendered again by a resume.
     """
     remedy = (
-        "a frame record a `contactcal synth` run wrote (this one is damaged): remove it and run "
-        "the same synth command, which renders that frame again"
+        "a frame record a `contactcal synth` run wrote; remove it and run the same synth "
+        "command, which renders that frame again"
     )
     record = read_json(path, remedy)
     if not isinstance(record, dict):

@@ -17,7 +17,12 @@ from test_outputs import copy_session
 from contactcal.infer.calibration import out_folder
 from contactcal.infer.calibration import record as calibration_io
 from contactcal.infer.calibration.fit import CurveConfig
-from contactcal.infer.calibration.load import NoContactCurveError, NoSuchPhaseError, load_curve
+from contactcal.infer.calibration.load import (
+    FORMAT,
+    NoContactCurveError,
+    NoSuchPhaseError,
+    load_curve,
+)
 from contactcal.infer.calibration.out_folder import earlier_record_note, held_record
 from contactcal.infer.calibration.points import CalibrationPoint
 from contactcal.infer.calibration.record import write_calibration
@@ -397,7 +402,7 @@ def test_a_curve_that_does_not_resolve_is_not_read_silently(tmp_path: Path) -> N
 
 def test_a_replaced_record_without_a_device_id_is_said_so(tmp_path: Path) -> None:
     """The note read "device id None" for a record made without --device-id."""
-    record = {"created": "2024-05-01T10:00:00+00:00", "device_id": None}
+    record = {"format": FORMAT, "created": "2024-05-01T10:00:00+00:00", "device_id": None}
     (tmp_path / "calibration.json").write_text(json.dumps(record))
     note = earlier_record_note(tmp_path, held_record(tmp_path))
     assert note is not None and "None" not in note

@@ -153,11 +153,12 @@ def test_an_earlier_calibration_that_is_not_a_regular_file_is_not_read(
     fifo: WaitingWriter, tmp_path: Path
 ) -> None:
     """The earlier record of ``calibrate --out`` was read as text after an ``is_file`` check: a
-    FIFO put there in between was waited on. It is held (so its run is refused or noted),
-    unreadable, and never opened."""
-    from contactcal.infer.calibration.out_folder import HeldRecord, held_record
+    FIFO put there in between was waited on. It is no record (its run is refused), never
+    opened."""
+    from contactcal.infer.calibration.out_folder import held_record
 
-    assert held_record(tmp_path) == HeldRecord(fifo.path, None)
+    with pytest.raises(ValueError, match=f"^{fifo.path}: not a regular file .*another --out$"):
+        held_record(tmp_path)
     assert not fifo.opened
     assert held_record(tmp_path / "none") is None
 

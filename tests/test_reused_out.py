@@ -6,6 +6,7 @@ file, with a note."""
 from __future__ import annotations
 
 import json
+import re
 import shutil
 from pathlib import Path
 
@@ -23,6 +24,10 @@ def _snapshot(folder: Path) -> dict[str, bytes]:
     return {str(p.relative_to(folder)): p.read_bytes() for p in folder.rglob("*") if p.is_file()}
 
 
+def _not_measured(*args: object, **kwargs: object) -> None:
+    raise AssertionError("measured before the --out was checked")
+
+
 @pytest.mark.parametrize("device", [["--device-id", "display-08"], []])
 def test_another_displays_calibration_is_refused_not_replaced(
     device: list[str], tmp_path: Path, capsys: pytest.CaptureFixture[str], monkeypatch
@@ -36,10 +41,7 @@ def test_another_displays_calibration_is_refused_not_replaced(
     capsys.readouterr()
     before = _snapshot(out)
 
-    def measured(*args: object, **kwargs: object) -> None:
-        raise AssertionError("measured before the --out was checked")
-
-    monkeypatch.setattr(calibrate, "calibrate_session", measured)
+    monkeypatch.setattr(calibrate, "calibrate_session", _not_measured)
     assert main(_calibrate(s / "manifest.csv", out, *device)) == 2
     printed = capsys.readouterr()
     one_line_naming(printed.err, out / "calibration.json")
@@ -60,10 +62,7 @@ def test_demo_refuses_a_displays_calibration_in_its_folders(
     capsys.readouterr()
     before = _snapshot(out)
 
-    def measured(*args: object, **kwargs: object) -> None:
-        raise AssertionError("measured before the --out was checked")
-
-    monkeypatch.setattr(demo, "run_demo", measured)
+    monkeypatch.setattr(demo, "run_demo", _not_measured)
     assert main(["demo", "--out", str(out)]) == 2
     printed = capsys.readouterr()
     one_line_naming(printed.err, out / "classical" / "calibration.json")
@@ -88,6 +87,91 @@ def test_the_same_display_or_none_is_replaced_with_a_note(
     # a record without a device id is replaced by an identified run, with the note
     assert main(_calibrate(s / "manifest.csv", tmp_path / "c0", "--device-id", "display-07")) == 0
     assert "no device id" in capsys.readouterr().out
+
+
+#: calibration.json contents that are no record, and what the refusal says was found there.
+NO_RECORD = {
+    "damaged": (b'{"device_id": "display-07", "crea', "not valid JSON ("),
+    "not UTF-8": (b"\xff\xfe", "not valid JSON ("),
+    "not an object": (b'["display-07"]', "not a contactcal calibration record"),
+    "no format": (
+        b'{"created": "2024-05-01T10:00:00+00:00", "device_id": "display-07"}',
+        "not a contactcal calibration record",
+    ),
+}
+
+
+@pytest.mark.parametrize("command", ["calibrate", "demo"])
+@pytest.mark.parametrize("held", NO_RECORD)
+def test_a_calibration_json_that_is_no_record_is_refused_not_replaced(
+    held: str, command: str, tmp_path: Path, capsys: pytest.CaptureFixture[str], monkeypatch
+) -> None:
+    """Such a file was replaced with a note ("unreadable as a record"): the device check could
+    not run on it, so a typo in --out lost another display's record, damaged or hand-edited.
+    (A folder, device or pipe there is refused before, as an output that cannot be written.)"""
+    from contactcal.infer.calibration import calibrate
+    from contactcal.infer.pipeline import demo
+
+    s = copy_session(tmp_path)
+    out = tmp_path / "cal"
+    folder = out / "classical" if command == "demo" else out
+    folder.mkdir(parents=True)
+    content, found = NO_RECORD[held]
+    path = folder / "calibration.json"
+    path.write_bytes(content)
+    before = _snapshot(out)
+    monkeypatch.setattr(calibrate, "calibrate_session", _not_measured)
+    monkeypatch.setattr(demo, "run_demo", _not_measured)
+    another = _calibrate(s / "manifest.csv", out, "--device-id", "display-08")
+    assert main(["demo", "--out", str(out)] if command == "demo" else another) == 2
+    printed = capsys.readouterr()
+    one_line_naming(printed.err, path)
+    assert f"{path}: {found}" in printed.err and printed.out == ""
+    assert printed.err.rstrip().endswith("move it away or give another --out")
+    assert _snapshot(out) == before
+
+
+def test_a_record_of_an_earlier_format_version_is_replaced_with_a_note(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """Only what is no record is refused: a version 1 record (no "created", no device id), which
+    load_curve reads, is a re-calibration's to replace."""
+    from contactcal.infer.calibration.load import load_curve
+
+    s = copy_session(tmp_path)
+    out = tmp_path / "cal"
+    out.mkdir()
+    fit = {"pressure_kpa": [0.0, 5.0, 10.0], "area": [0.0, 40.0, 80.0]}
+    v1 = {"format": "contactcal.calibration", "format_version": 1, "fit": fit, "onset_kpa": 1.0}
+    (out / "calibration.json").write_text(json.dumps({**v1, "area_unit": "px", "inverse": None}))
+    assert load_curve(out / "calibration.json").onset_kpa == 1.0
+    assert main(_calibrate(s / "manifest.csv", out, "--device-id", "display-07")) == 0
+    note = f"note: replaced the calibration that {out} held (no creation time, no device id)"
+    assert note in capsys.readouterr().out
+    assert json.loads((out / "calibration.json").read_text())["device_id"] == "display-07"
+
+
+@pytest.mark.parametrize("held", ["unreadable", "a folder"])
+def test_a_calibration_json_that_cannot_be_read_is_refused_naming_it(
+    held: str, tmp_path: Path, monkeypatch
+) -> None:
+    """A permission error (root reads any file: raised here), or a folder put there after the
+    output check, is refused like any non-record (it was held as "unreadable as a record")."""
+    from contactcal.infer.calibration import out_folder
+
+    def denied(path: Path, *args: object) -> bytes:
+        raise PermissionError(13, "Permission denied", str(path))
+
+    path = tmp_path / "calibration.json"
+    if held == "a folder":
+        path.mkdir()
+        found = "is a folder"
+    else:
+        monkeypatch.setattr(out_folder, "read_input_json", denied)
+        found = "cannot be read (Permission denied)"
+    want = re.escape(f"{path}: {found}; expected a calibration record")
+    with pytest.raises(ValueError, match=f"^{want}.*move it away or give another --out$"):
+        out_folder.held_record(tmp_path)
 
 
 HELD = [("frames/p.jpg",), ("preview.mp4",), ("frames/p.jpg", "preview.avi")]

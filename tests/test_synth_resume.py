@@ -103,13 +103,55 @@ def test_a_damaged_frame_record_is_named_before_any_render(
         build_dataset(root, config, shard=(0, 2), progress=False)
     msg = str(exc.value)
     assert msg.startswith(f"{damaged}: {said}") and "expected a frame record a `contactcal" in msg
-    assert msg.endswith(
-        "(this one is damaged): remove it and run the same synth command, "
-        "which renders that frame again"
-    )
+    assert msg.endswith(REMEDY)
     assert not (root / "finger_0000" / "manifest.csv").exists(), "nothing rendered or written"
     with pytest.raises(ValueError, match=re.escape(str(damaged))):
         render_finger(str(root), config, 1)  # the resume of one finger reads it too
+
+
+#: The end of every refusal of a frame record.
+REMEDY = (
+    "expected a frame record a `contactcal synth` run wrote; remove it and run the same synth "
+    "command, which renders that frame again"
+)
+
+
+@pytest.mark.parametrize(
+    ("held", "said"),
+    [
+        ("a FIFO", "not a regular file (a device, pipe or socket)"),
+        ("a folder", "is a folder"),
+        ("unreadable", "cannot be read (Permission denied)"),
+    ],
+)
+def test_a_frame_record_that_is_no_file_or_unreadable_says_what_it_is(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str], monkeypatch, held: str, said: str
+) -> None:
+    """A FIFO was refused as "(this one is damaged)", and a permission error was printed as its
+    errno text alone, without what to do."""
+    from contactcal.synth import dataset_folder
+
+    root = _finished(tmp_path / "ds")
+    record = root / "finger_0000" / "frames" / "p06.0kpa.json"
+    record.unlink()
+    if held == "a FIFO":
+        os.mkfifo(record)
+    elif held == "a folder":
+        record.mkdir()
+    else:
+        record.write_text("{}")
+        read = dataset_folder.read_input_json
+
+        def denied(path: Path, *args: object) -> bytes:
+            if path == record:
+                raise PermissionError(13, "Permission denied", str(path))
+            return read(path, *args)
+
+        monkeypatch.setattr(dataset_folder, "read_input_json", denied)
+    assert main([*ARGV, "--out", str(root)]) == 2
+    err = _one_line(capsys)
+    assert err.startswith(f"contactcal: error: {record}: {said}; {REMEDY}"), err
+    assert "damaged" not in err and "Errno" not in err
 
 
 def test_a_changed_config_names_what_changed(

@@ -5,11 +5,14 @@ A run into a folder that holds a calibration replaces it whole, with a note
 would lose another display's record (the device ids differ), replace a record in mm² with one in
 px (this run has no pixel scale), or leave a recording's ``frames/`` and preview beside a
 calibration made of other frames. The ``calibration.json`` held is read once, as inputs are
-(:func:`held_record`), for the checks and the note.
+(:func:`held_record`), for the checks and the note; one that is no calibration record (a
+folder, a device or pipe, unreadable, not JSON, or JSON without the record's ``format``) is
+refused, as its device id, which the device check needs, is unknown.
 """
 
 from __future__ import annotations
 
+import json
 import os
 import shlex
 from dataclasses import dataclass
@@ -17,9 +20,17 @@ from pathlib import Path
 from typing import Any
 
 from contactcal.infer.calibration.curve import MM2
-from contactcal.infer.files.regular import read_input_json
+from contactcal.infer.calibration.load import FORMAT
+from contactcal.infer.files.regular import read_input_json, unreadable_message
 from contactcal.infer.files.temporaries import TEMP_NAME
 from contactcal.infer.video.preview_files import previews_in
+
+#: What a ``calibration.json`` in ``--out`` must be for a run to replace it, and what to do
+#: otherwise (a typo in ``--out`` could lose another display's record, damaged or hand-edited).
+HELD_EXPECTED = (
+    "a calibration record, whose device id tells whether this run may replace it; move it away "
+    "or give another --out"
+)
 
 
 @dataclass(frozen=True)
@@ -29,20 +40,33 @@ class HeldRecord:
 
     #: Its path.
     path: Path
-    #: Its JSON object; None: unreadable (or a device, pipe, folder), or not a JSON object.
-    data: dict[str, Any] | None
+    #: Its JSON object, a calibration record of any format version.
+    data: dict[str, Any]
 
 
 def held_record(out_dir: str | os.PathLike[str]) -> HeldRecord | None:
-    """The ``calibration.json`` ``out_dir`` holds, read once as inputs are; None: none."""
+    """The ``calibration.json`` ``out_dir`` holds, read once as inputs are; None: none.
+
+    Any record ``contactcal`` wrote is one (its ``format``, whatever its version and fields).
+
+    Raises:
+        ValueError: it is no calibration record: a folder, a device or pipe (refused unread),
+            unreadable, not JSON, or JSON without the record's ``format``; one line naming it,
+            what it is, and what to do (:data:`HELD_EXPECTED`).
+    """
     path = Path(out_dir) / "calibration.json"
     try:
-        data = read_input_json(path, "an earlier calibration.json", ValueError)
+        data = read_input_json(path, HELD_EXPECTED, ValueError)
     except (FileNotFoundError, NotADirectoryError):  # none there
         return None
-    except (OSError, ValueError):
-        data = None
-    return HeldRecord(path, data if isinstance(data, dict) else None)
+    except OSError as exc:
+        raise ValueError(unreadable_message(path, exc, HELD_EXPECTED)) from None
+    except (UnicodeDecodeError, json.JSONDecodeError) as exc:
+        raise ValueError(f"{path}: not valid JSON ({exc}); expected {HELD_EXPECTED}") from None
+    if not isinstance(data, dict) or data.get("format") != FORMAT:
+        found = f'not a contactcal calibration record (no "format": "{FORMAT}")'
+        raise ValueError(f"{path}: {found}; expected {HELD_EXPECTED}")
+    return HeldRecord(path, data)
 
 
 def earlier_record_note(out_dir: str | os.PathLike[str], held: HeldRecord | None) -> str | None:
@@ -58,8 +82,8 @@ def earlier_record_note(out_dir: str | os.PathLike[str], held: HeldRecord | None
 
     Returns:
         ``None`` without an earlier ``calibration.json``, ``.csv`` or ``curve.png``, else a
-        one-line note naming the record's creation time and device id ("unreadable" when it is
-        not a record), or, without a ``calibration.json``, the files replaced.
+        one-line note naming the record's creation time and device id, or, without a
+        ``calibration.json``, the files replaced.
     """
     if held is None:
         held_files = [n for n in ("calibration.csv", "curve.png") if (Path(out_dir) / n).is_file()]
@@ -70,12 +94,10 @@ def earlier_record_note(out_dir: str | os.PathLike[str], held: HeldRecord | None
             f"calibration.json beside {'them' if len(held_files) > 1 else 'it'}: not a "
             "contactcal record); give each run its own --out to keep both"
         )
-    if held.data is None or "created" not in held.data:
-        what = "unreadable as a record"
-    else:
-        device = held.data.get("device_id")
-        named = "no device id" if device is None else f"device id {device!r}"
-        what = f"created {held.data['created']}, {named}"
+    created, device = held.data.get("created"), held.data.get("device_id")
+    when = "no creation time" if created is None else f"created {created}"
+    named = "no device id" if device is None else f"device id {device!r}"
+    what = f"{when}, {named}"
     return (
         f"note: replaced the calibration that {out_dir} held ({what}); give each run its own --out "
         "to keep both"
@@ -101,7 +123,8 @@ def check_reused_out(
         ``calibration.json`` read once for both.
 
     Raises:
-        ValueError: ``out`` holds another display's calibration, one in mm² that this run
+        ValueError: ``out`` holds a ``calibration.json`` that is no record
+            (:func:`held_record`), another display's calibration, one in mm² that this run
             without a scale would replace with one in px, or (a manifest run) an earlier
             recording's frames or preview; one line naming it and what to do.
     """
@@ -114,9 +137,8 @@ def check_reused_out(
 
 
 def _recorded_device(held: HeldRecord) -> str | None:
-    """The device id a held ``calibration.json`` names; None: none, or not a record (which a
-    run replaces with a note, as before)."""
-    device = None if held.data is None else held.data.get("device_id")
+    """The device id a held ``calibration.json`` names; None: none."""
+    device = held.data.get("device_id")
     return None if device is None else str(device)
 
 
@@ -174,7 +196,7 @@ def check_same_unit(held: HeldRecord | None, no_scale: str | None, scale_from: s
         ValueError: the record is in mm² and ``no_scale`` is not None; one line naming it, the
             scale options its command line gave (if it recorded them), and what to do.
     """
-    if held is None or held.data is None or no_scale is None:
+    if held is None or no_scale is None:
         return
     if held.data.get("area_unit") != MM2:
         return

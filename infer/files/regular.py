@@ -40,6 +40,12 @@ def folder_message(path: str | os.PathLike[str], expected: str) -> str:
     return f"{path}: is a folder; expected {expected}"
 
 
+def unreadable_message(path: str | os.PathLike[str], exc: OSError, expected: str) -> str:
+    """The one line refusing ``path``, which could not be read (``exc``: why, e.g. a permission
+    error); ``expected``: what the reader expected there, and what to do."""
+    return f"{path}: cannot be read ({exc.strerror or exc}); expected {expected}"
+
+
 def _special(mode: int) -> bool:
     """Whether ``mode`` is neither a regular file's nor a folder's."""
     return not (stat.S_ISREG(mode) or stat.S_ISDIR(mode))
