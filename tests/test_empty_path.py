@@ -106,3 +106,12 @@ def test_the_options_that_may_name_a_folder_are_those_that_say_so() -> None:
     for name, action in options:
         says_folder = "folder" in (action.help or "") or "DIR" in str(action.metavar)
         assert (action.type is folder_arg) == says_folder, (name, action.dest)
+
+
+def test_the_readme_quotes_both_refusals() -> None:
+    """The README quoted the file refusal and said a folder option only "adds" the hint: its
+    refusal, "a file or folder path", was quoted nowhere."""
+    readme = (Path(__file__).resolve().parents[1] / "README.md").read_text(encoding="utf-8")
+    text = " ".join(readme.split())  # its lines joined
+    assert f"argument --model: {FILE_REFUSAL}" in text
+    assert f"argument --out: {REFUSAL}" in text
