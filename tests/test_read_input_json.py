@@ -28,7 +28,12 @@ def test_a_folder_is_refused_in_the_callers_type(tmp_path: Path) -> None:
 
 @pytest.mark.parametrize(
     ("content", "raised"),
-    [(b'{"a": 1,', json.JSONDecodeError), (b'{"a": "\xff"}', UnicodeDecodeError)],
+    [
+        (b'{"a": 1,', json.JSONDecodeError),
+        (b'{"a": "\xff"}', UnicodeDecodeError),
+        (b'{"a": ' + b"9" * 5000 + b"}", json.JSONDecodeError),  # over the int digit limit
+        (b"[" * 200_000 + b"]" * 200_000, json.JSONDecodeError),  # over the recursion limit
+    ],
 )
 def test_damaged_content_is_left_to_the_caller_unwrapped(
     tmp_path: Path, content: bytes, raised: type[ValueError]

@@ -158,6 +158,13 @@ def read_input_json(
         error: ``path`` is a folder or not a regular file.
         OSError: as ``open`` raises it (FileNotFoundError, PermissionError, ...).
         UnicodeDecodeError: the content is not UTF-8 text.
-        json.JSONDecodeError: the text is not valid JSON.
+        json.JSONDecodeError: the text is not valid JSON, or JSON no reader takes (an integer
+            over Python's digit limit, nesting deeper than its recursion limit).
     """
-    return json.loads(read_input_bytes(path, expected, error).decode("utf-8"))
+    text = read_input_bytes(path, expected, error).decode("utf-8")
+    try:
+        return json.loads(text)
+    except json.JSONDecodeError:
+        raise
+    except (ValueError, RecursionError) as exc:  # raised as what it is: JSON no reader takes
+        raise json.JSONDecodeError(f"unreadable JSON value ({exc})", text, 0) from None
