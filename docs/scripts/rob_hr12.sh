@@ -11,7 +11,7 @@ T=data/rob_hr12
 [[ -f out/rob_hr12/results.json ]] || $C bench --data $T --model models/contact_unet.onnx \
   --robustness --robustness-frames 120 --repeats 1 --timing-frames 1 --out out/rob_hr12
 .venv/bin/python docs/scripts/rob_hr12_report.py out/rob_hr12/results.json
-# H18-ab's pointer on the same frames (docs/training.md, "Added at 16:02 UTC"): A, trained on
+# H18-ab's pointer on the same frames (docs/training.md, "Added at 16:00 UTC"): A, trained on
 # 400-px renders only (docs/scripts/h18_ab.sh), scored by the same bench; read its blur σ 12 row.
 [[ -f out/rob_hr12_A/results.json ]] || $C bench --data $T --model runs/h18ab_A/export.onnx \
   --robustness --robustness-frames 120 --repeats 1 --timing-frames 1 --out out/rob_hr12_A
