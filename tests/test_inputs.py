@@ -9,6 +9,7 @@ from pathlib import Path
 import cv2
 import numpy as np
 import pytest
+from unreadable_json import UNREADABLE_JSON
 
 from contactcal.infer.cli import main
 from contactcal.infer.image.gray import ImageError
@@ -190,6 +191,18 @@ def test_pixel_scale_bounds(tmp_path: Path) -> None:
         rig.write_text(text)
         with pytest.raises(RigConfigError, match="rig.json"):
             load_rig_config(rig)
+
+
+@pytest.mark.parametrize("text", UNREADABLE_JSON.values(), ids=UNREADABLE_JSON.keys())
+def test_rig_json_no_reader_takes_is_one_line_naming_it(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str], text: str
+) -> None:
+    """JSON no reader takes (an integer over the digit limit, deep nesting) is refused as invalid
+    JSON (was a line without the file, or a RecursionError traceback)."""
+    rig = tmp_path / "rig.json"
+    rig.write_text(text)
+    argv = ["measure", str(FRAME), "--rig", str(rig), "--out", str(tmp_path / "r.json")]
+    _exit_2(capsys, argv, f"{rig}: not a readable JSON rig config (unreadable JSON value (")
 
 
 def test_cli_scale_errors(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:

@@ -9,6 +9,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from unreadable_json import UNREADABLE_JSON
 
 from contactcal.infer.cli import main
 from contactcal.infer.methods.unet.config import PreprocessConfig
@@ -43,6 +44,27 @@ def test_nan_min_area_in_a_real_model_is_rejected(
     code, err = _measure(path, tmp_path, capsys)
     assert code == 2 and str(path) in err and "min_contact_area_px" in err
     assert len(err.strip().splitlines()) == 1, err
+
+
+@pytest.mark.parametrize("key", ["interval", "min_change"])
+@pytest.mark.parametrize("text", UNREADABLE_JSON.values(), ids=UNREADABLE_JSON.keys())
+def test_metadata_json_no_reader_takes_is_one_line_naming_the_model(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str], key: str, text: str
+) -> None:
+    """A metadata entry in JSON no reader takes (an integer over the digit limit, deep nesting)
+    is invalid metadata (was a line without the file, or a RecursionError traceback)."""
+    onnx = pytest.importorskip("onnx")
+    proto = onnx.load(str(DEFAULT_MODEL))
+    onnx.helper.set_model_props(
+        proto, {**{p.key: p.value for p in proto.metadata_props}, key: text}
+    )
+    path = tmp_path / "unreadable.onnx"
+    onnx.save(proto, str(path))
+    code, err = _measure(path, tmp_path, capsys)
+    assert code == 2 and err.startswith(
+        f"contactcal: error: --model {path}: invalid model metadata: "
+    )
+    assert err.count("\n") == 1, err[:300]
 
 
 def test_model_without_interval_is_one_clear_line(

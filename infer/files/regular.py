@@ -144,7 +144,7 @@ def read_input_json(
     path: str | os.PathLike[str], expected: str, error: Callable[[str], Exception]
 ) -> Any:
     """The JSON value in a user-given input file: its content, read once
-    (:func:`read_input_bytes`), decoded as UTF-8 and parsed.
+    (:func:`read_input_bytes`), decoded as UTF-8 and parsed (:func:`parse_input_json`).
 
     A decode or syntax error is raised as Python's own (both are ValueError), unwrapped: each
     caller words the refusal of a damaged file its own way (or reads it as "no record there").
@@ -161,9 +161,25 @@ def read_input_json(
         json.JSONDecodeError: the text is not valid JSON, or JSON no reader takes (an integer
             over Python's digit limit, nesting deeper than its recursion limit).
     """
-    text = read_input_bytes(path, expected, error).decode("utf-8")
+    return parse_input_json(read_input_bytes(path, expected, error).decode("utf-8"))
+
+
+def parse_input_json(
+    text: str, object_pairs_hook: Callable[[list[tuple[str, Any]]], Any] | None = None
+) -> Any:
+    """The JSON value in ``text``, user-given (an input file's, a model's metadata entry), as
+    ``json.loads(text, object_pairs_hook=...)`` parses it; JSON no reader takes is refused as
+    invalid JSON, so that each caller's refusal of invalid JSON (one line naming the input)
+    covers it too.
+
+    Raises:
+        json.JSONDecodeError: the text is not valid JSON, or JSON no reader takes (an integer
+            over Python's digit limit, nesting deeper than its recursion limit).
+        Exception: as ``object_pairs_hook`` raises it (one that is no ValueError: a
+            ValueError is taken for JSON no reader takes).
+    """
     try:
-        return json.loads(text)
+        return json.loads(text, object_pairs_hook=object_pairs_hook)
     except json.JSONDecodeError:
         raise
     except (ValueError, RecursionError) as exc:  # raised as what it is: JSON no reader takes

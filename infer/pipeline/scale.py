@@ -18,7 +18,7 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
-from contactcal.infer.files.regular import read_input_bytes
+from contactcal.infer.files.regular import parse_input_json, read_input_bytes
 
 #: Plausible mm per pixel at the contact plane. The rig's camera gives ~0.012 mm/px on a
 #: 2592 px frame (a ~30 mm field); 1e-4 mm/px (a 0.26 mm field) is finer than any camera's view
@@ -99,7 +99,7 @@ def read_rig_json(path: str | os.PathLike[str]) -> dict[str, Any]:
     try:
         raw = read_input_bytes(p, "the rig config JSON file (rig.json)", RigConfigError)
         text = raw.decode("utf-8-sig")  # a BOM (Notepad) is fine
-        data = json.loads(text, object_pairs_hook=_pairs_once)
+        data = parse_input_json(text, object_pairs_hook=_pairs_once)
     except FileNotFoundError as exc:
         raise RigConfigError(f"{p}: no such rig config file") from exc
     except (OSError, UnicodeDecodeError, json.JSONDecodeError) as exc:

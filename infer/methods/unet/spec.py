@@ -18,6 +18,7 @@ from pathlib import Path
 from typing import Any
 
 from contactcal.infer.errors import option_error
+from contactcal.infer.files.regular import parse_input_json
 from contactcal.infer.methods.unet.config import PreprocessConfig
 
 
@@ -173,7 +174,7 @@ def _fields(
     """The JSON object of metadata ``key``, with exactly the fields of dataclass ``cls``; the
     ``legacy`` fields (those a model may predate) filled in with their values where absent; with
     ``recorded``, its :data:`CALIBRATION_DATA_KEY` record (if any) accepted and left out."""
-    values = json.loads(text)
+    values = parse_input_json(text)
     if not isinstance(values, dict):
         raise ValueError(f"{key}: expected a JSON object")
     values = {**(legacy or {}), **values}
@@ -210,7 +211,7 @@ def _recorded_value(text: str) -> float:
     """The number of ``{"value": number, "data": …}`` (an entry with its calibration record,
     :data:`CALIBRATION_DATA_KEY`); NaN for any other text."""
     try:
-        entry = json.loads(text)
+        entry = parse_input_json(text)
     except json.JSONDecodeError:
         return math.nan
     if not isinstance(entry, dict) or set(entry) != {"value", CALIBRATION_DATA_KEY}:
