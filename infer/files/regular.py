@@ -146,8 +146,9 @@ def read_input_json(
     """The JSON value in a user-given input file: its content, read once
     (:func:`read_input_bytes`), decoded as UTF-8 and parsed (:func:`parse_input_json`).
 
-    A decode or syntax error is raised as Python's own (both are ValueError), unwrapped: each
-    caller words the refusal of a damaged file its own way (or reads it as "no record there").
+    A decode or syntax error is raised as Python's own (both are ValueError), not in the caller's
+    type, and JSON no reader takes as a syntax error (:func:`parse_input_json`): each caller
+    words the refusal of a damaged file its own way (or reads it as "no record there").
 
     Args:
         path: the input file.
