@@ -1,12 +1,12 @@
 """The reading of "v2.4's robustness at 1296 px on 12 new fingers" (``docs/training.md``).
 
-Reads one ``contactcal bench --robustness --robustness-frames 120`` run of a model (the shipped one,
-or H18-ab's A) on ``data/rob_hr12`` (``docs/scripts/rob_hr12.sh``), refuses a run of other frames or
-another set, and prints: for each method, the median |area error| at ≥ 5 kPa and 3-5 kPa and the no-
-contact share (each session's reference frame left out); the U-Net's in-range rows at or above
-:data:`SHOWN` and its blur rows (H18-ab's pointer), with their 90 % intervals; its worst in-range
-ratio; the reading written before the run ("met with margin", "met on this draw" or "missed on this
-draw"). Exit 0 whatever the reading, 2 on unreadable input.
+Reads one ``contactcal bench --robustness --robustness-frames 120`` run of a model (the shipped
+one, or H18-ab's A) on ``data/rob_hr12`` (``docs/scripts/rob_hr12.sh``), refuses a run of other
+frames or another set, and prints: for each method, the median |area error| at ≥ 5 kPa and 3-5 kPa
+and the no-contact share (each session's reference frame left out); the U-Net's in-range rows at or
+above :data:`SHOWN` and its blur rows (H18-ab's pointer), with their 90 % intervals; its worst
+in-range ratio; the reading written before the run ("met with margin", "met on this draw" or
+"missed on this draw"). Exit 0 whatever the reading, 2 on unreadable input.
 
     .venv/bin/python docs/scripts/rob_hr12_report.py out/rob_hr12/results.json
 """
