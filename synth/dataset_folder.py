@@ -17,7 +17,7 @@ from typing import TYPE_CHECKING, Any
 from contactcal.infer.errors import config_changes, few
 from contactcal.infer.files.atomic import write_json
 from contactcal.infer.files.jsonable import jsonable
-from contactcal.infer.files.regular import read_input_json, unreadable_message
+from contactcal.infer.files.regular import read_record_json
 from contactcal.infer.files.temporaries import TEMP_NAME
 from contactcal.synth.layout import INDEX_COLUMNS
 from contactcal.synth.variant import VARIANTS
@@ -37,22 +37,6 @@ SYNTH_REVISION = max(REVISIONS)
 FRAME_KEYS = ("finger", "pressure_kpa", "contact", "mm_per_px")
 
 
-def read_json(path: Path, expected: str) -> Any:
-    """The JSON in ``path``, read as inputs are; ValueError naming it and ``expected`` (what a
-    run wrote there, and what to do) if it is not valid JSON, not a regular file (a folder, a
-    device or pipe: never read nor waited on), or cannot be read (e.g. a permission error).
-    """
-    try:
-        return read_input_json(path, expected, ValueError)
-    except UnicodeDecodeError:
-        why = "not UTF-8 text"
-    except json.JSONDecodeError as exc:
-        why = f"{exc.msg} at line {exc.lineno} column {exc.colno}"
-    except OSError as exc:
-        raise ValueError(unreadable_message(path, exc, expected)) from None
-    raise ValueError(f"{path}: not valid JSON ({why}); expected {expected}")
-
-
 def read_frame_record(path: Path) -> dict[str, Any]:
     """A finished frame's truth JSON (its ``index.csv`` row), checked.
 
@@ -64,7 +48,7 @@ def read_frame_record(path: Path) -> dict[str, Any]:
         "a frame record a `contactcal synth` run wrote; remove it and run the same synth "
         "command, which renders that frame again"
     )
-    record = read_json(path, remedy)
+    record = read_record_json(path, remedy)
     if not isinstance(record, dict):
         raise ValueError(f"{path}: holds no JSON object; expected {remedy}")
     missing = [k for k in FRAME_KEYS if k not in record]
@@ -101,7 +85,7 @@ def check_config_matches(root: Path, config: DatasetConfig) -> None:
         "the config a `contactcal synth` run wrote; render into a new --out (or remove this "
         "folder to render it again)"
     )
-    old = read_json(path, expected)
+    old = read_record_json(path, expected)
     if not isinstance(old, dict) or not isinstance(old.get("render"), dict):
         raise ValueError(
             f"{path}: is not the config of a `contactcal synth` dataset (a training run's or "

@@ -20,7 +20,7 @@ from pathlib import Path
 from typing import Any
 
 from contactcal.infer.files.atomic import write_json
-from contactcal.synth.dataset_folder import read_json
+from contactcal.infer.files.regular import read_record_json
 
 
 def run_record_path(root: Path, shard: tuple[int, int]) -> Path:
@@ -46,7 +46,7 @@ def read_runs(path: Path, frames_now: int) -> tuple[list[dict[str, Any]], bool]:
         "the run record a `contactcal synth` run wrote; remove it (it records only the earlier "
         "runs' arguments, times and frame counts) and run again"
     )
-    record = read_json(path, expected)
+    record = read_record_json(path, expected)
     earlier = record.pop("earlier_runs", []) if isinstance(record, dict) else None
     if not isinstance(earlier, list) or not all(isinstance(r, dict) for r in earlier):
         raise ValueError(f"{path}: not a run record (a JSON object); expected {expected}")

@@ -338,7 +338,7 @@ def test_calibrate_reads_the_earlier_record_and_the_rig_json_once(
     assert main(argv) == 0
     capsys.readouterr()
     # how the record and the rig.json are read
-    reads = count_reads(monkeypatch, (out_folder, "read_input_json"), (scale, "read_input_bytes"))
+    reads = count_reads(monkeypatch, (out_folder, "read_record_json"), (scale, "read_input_bytes"))
     assert main(argv) == 0
     printed = capsys.readouterr().out
     assert "note: replaced the calibration that" in printed  # from the one read

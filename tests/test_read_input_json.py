@@ -9,7 +9,7 @@ from pathlib import Path
 import pytest
 from unreadable_json import UNREADABLE_JSON
 
-from contactcal.infer.files.regular import read_input_json
+from contactcal.infer.files.regular import read_input_json, read_record_json
 
 
 class _Refusal(Exception):
@@ -49,3 +49,25 @@ def test_damaged_content_is_left_to_the_caller_unwrapped(
 def test_a_missing_file_is_the_open_error(tmp_path: Path) -> None:
     with pytest.raises(FileNotFoundError):
         read_input_json(tmp_path / "none.json", "the R file", _Refusal)
+
+
+@pytest.mark.parametrize(
+    ("content", "found"),
+    [
+        (None, "cannot be read (No such file or directory)"),
+        (b'{"a": 1,', "not valid JSON (Expecting property name enclosed in double quotes: line 1 "),
+        (b'{"a": "\xff"}', "not valid JSON (not UTF-8 text)"),
+    ],
+)
+def test_a_record_is_refused_in_one_line_naming_it_and_what_to_do(
+    tmp_path: Path, content: bytes | None, found: str
+) -> None:
+    """``read_record_json``: the one wording of a damaged record, whichever reads it (an
+    earlier ``calibration.json`` worded its own: "('utf-8' codec can't decode byte ...)")."""
+    path = tmp_path / "r.json"
+    if content is not None:
+        path.write_bytes(content)
+    with pytest.raises(ValueError) as exc:
+        read_record_json(path, "the R file; remove it")
+    assert str(exc.value).startswith(f"{path}: {found}"), exc.value
+    assert str(exc.value).endswith("; expected the R file; remove it")

@@ -91,8 +91,11 @@ def test_the_same_display_or_none_is_replaced_with_a_note(
 
 #: calibration.json contents that are no record, and what the refusal says was found there.
 NO_RECORD = {
-    "damaged": (b'{"device_id": "display-07", "crea', "not valid JSON ("),
-    "not UTF-8": (b"\xff\xfe", "not valid JSON ("),
+    "damaged": (
+        b'{"device_id": "display-07", "crea',
+        "not valid JSON (Unterminated string starting at: line 1 column 29)",
+    ),
+    "not UTF-8": (b"\xff\xfe", "not valid JSON (not UTF-8 text)"),
     "not an object": (b'["display-07"]', "not a contactcal calibration record"),
     "no format": (
         b'{"created": "2024-05-01T10:00:00+00:00", "device_id": "display-07"}',
@@ -158,6 +161,7 @@ def test_a_calibration_json_that_cannot_be_read_is_refused_naming_it(
     """A permission error (root reads any file: raised here), or a folder put there after the
     output check, is refused like any non-record (it was held as "unreadable as a record")."""
     from contactcal.infer.calibration import out_folder
+    from contactcal.infer.files import regular
 
     def denied(path: Path, *args: object) -> bytes:
         raise PermissionError(13, "Permission denied", str(path))
@@ -167,7 +171,8 @@ def test_a_calibration_json_that_cannot_be_read_is_refused_naming_it(
         path.mkdir()
         found = "is a folder"
     else:
-        monkeypatch.setattr(out_folder, "read_input_json", denied)
+        path.write_text("{}")
+        monkeypatch.setattr(regular, "read_input_json", denied)
         found = "cannot be read (Permission denied)"
     want = re.escape(f"{path}: {found}; expected a calibration record")
     with pytest.raises(ValueError, match=f"^{want}.*move it away or give another --out$"):

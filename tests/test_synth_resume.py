@@ -129,7 +129,7 @@ def test_a_frame_record_that_is_no_file_or_unreadable_says_what_it_is(
 ) -> None:
     """A FIFO was refused as "(this one is damaged)", and a permission error was printed as its
     errno text alone, without what to do."""
-    from contactcal.synth import dataset_folder
+    from contactcal.infer.files import regular
 
     root = _finished(tmp_path / "ds")
     record = root / "finger_0000" / "frames" / "p06.0kpa.json"
@@ -140,14 +140,14 @@ def test_a_frame_record_that_is_no_file_or_unreadable_says_what_it_is(
         record.mkdir()
     else:
         record.write_text("{}")
-        read = dataset_folder.read_input_json
+        read = regular.read_input_json
 
         def denied(path: Path, *args: object) -> bytes:
             if path == record:
                 raise PermissionError(13, "Permission denied", str(path))
             return read(path, *args)
 
-        monkeypatch.setattr(dataset_folder, "read_input_json", denied)
+        monkeypatch.setattr(regular, "read_input_json", denied)
     assert main([*ARGV, "--out", str(root)]) == 2
     err = _one_line(capsys)
     assert err.startswith(f"contactcal: error: {record}: {said}; {REMEDY}"), err

@@ -12,7 +12,6 @@ refused, as its device id, which the device check needs, is unknown.
 
 from __future__ import annotations
 
-import json
 import os
 import shlex
 from dataclasses import dataclass
@@ -21,7 +20,7 @@ from typing import Any
 
 from contactcal.infer.calibration.curve import MM2
 from contactcal.infer.calibration.load import FORMAT
-from contactcal.infer.files.regular import read_input_json, unreadable_message
+from contactcal.infer.files.regular import read_record_json
 from contactcal.infer.files.temporaries import TEMP_NAME
 from contactcal.infer.video.preview_files import previews_in
 
@@ -55,14 +54,9 @@ def held_record(out_dir: str | os.PathLike[str]) -> HeldRecord | None:
             what it is, and what to do (:data:`HELD_EXPECTED`).
     """
     path = Path(out_dir) / "calibration.json"
-    try:
-        data = read_input_json(path, HELD_EXPECTED, ValueError)
-    except (FileNotFoundError, NotADirectoryError):  # none there
+    if not os.path.lexists(path):  # none there (a link to nothing is refused, unreadable)
         return None
-    except OSError as exc:
-        raise ValueError(unreadable_message(path, exc, HELD_EXPECTED)) from None
-    except (UnicodeDecodeError, json.JSONDecodeError) as exc:
-        raise ValueError(f"{path}: not valid JSON ({exc}); expected {HELD_EXPECTED}") from None
+    data = read_record_json(path, HELD_EXPECTED)
     if not isinstance(data, dict) or data.get("format") != FORMAT:
         found = f'not a contactcal calibration record (no "format": "{FORMAT}")'
         raise ValueError(f"{path}: {found}; expected {HELD_EXPECTED}")

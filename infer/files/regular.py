@@ -40,12 +40,6 @@ def folder_message(path: str | os.PathLike[str], expected: str) -> str:
     return f"{path}: is a folder; expected {expected}"
 
 
-def unreadable_message(path: str | os.PathLike[str], exc: OSError, expected: str) -> str:
-    """The one line refusing ``path``, which could not be read (``exc``: why, e.g. a permission
-    error); ``expected``: what the reader expected there, and what to do."""
-    return f"{path}: cannot be read ({exc.strerror or exc}); expected {expected}"
-
-
 def _special(mode: int) -> bool:
     """Whether ``mode`` is neither a regular file's nor a folder's."""
     return not (stat.S_ISREG(mode) or stat.S_ISDIR(mode))
@@ -148,7 +142,8 @@ def read_input_json(
 
     A decode or syntax error is raised as Python's own (both are ValueError), not in the caller's
     type, and JSON no reader takes as a syntax error (:func:`parse_input_json`): each caller
-    words the refusal of a damaged file its own way (or reads it as "no record there").
+    words the refusal of a damaged file its own way (or reads it as "no record there"), or
+    leaves it to :func:`read_record_json`.
 
     Args:
         path: the input file.
@@ -185,3 +180,24 @@ def parse_input_json(
         raise
     except (ValueError, RecursionError) as exc:  # raised as what it is: JSON no reader takes
         raise json.JSONDecodeError(f"unreadable JSON value ({exc})", text, 0) from None
+
+
+def read_record_json(path: str | os.PathLike[str], expected: str) -> Any:
+    """The JSON value in ``path``, a file a run wrote (a record, a config), read as every input
+    is (:func:`read_input_json`), or one line refusing it: naming it, what it is, and
+    ``expected`` (what a run writes there, and what to do).
+
+    Raises:
+        ValueError: ``path`` is a folder, not a regular file, cannot be read (missing, a
+            permission error, ...), is not UTF-8 text, or not valid JSON.
+    """
+    try:
+        return read_input_json(path, expected, ValueError)
+    except UnicodeDecodeError:
+        why = "not UTF-8 text"
+    except json.JSONDecodeError as exc:
+        why = f"{exc.msg}: line {exc.lineno} column {exc.colno}"
+    except OSError as exc:
+        why = f"cannot be read ({exc.strerror or exc})"
+        raise ValueError(f"{path}: {why}; expected {expected}") from None
+    raise ValueError(f"{path}: not valid JSON ({why}); expected {expected}")
