@@ -73,15 +73,32 @@ def test_an_output_under_a_file_names_its_option(
     assert sorted(p.name for p in here.iterdir()) == ["afile", "s"]
 
 
-def test_the_calibration_record_refused_as_an_input_names_out(
+def test_a_calibration_output_refused_as_an_input_names_out(
     here: Path, capsys: pytest.CaptureFixture[str]
 ) -> None:
+    (here / "c").mkdir()
+    shutil.copy(here / "s" / "rig.json", here / "c" / "calibration.csv")  # read as --rig
+    argv = ["calibrate", "s/manifest.csv", "--method", "classical", "--rig", "c/calibration.csv"]
+    line = refused([*argv, "--out", "c"], capsys)
+    assert line.startswith("contactcal: error: --out c: "), line
+    assert "calibration.csv: is an input of this run (c/calibration.csv)" in line, line
+    assert sorted(p.name for p in (here / "c").iterdir()) == ["calibration.csv"]
+
+
+def test_an_input_in_the_records_place_is_refused_as_no_record(
+    here: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """A ``calibration.json`` in ``--out`` that is this run's own input (here its ``--rig``) is
+    no calibration record: refused as such before any work, with the advice to move it away or
+    give another ``--out`` (the earlier-record check runs before the outputs are staged)."""
     (here / "c").mkdir()
     shutil.copy(here / "s" / "rig.json", here / "c" / "calibration.json")  # read as --rig
     argv = ["calibrate", "s/manifest.csv", "--method", "classical", "--rig", "c/calibration.json"]
     line = refused([*argv, "--out", "c"], capsys)
-    assert line.startswith("contactcal: error: --out c: "), line
-    assert "calibration.json: is an input of this run (c/calibration.json)" in line, line
+    assert line.startswith("contactcal: error: c/calibration.json: not a contactcal calibration"), (
+        line
+    )
+    assert line.endswith("move it away or give another --out"), line
     assert sorted(p.name for p in (here / "c").iterdir()) == ["calibration.json"]
 
 
