@@ -143,16 +143,10 @@ def read_input_json(
     A decode or syntax error is raised as Python's own (both are ValueError), not in the caller's
     type, and JSON no reader takes as a syntax error (:func:`parse_input_json`): each caller
     words the refusal of a damaged file its own way (or reads it as "no record there"), or
-    leaves it to :func:`read_record_json`.
-
-    Args:
-        path: the input file.
-        expected: what was expected there, e.g. ``"an earlier calibration.json"``.
-        error: the caller's exception type, built from the message line.
+    leaves it to :func:`read_record_json`. Arguments as :func:`open_input`'s.
 
     Raises:
-        error: ``path`` is a folder or not a regular file.
-        OSError: as ``open`` raises it (FileNotFoundError, PermissionError, ...).
+        error, OSError: as :func:`open_input` raises them.
         UnicodeDecodeError: the content is not UTF-8 text.
         json.JSONDecodeError: the text is not valid JSON, or JSON no reader takes (an integer
             over Python's digit limit, nesting deeper than its recursion limit).
@@ -198,6 +192,7 @@ def read_record_json(path: str | os.PathLike[str], expected: str) -> Any:
     except json.JSONDecodeError as exc:
         why = f"{exc.msg}: line {exc.lineno} column {exc.colno}"
     except OSError as exc:
-        why = f"cannot be read ({exc.strerror or exc})"
-        raise ValueError(f"{path}: {why}; expected {expected}") from None
+        raise ValueError(
+            f"{path}: cannot be read ({exc.strerror or exc}); expected {expected}"
+        ) from None
     raise ValueError(f"{path}: not valid JSON ({why}); expected {expected}")
